@@ -1,0 +1,352 @@
+//! A shell body: one mesh, one section, its nodal state, constraints and loads.
+
+use crate::element::{HourglassState, QuadElem, ShellState, Slot, Stabilization, TriElem};
+use crate::error::CoreError;
+use crate::material::Section;
+use crate::mesh::Mesh;
+use crate::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// Fixed-DOF bits: translations x, y, z then rotations x, y, z.
+pub mod dof {
+    pub const X: u8 = 1;
+    pub const Y: u8 = 2;
+    pub const Z: u8 = 4;
+    pub const RX: u8 = 8;
+    pub const RY: u8 = 16;
+    pub const RZ: u8 = 32;
+    pub const TRANSLATIONS: u8 = 7;
+    pub const ROTATIONS: u8 = 56;
+    pub const ALL: u8 = 63;
+}
+
+/// No velocity program: a constrained DOF is held at zero velocity.
+pub const NO_PROGRAM: u16 = u16::MAX;
+
+/// Prescribed (kinematic) nodal velocity, ramped linearly from zero over `ramp` seconds
+/// (ramp = 0: applied from the start, including the initial velocity).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct VelocityProgram {
+    pub velocity: Vec3,
+    pub angular: Vec3,
+    pub ramp: f64,
+}
+
+impl VelocityProgram {
+    pub fn at(&self, t: f64) -> (Vec3, Vec3) {
+        let s = ramp_factor(t, 0.0, self.ramp);
+        (self.velocity * s, self.angular * s)
+    }
+}
+
+/// Linear ramp from 0 at `t0` to 1 at `t1` (a step at t0 when t1 <= t0).
+pub fn ramp_factor(t: f64, t0: f64, t1: f64) -> f64 {
+    if t1 <= t0 {
+        if t >= t0 {
+            1.0
+        } else {
+            0.0
+        }
+    } else {
+        ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+    }
+}
+
+/// A nodal force and moment (global axes), scaled by a ramp from `t0` to `t1`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NodalLoad {
+    pub node: u32,
+    pub force: Vec3,
+    pub moment: Vec3,
+    pub t0: f64,
+    pub t1: f64,
+}
+
+/// Cumulative energy record of one body at the time of its last completed step.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct BodyEnergy {
+    pub kinetic: f64,
+    pub internal: f64,
+    pub hourglass: f64,
+    /// Work absorbed by contact (minus the work contact forces did on this body).
+    pub contact: f64,
+    /// Dissipated by Kelvin and mass damping.
+    pub damping: f64,
+    /// Work of loads, gravity and boundary reactions.
+    pub external: f64,
+}
+
+/// Rotational inertia of a node: m * max(t^2/12, ROT_INERTIA_AREA * A_e); the area term
+/// lifts the shear-rotation frequency below the membrane one so rotations never set the
+/// time step (docs/theory.md, "Mass").
+pub const ROT_INERTIA_AREA: f64 = 1.0 / 8.0;
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Body {
+    pub id: u32,
+    pub name: String,
+    pub section: Section,
+    pub stab: Stabilization,
+    /// Current positions x_n, half-step velocities v_{n-1/2} (v_0 before the first step),
+    /// angular velocities.
+    pub x: Vec<Vec3>,
+    pub v: Vec<Vec3>,
+    pub w: Vec<Vec3>,
+    pub x0: Vec<Vec3>,
+    pub mass: Vec<f64>,
+    pub inertia: Vec<f64>,
+    pub fixed: Vec<u8>,
+    pub program: Vec<u16>,
+    pub programs: Vec<VelocityProgram>,
+    pub loads: Vec<NodalLoad>,
+    /// Index into `loads` per node (u32::MAX: none); several loads on one node are merged.
+    pub load_of: Vec<u32>,
+    /// Mass-proportional (global) damping coefficient c [1/s]: f = -c m v.
+    pub mass_damping: f64,
+    pub tris: Vec<TriElem>,
+    pub quads: Vec<QuadElem>,
+    /// Resultant state: triangles first, then quads.
+    pub shell: Vec<ShellState>,
+    pub hourglass: Vec<HourglassState>,
+    /// Per-element force slots (tri: 3, quad: 4), gathered per node in a fixed order.
+    pub slots: Vec<Slot>,
+    pub gather_start: Vec<u32>,
+    pub gather_slot: Vec<u32>,
+    /// Contact forces on nodes (written by the contact stage, zero otherwise).
+    pub f_contact: Vec<Vec3>,
+    /// Contact participates (has a contact surface).
+    pub contact: bool,
+    /// Self-contact of this body enabled.
+    pub self_contact: bool,
+    /// Every DOF of every node constrained: no internal forces are computed.
+    pub kinematic: bool,
+    pub energy: BodyEnergy,
+    /// Energies from the last force pass (configuration x_{n+1}), reported next step.
+    pub pending_internal: f64,
+    pub pending_hourglass: f64,
+    /// Kelvin dissipation of the last force pass, booked with the next step's energies.
+    pub pending_damping: f64,
+}
+
+impl Body {
+    /// Build a body: validates the mesh, precomputes element reference data, lumped
+    /// masses and the gather map.
+    pub fn new(
+        id: u32,
+        name: &str,
+        mesh: &Mesh,
+        section: Section,
+        stab: Stabilization,
+    ) -> Result<Self, CoreError> {
+        section.material.validate()?;
+        if !(section.thickness.is_finite() && section.thickness > 0.0) {
+            return Err(CoreError::Thickness {
+                body: name.into(),
+                value: section.thickness,
+            });
+        }
+        mesh.validate(name)?;
+        let nn = mesh.nodes.len();
+        let x = mesh.nodes.clone();
+        let tris: Vec<TriElem> = mesh
+            .tris
+            .iter()
+            .map(|t| TriElem::new(*t, &t.map(|n| x[n as usize])))
+            .collect();
+        let quads: Vec<QuadElem> = mesh
+            .quads
+            .iter()
+            .map(|q| QuadElem::new(*q, &q.map(|n| x[n as usize]), &section, &stab))
+            .collect();
+        let rho_t = section.material.density * section.thickness;
+        let t2 = section.thickness * section.thickness / 12.0;
+        let mut mass = vec![0.0; nn];
+        let mut inertia = vec![0.0; nn];
+        let mut lump = |nodes: &[u32], area: f64| {
+            let m = rho_t * area / nodes.len() as f64;
+            let s = t2.max(ROT_INERTIA_AREA * area);
+            for &n in nodes {
+                mass[n as usize] += m;
+                inertia[n as usize] += m * s;
+            }
+        };
+        for e in &tris {
+            lump(&e.nodes, e.area0);
+        }
+        for e in &quads {
+            lump(&e.nodes, e.area0);
+        }
+        // Gather map: node -> slots, in element order (fixed, thread-independent).
+        let mut count = vec![0u32; nn + 1];
+        let slot_nodes: Vec<u32> = tris
+            .iter()
+            .flat_map(|e| e.nodes)
+            .chain(quads.iter().flat_map(|e| e.nodes))
+            .collect();
+        for &n in &slot_nodes {
+            count[n as usize + 1] += 1;
+        }
+        for i in 0..nn {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut gather_slot = vec![0u32; slot_nodes.len()];
+        for (s, &n) in slot_nodes.iter().enumerate() {
+            gather_slot[fill[n as usize] as usize] = s as u32;
+            fill[n as usize] += 1;
+        }
+        for (i, m) in mass.iter().enumerate() {
+            if *m <= 0.0 {
+                return Err(CoreError::Other {
+                    body: name.into(),
+                    what: format!("node {i} belongs to no element (it would have no mass)"),
+                });
+            }
+        }
+        let ne = tris.len() + quads.len();
+        Ok(Self {
+            id,
+            name: name.into(),
+            section,
+            stab,
+            x0: x.clone(),
+            v: vec![Vec3::zeros(); nn],
+            w: vec![Vec3::zeros(); nn],
+            x,
+            mass,
+            inertia,
+            fixed: vec![0; nn],
+            program: vec![NO_PROGRAM; nn],
+            programs: Vec::new(),
+            loads: Vec::new(),
+            load_of: vec![u32::MAX; nn],
+            mass_damping: 0.0,
+            shell: vec![ShellState::default(); ne],
+            hourglass: vec![HourglassState::default(); quads.len()],
+            slots: vec![[0.0; 6]; slot_nodes.len()],
+            gather_start: count,
+            gather_slot,
+            tris,
+            quads,
+            f_contact: Vec::new(),
+            contact: false,
+            self_contact: false,
+            kinematic: false,
+            energy: BodyEnergy::default(),
+            pending_internal: 0.0,
+            pending_hourglass: 0.0,
+            pending_damping: 0.0,
+        })
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn element_count(&self) -> usize {
+        self.tris.len() + self.quads.len()
+    }
+
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().sum()
+    }
+
+    /// Rigid initial motion: v_I = v + omega x (x_I - centre), w_I = omega.
+    pub fn set_rigid_velocity(&mut self, v: Vec3, omega: Vec3, centre: Vec3) {
+        for i in 0..self.x.len() {
+            self.v[i] = v + omega.cross(&(self.x[i] - centre));
+            self.w[i] = omega;
+        }
+    }
+
+    /// Mass-weighted centre of the current positions.
+    pub fn centre_of_mass(&self) -> Vec3 {
+        let mut c = Vec3::zeros();
+        for (p, m) in self.x.iter().zip(&self.mass) {
+            c += p * *m;
+        }
+        c / self.total_mass()
+    }
+
+    /// Constrain DOFs of a node to zero velocity (bits of `dof`).
+    pub fn fix(&mut self, node: usize, mask: u8) {
+        self.fixed[node] |= mask;
+        self.refresh_kinematic();
+    }
+
+    /// Prescribe the velocity of the given nodes (all six DOFs follow the program).
+    pub fn prescribe(&mut self, nodes: &[usize], program: VelocityProgram) {
+        let id = self.programs.len() as u16;
+        self.programs.push(program);
+        let (v, w) = program.at(0.0);
+        for &n in nodes {
+            self.fixed[n] = dof::ALL;
+            self.program[n] = id;
+            self.v[n] = v;
+            self.w[n] = w;
+        }
+        self.refresh_kinematic();
+    }
+
+    pub fn add_load(&mut self, load: NodalLoad) {
+        let n = load.node as usize;
+        self.load_of[n] = self.loads.len() as u32;
+        self.loads.push(load);
+    }
+
+    fn refresh_kinematic(&mut self) {
+        self.kinematic = self.fixed.iter().all(|&f| f == dof::ALL);
+    }
+
+    /// Zero all DOFs whose bits are fixed and apply programs at time t (used at start).
+    pub fn apply_constraints(&mut self, t: f64) {
+        for i in 0..self.x.len() {
+            let f = self.fixed[i];
+            if f == 0 {
+                continue;
+            }
+            let (pv, pw) = match self.program[i] {
+                NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
+                p => self.programs[p as usize].at(t),
+            };
+            for d in 0..3 {
+                if f & (1 << d) != 0 {
+                    self.v[i][d] = pv[d];
+                }
+                if f & (8 << d) != 0 {
+                    self.w[i][d] = pw[d];
+                }
+            }
+        }
+    }
+
+    /// Translational + rotational kinetic energy of the current (half-step) velocities.
+    pub fn kinetic_energy_now(&self) -> f64 {
+        let mut e = 0.0;
+        for i in 0..self.x.len() {
+            e += 0.5 * (self.mass[i] * self.v[i].norm_squared()
+                + self.inertia[i] * self.w[i].norm_squared());
+        }
+        e
+    }
+
+    /// Linear momentum sum m v.
+    pub fn linear_momentum(&self) -> Vec3 {
+        let mut p = Vec3::zeros();
+        for i in 0..self.x.len() {
+            p += self.v[i] * self.mass[i];
+        }
+        p
+    }
+
+    /// Angular momentum about the origin: sum m x x v + I w (positions at the same time
+    /// level as v when called between steps: x_{n+1} with v_{n+1/2} is exactly conserved
+    /// by central differences).
+    pub fn angular_momentum(&self) -> Vec3 {
+        let mut l = Vec3::zeros();
+        for i in 0..self.x.len() {
+            l += self.x[i].cross(&self.v[i]) * self.mass[i] + self.w[i] * self.inertia[i];
+        }
+        l
+    }
+}

@@ -1,0 +1,99 @@
+//! Typed errors: bad input (`CoreError`) and run-time faults (`Fault`).
+
+use thiserror::Error;
+
+/// Invalid input to the physics core (material, mesh, boundary conditions).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CoreError {
+    #[error("material: {field} = {value} is invalid: {valid}")]
+    Material {
+        field: &'static str,
+        value: f64,
+        valid: &'static str,
+    },
+    #[error("body '{body}': thickness = {value} is invalid: must be finite and > 0")]
+    Thickness { body: String, value: f64 },
+    #[error("body '{body}': element {element} refers to node {node}, but the body has {nodes} nodes")]
+    NodeIndex {
+        body: String,
+        element: usize,
+        node: u32,
+        nodes: usize,
+    },
+    #[error("body '{body}': element {element} is degenerate (area {area:.3e} m^2, repeated or collinear nodes)")]
+    Degenerate {
+        body: String,
+        element: usize,
+        area: f64,
+    },
+    #[error("body '{body}': quad {element} is warped by {warp:.3} (max out-of-plane offset / sqrt(area)); the one-point quad is valid up to {limit}: split it into triangles")]
+    Warped {
+        body: String,
+        element: usize,
+        warp: f64,
+        limit: f64,
+    },
+    #[error("body '{body}': quad {element} is not convex (corner {corner} turns the wrong way)")]
+    NonConvex {
+        body: String,
+        element: usize,
+        corner: usize,
+    },
+    #[error("body '{body}': node {node} has a non-finite coordinate")]
+    NonFiniteNode { body: String, node: usize },
+    #[error("body '{body}' has no elements")]
+    Empty { body: String },
+    #[error("body '{body}': {what}")]
+    Other { body: String, what: String },
+}
+
+/// Why a run stopped: every variant names the body, the place and the step.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum Fault {
+    #[error("step {step}: non-finite {what} in body {body} ({place}); the time step is probably too large or an input is extreme")]
+    NonFinite {
+        step: u64,
+        body: u32,
+        place: String,
+        what: &'static str,
+    },
+    #[error("step {step}: element {element} of body {body} collapsed (area ratio {ratio:.3e} of its initial area)")]
+    Collapsed {
+        step: u64,
+        body: u32,
+        element: usize,
+        ratio: f64,
+    },
+    #[error("step {step}: element {element} of body {body} is inverted (corner {corner} turned inside out)")]
+    Inverted {
+        step: u64,
+        body: u32,
+        element: usize,
+        corner: usize,
+    },
+    #[error("step {step}: energy runaway: balance error {error:.3} of the largest energy exceeds {limit:.3}; the most strained element is {element} of body {body} (usually: time step above the critical one, or a too stiff penalty)")]
+    EnergyRunaway {
+        step: u64,
+        error: f64,
+        limit: f64,
+        body: u32,
+        element: usize,
+    },
+    #[error("step {step}: time step collapsed to {dt:.3e} s (below the floor {floor:.3e} s) at element {element} of body {body}")]
+    DtCollapse {
+        step: u64,
+        dt: f64,
+        floor: f64,
+        body: u32,
+        element: usize,
+    },
+    #[error("step {step}: node {node} of body {body} moved {distance:.3e} m in one step (speed {speed:.3e} m/s), more than the contact search margin budget {budget:.3e} m allows; contact could be missed: increase the margin or lower the time step")]
+    Tunnelling {
+        step: u64,
+        body: u32,
+        node: usize,
+        speed: f64,
+        distance: f64,
+        budget: f64,
+    },
+}

@@ -1,0 +1,103 @@
+//! The one-step pipeline of a group of bodies (the unit a worker owns):
+//! integrate (x_n -> x_{n+1}) -> contact at x_{n+1} -> element forces at x_{n+1}.
+//! Forces are thus ready before the next step's time step is chosen, and the stable dt
+//! reported is that of the configuration the next step starts from.
+
+use crate::body::{Body, BodyEnergy};
+use crate::error::Fault;
+use crate::forces::ForceSums;
+use crate::integrate::StepClock;
+use crate::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// What one body reports after a step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BodyReport {
+    pub id: u32,
+    /// Energies at t_n (the start of the step just taken).
+    pub energy: BodyEnergy,
+    /// Critical element time step of the new configuration (no safety factor).
+    pub stable_dt: f64,
+    pub dt_element: usize,
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub max_move: f64,
+    pub hot_element: usize,
+    pub hot_density: f64,
+}
+
+/// A set of bodies integrated together.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Group {
+    pub bodies: Vec<Body>,
+    pub gravity: Vec3,
+    /// t_n of the current positions.
+    pub time: f64,
+    pub step: u64,
+    /// h_{n-1/2}: the last step taken (0 before the first).
+    pub h_prev: f64,
+}
+
+fn report(b: &Body, f: &ForceSums, lo: Vec3, hi: Vec3, max_move: f64) -> BodyReport {
+    BodyReport {
+        id: b.id,
+        energy: b.energy,
+        stable_dt: f.dt,
+        dt_element: f.dt_element,
+        lo,
+        hi,
+        max_move,
+        hot_element: f.hot_element,
+        hot_density: f.hot_density,
+    }
+}
+
+impl Group {
+    pub fn new(bodies: Vec<Body>, gravity: Vec3) -> Self {
+        Self {
+            bodies,
+            gravity,
+            time: 0.0,
+            step: 0,
+            h_prev: 0.0,
+        }
+    }
+
+    /// Forces at the initial configuration (no rate increments).
+    pub fn start(&mut self) -> Result<Vec<BodyReport>, Fault> {
+        let mut out = Vec::with_capacity(self.bodies.len());
+        for b in &mut self.bodies {
+            b.apply_constraints(0.0);
+            let f = b.internal_forces(0.0, 0)?;
+            let (lo, hi) = crate::mesh::bounds(&b.x);
+            b.energy.internal = b.pending_internal;
+            b.energy.hourglass = b.pending_hourglass;
+            b.energy.kinetic = b.kinetic_energy_now();
+            out.push(report(b, &f, lo, hi, 0.0));
+        }
+        Ok(out)
+    }
+
+    /// One step of length h: returns one report per body, in the group's body order.
+    pub fn advance(&mut self, h: f64) -> Result<Vec<BodyReport>, Fault> {
+        let clock = StepClock {
+            t: self.time,
+            h_prev: self.h_prev,
+            h,
+            step: self.step,
+        };
+        let mut sums = Vec::with_capacity(self.bodies.len());
+        for b in &mut self.bodies {
+            sums.push(b.integrate(&clock, self.gravity)?);
+        }
+        self.time += h;
+        self.step += 1;
+        self.h_prev = h;
+        let mut out = Vec::with_capacity(self.bodies.len());
+        for (b, s) in self.bodies.iter_mut().zip(&sums) {
+            let f = b.internal_forces(h, self.step)?;
+            out.push(report(b, &f, s.lo, s.hi, s.max_move));
+        }
+        Ok(out)
+    }
+}

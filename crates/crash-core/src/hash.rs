@@ -1,0 +1,50 @@
+//! Bitwise state hash (FNV-1a over the exact f64 bits) used to prove determinism.
+
+use crate::body::Body;
+
+const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+const PRIME: u64 = 0x0000_0100_0000_01b3;
+
+#[derive(Debug, Clone, Copy)]
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Self(OFFSET)
+    }
+}
+
+impl Fnv {
+    pub fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 ^= x as u64;
+            self.0 = self.0.wrapping_mul(PRIME);
+        }
+    }
+    pub fn f64(&mut self, v: f64) {
+        self.bytes(&v.to_bits().to_le_bytes());
+    }
+    pub fn u64(&mut self, v: u64) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// Hash of positions, velocities and angular velocities of the bodies, in the order
+/// given (callers pass bodies sorted by id).
+pub fn state_hash<'a>(bodies: impl IntoIterator<Item = &'a Body>) -> u64 {
+    let mut h = Fnv::default();
+    for b in bodies {
+        h.u64(b.id as u64);
+        for i in 0..b.x.len() {
+            for d in 0..3 {
+                h.f64(b.x[i][d]);
+                h.f64(b.v[i][d]);
+                h.f64(b.w[i][d]);
+            }
+        }
+    }
+    h.finish()
+}

@@ -1,0 +1,29 @@
+//! crash-core: the physics of crash.
+//!
+//! Explicit central-difference time integration (seed eq. 5–6) of co-rotational
+//! one-point Reissner–Mindlin shells (3-node triangle, 4-node Belytschko–Lin–Tsay quad)
+//! with Kelvin viscoelastic damping. No networking here: master and workers build on it.
+
+pub mod body;
+pub mod driver;
+pub mod element;
+pub mod energy;
+pub mod error;
+pub mod forces;
+pub mod group;
+pub mod hash;
+pub mod integrate;
+pub mod material;
+pub mod mesh;
+
+/// 3-vector of f64 (nalgebra).
+pub type Vec3 = nalgebra::Vector3<f64>;
+
+pub use body::{dof, Body, BodyEnergy, NodalLoad, VelocityProgram};
+pub use driver::{Run, RunConfig};
+pub use element::Stabilization;
+pub use energy::{EnergyLedger, EnergyTotals};
+pub use error::{CoreError, Fault};
+pub use group::{BodyReport, Group};
+pub use material::{Material, Section};
+pub use mesh::Mesh;
