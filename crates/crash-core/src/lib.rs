@@ -15,6 +15,7 @@ pub mod hash;
 pub mod integrate;
 pub mod material;
 pub mod mesh;
+pub mod shapes;
 
 /// 3-vector of f64 (nalgebra).
 pub type Vec3 = nalgebra::Vector3<f64>;

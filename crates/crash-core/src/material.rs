@@ -151,8 +151,7 @@ impl Section {
     pub fn plane_energy(&self, k: f64, s: [f64; 3]) -> f64 {
         let nu = self.material.poisson;
         (s[0] * s[0] + s[1] * s[1] - 2.0 * nu * s[0] * s[1] + 2.0 * (1.0 + nu) * s[2] * s[2])
-            * (1.0 - nu * nu)
-            / (2.0 * k)
+            / (2.0 * k * (1.0 - nu * nu))
     }
 
     /// Damping correction of the critical time step for Kelvin damping:

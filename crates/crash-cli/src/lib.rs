@@ -1,0 +1,1 @@
+//! crash-cli: The crash command: run, check, render, study, bench.

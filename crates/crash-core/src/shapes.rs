@@ -1,0 +1,250 @@
+//! Mesh generators for the standard shapes (plates, spheres, cylinders, boxes).
+//! Each returns a `Mesh` centred at the origin; scenes place and rotate them.
+
+use crate::mesh::Mesh;
+use crate::Vec3;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+
+/// Element family of a generated surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ElementKind {
+    Tri,
+    Quad,
+}
+
+/// Rectangle lx x ly in the xy plane, nx x ny cells, centred at the origin. Triangles
+/// split each cell along alternating diagonals (no preferred direction).
+pub fn plate(lx: f64, ly: f64, nx: usize, ny: usize, kind: ElementKind) -> Mesh {
+    let mut m = Mesh::default();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            m.nodes.push(Vec3::new(
+                lx * (i as f64 / nx as f64 - 0.5),
+                ly * (j as f64 / ny as f64 - 0.5),
+                0.0,
+            ));
+        }
+    }
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            match kind {
+                ElementKind::Quad => m.quads.push([a, b, c, d]),
+                ElementKind::Tri => {
+                    if (i + j) % 2 == 0 {
+                        m.tris.push([a, b, c]);
+                        m.tris.push([a, c, d]);
+                    } else {
+                        m.tris.push([a, b, d]);
+                        m.tris.push([b, c, d]);
+                    }
+                }
+            }
+        }
+    }
+    m
+}
+
+/// Sphere of the given radius: a subdivided icosahedron (near-uniform triangles,
+/// 20 * 4^level elements), outward normals.
+pub fn icosphere(radius: f64, level: u32) -> Mesh {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut nodes: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut tris: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..level {
+        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut next = Vec::with_capacity(tris.len() * 4);
+        let mut midpoint = |a: u32, b: u32, nodes: &mut Vec<Vec3>| -> u32 {
+            let key = (a.min(b), a.max(b));
+            *mid.entry(key).or_insert_with(|| {
+                nodes.push(((nodes[a as usize] + nodes[b as usize]) * 0.5).normalize());
+                (nodes.len() - 1) as u32
+            })
+        };
+        for &[a, b, c] in &tris {
+            let ab = midpoint(a, b, &mut nodes);
+            let bc = midpoint(b, c, &mut nodes);
+            let ca = midpoint(c, a, &mut nodes);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    Mesh {
+        nodes: nodes.into_iter().map(|p| p * radius).collect(),
+        tris,
+        quads: Vec::new(),
+    }
+}
+
+/// Open cylinder (tube) along z: n_around x n_along cells, centred at the origin.
+pub fn cylinder(radius: f64, length: f64, n_around: usize, n_along: usize, kind: ElementKind) -> Mesh {
+    let mut m = Mesh::default();
+    for j in 0..=n_along {
+        let z = length * (j as f64 / n_along as f64 - 0.5);
+        for i in 0..n_around {
+            let a = std::f64::consts::TAU * i as f64 / n_around as f64;
+            m.nodes.push(Vec3::new(radius * a.cos(), radius * a.sin(), z));
+        }
+    }
+    let id = |i: usize, j: usize| (j * n_around + i % n_around) as u32;
+    for j in 0..n_along {
+        for i in 0..n_around {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            match kind {
+                ElementKind::Quad => m.quads.push([a, b, c, d]),
+                ElementKind::Tri => {
+                    m.tris.push([a, b, c]);
+                    m.tris.push([a, c, d]);
+                }
+            }
+        }
+    }
+    m
+}
+
+/// Closed box surface lx x ly x lz with about `n` cells along the longest side,
+/// outward normals, centred at the origin.
+pub fn cuboid(lx: f64, ly: f64, lz: f64, n: usize, kind: ElementKind) -> Mesh {
+    let longest = lx.max(ly).max(lz);
+    let cells = |l: f64| ((l / longest * n as f64).round() as usize).max(1);
+    let (nx, ny, nz) = (cells(lx), cells(ly), cells(lz));
+    let mut index: HashMap<(i64, i64, i64), u32> = HashMap::new();
+    let mut m = Mesh::default();
+    // integer lattice keys make shared edges between faces share nodes exactly
+    let mut node = |i: usize, j: usize, k: usize, m: &mut Mesh| -> u32 {
+        *index.entry((i as i64, j as i64, k as i64)).or_insert_with(|| {
+            m.nodes.push(Vec3::new(
+                lx * (i as f64 / nx as f64 - 0.5),
+                ly * (j as f64 / ny as f64 - 0.5),
+                lz * (k as f64 / nz as f64 - 0.5),
+            ));
+            (m.nodes.len() - 1) as u32
+        })
+    };
+    // each face: (fixed axis, fixed value index, u axis count, v axis count, outward sign)
+    let dims = [nx, ny, nz];
+    for axis in 0..3 {
+        let (ua, va) = ((axis + 1) % 3, (axis + 2) % 3);
+        for side in [0usize, 1] {
+            let fixed = side * dims[axis];
+            for a in 0..dims[ua] {
+                for b in 0..dims[va] {
+                    let mut corner = |da: usize, db: usize, m: &mut Mesh| {
+                        let mut ijk = [0usize; 3];
+                        ijk[axis] = fixed;
+                        ijk[ua] = a + da;
+                        ijk[va] = b + db;
+                        node(ijk[0], ijk[1], ijk[2], m)
+                    };
+                    let mut q = [
+                        corner(0, 0, &mut m),
+                        corner(1, 0, &mut m),
+                        corner(1, 1, &mut m),
+                        corner(0, 1, &mut m),
+                    ];
+                    if side == 0 {
+                        q.reverse();
+                    }
+                    match kind {
+                        ElementKind::Quad => m.quads.push(q),
+                        ElementKind::Tri => {
+                            m.tris.push([q[0], q[1], q[2]]);
+                            m.tris.push([q[0], q[2], q[3]]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plate_area_is_exact_for_both_kinds() {
+        for kind in [ElementKind::Tri, ElementKind::Quad] {
+            let m = plate(2.0, 0.5, 8, 3, kind);
+            assert!((m.area() - 1.0).abs() < 1e-12);
+            m.validate("p").expect("valid");
+        }
+    }
+
+    #[test]
+    fn icosphere_area_converges_to_sphere_area() {
+        let m = icosphere(1.0, 4);
+        let exact = 4.0 * std::f64::consts::PI;
+        assert_eq!(m.tris.len(), 20 * 256);
+        assert!((m.area() - exact).abs() / exact < 0.01);
+        m.validate("s").expect("valid");
+    }
+
+    #[test]
+    fn closed_surfaces_have_outward_normals() {
+        for m in [icosphere(1.0, 2), cuboid(1.0, 2.0, 3.0, 6, ElementKind::Quad)] {
+            // divergence theorem: volume = sum over faces of (x . n) A / 3 > 0
+            let mut vol = 0.0;
+            for t in &m.tris {
+                let p = t.map(|n| m.nodes[n as usize]);
+                vol += p[0].dot(&(p[1] - p[0]).cross(&(p[2] - p[0]))) / 6.0;
+            }
+            for q in &m.quads {
+                let p = q.map(|n| m.nodes[n as usize]);
+                vol += p[0].dot(&(p[1] - p[0]).cross(&(p[2] - p[0]))) / 6.0;
+                vol += p[0].dot(&(p[2] - p[0]).cross(&(p[3] - p[0]))) / 6.0;
+            }
+            assert!(vol > 0.0);
+        }
+        let b = cuboid(1.0, 2.0, 3.0, 6, ElementKind::Quad);
+        let vol_expected = 6.0;
+        let mut vol = 0.0;
+        for q in &b.quads {
+            let p = q.map(|n| b.nodes[n as usize]);
+            vol += p[0].dot(&(p[1] - p[0]).cross(&(p[2] - p[0]))) / 6.0;
+            vol += p[0].dot(&(p[2] - p[0]).cross(&(p[3] - p[0]))) / 6.0;
+        }
+        assert!((vol - vol_expected).abs() < 1e-9, "{vol}");
+    }
+}

@@ -1,0 +1,1 @@
+//! crash-io: Results: VTU/PVD series, CSV histories, PNG pictures and plots, checkpoints.

@@ -1,0 +1,1 @@
+//! crash-master: The master: global time loop, MEIM (petgraph), grouping, assignment, output merge.

@@ -1,0 +1,1 @@
+//! crash-worker: The worker: owns groups of bodies and integrates them (tonic service over crash-core).
