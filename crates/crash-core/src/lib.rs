@@ -5,6 +5,7 @@
 //! with Kelvin viscoelastic damping. No networking here: master and workers build on it.
 
 pub mod body;
+pub mod contact;
 pub mod driver;
 pub mod element;
 pub mod energy;
@@ -15,6 +16,7 @@ pub mod hash;
 pub mod integrate;
 pub mod material;
 pub mod mesh;
+pub mod output;
 pub mod shapes;
 
 /// 3-vector of f64 (nalgebra).
