@@ -62,7 +62,10 @@ pub struct NodalLoad {
     pub t1: f64,
 }
 
-/// Cumulative energy record of one body at the time of its last completed step.
+/// Energy record of one body. After a step from t_n to t_{n+1} it holds the values at
+/// t_{n+1/2}: kinetic energy of v_{n+1/2}, the mean of the internal (and hourglass)
+/// energies of x_n and x_{n+1}, and the work and dissipation summed up to then. With
+/// these time levels the balance closes to second order in the time step.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct BodyEnergy {
     pub kinetic: f64,
@@ -121,11 +124,9 @@ pub struct Body {
     /// Every DOF of every node constrained: no internal forces are computed.
     pub kinematic: bool,
     pub energy: BodyEnergy,
-    /// Energies from the last force pass (configuration x_{n+1}), reported next step.
-    pub pending_internal: f64,
-    pub pending_hourglass: f64,
-    /// Kelvin dissipation of the last force pass, booked with the next step's energies.
-    pub pending_damping: f64,
+    /// Internal and hourglass energy of the current configuration (last force pass).
+    pub internal_now: f64,
+    pub hourglass_now: f64,
 }
 
 impl Body {
@@ -233,9 +234,8 @@ impl Body {
             self_contact: false,
             kinematic: false,
             energy: BodyEnergy::default(),
-            pending_internal: 0.0,
-            pending_hourglass: 0.0,
-            pending_damping: 0.0,
+            internal_now: 0.0,
+            hourglass_now: 0.0,
         })
     }
 

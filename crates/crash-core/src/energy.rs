@@ -43,9 +43,13 @@ impl EnergyTotals {
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct EnergyLedger {
     pub e0: Option<f64>,
+    /// Largest energy seen so far.
     pub scale: f64,
-    pub max_error: f64,
+    /// Largest absolute imbalance |E - E_0| seen so far [J].
+    pub max_abs_error: f64,
     pub last: EnergyTotals,
+    /// Consecutive steps whose relative error exceeded the runaway limit.
+    pub over_limit: u32,
 }
 
 impl EnergyLedger {
@@ -63,10 +67,22 @@ impl EnergyLedger {
         } else {
             0.0
         };
-        if t.balance_error.abs() > self.max_error || t.balance_error.is_nan() {
-            self.max_error = t.balance_error.abs();
+        let abs = (total - e0).abs();
+        if abs > self.max_abs_error || abs.is_nan() {
+            self.max_abs_error = abs;
         }
         self.last = t;
         t
+    }
+
+    /// Largest imbalance of the run relative to the largest energy of the run. (The
+    /// running relative error is noisy in the first steps of a run that starts from
+    /// rest, when all energies are near zero; this measure is not.)
+    pub fn max_error(&self) -> f64 {
+        if self.scale > 0.0 {
+            self.max_abs_error / self.scale
+        } else {
+            0.0
+        }
     }
 }

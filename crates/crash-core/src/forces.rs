@@ -102,8 +102,8 @@ impl Body {
     /// compute nothing.
     pub fn internal_forces(&mut self, h: f64, step: u64) -> Result<ForceSums, Fault> {
         if self.kinematic {
-            self.pending_internal = 0.0;
-            self.pending_hourglass = 0.0;
+            self.internal_now = 0.0;
+            self.hourglass_now = 0.0;
             return Ok(ForceSums::default());
         }
         let sec = self.section;
@@ -198,9 +198,9 @@ impl Body {
                 what: "internal energy",
             });
         }
-        self.pending_internal = en.internal;
-        self.pending_hourglass = en.hourglass;
-        self.pending_damping += en.damping;
+        self.internal_now = en.internal;
+        self.hourglass_now = en.hourglass;
+        self.energy.damping += en.damping;
         Ok(total)
     }
 }

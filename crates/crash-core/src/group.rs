@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BodyReport {
     pub id: u32,
-    /// Energies at t_n (the start of the step just taken).
+    /// Energies at t_{n+1/2} (see `BodyEnergy`).
     pub energy: BodyEnergy,
     /// Critical element time step of the new configuration (no safety factor).
     pub stable_dt: f64,
@@ -70,8 +70,8 @@ impl Group {
             b.apply_constraints(0.0);
             let f = b.internal_forces(0.0, 0)?;
             let (lo, hi) = crate::mesh::bounds(&b.x);
-            b.energy.internal = b.pending_internal;
-            b.energy.hourglass = b.pending_hourglass;
+            b.energy.internal = b.internal_now;
+            b.energy.hourglass = b.hourglass_now;
             b.energy.kinetic = b.kinetic_energy_now();
             out.push(report(b, &f, lo, hi, 0.0));
         }
@@ -95,7 +95,10 @@ impl Group {
         self.h_prev = h;
         let mut out = Vec::with_capacity(self.bodies.len());
         for (b, s) in self.bodies.iter_mut().zip(&sums) {
+            let (i_old, h_old) = (b.internal_now, b.hourglass_now);
             let f = b.internal_forces(h, self.step)?;
+            b.energy.internal = 0.5 * (i_old + b.internal_now);
+            b.energy.hourglass = 0.5 * (h_old + b.hourglass_now);
             out.push(report(b, &f, s.lo, s.hi, s.max_move));
         }
         Ok(out)

@@ -16,7 +16,8 @@ use rayon::prelude::*;
 /// Per-body sums of the node loop.
 #[derive(Debug, Clone, Copy)]
 pub struct NodeSums {
-    /// Kinetic energy at t_n (from v_n = (v_{n-1/2} + v_{n+1/2}) / 2).
+    /// Kinetic energy of v_{n+1/2}: with work increments hbar f_n . (v_{n-1/2} + v_{n+1/2})/2
+    /// it telescopes exactly (m (v+ - v-) . (v+ + v-)/2 = hbar f . v_mean).
     pub kinetic: f64,
     /// Work increments over this step: loads and gravity, boundary reactions, contact
     /// forces (on this body), mass damping (dissipated, >= 0).
@@ -160,7 +161,7 @@ impl Body {
                     }
                     let vn = (v_old + v_new) * 0.5;
                     let wn = (w_old + w_new) * 0.5;
-                    s.kinetic += 0.5 * (m * vn.norm_squared() + inr * wn.norm_squared());
+                    s.kinetic += 0.5 * (m * v_new.norm_squared() + inr * w_new.norm_squared());
                     s.external += hbar * (fe.dot(&vn) + me.dot(&wn));
                     s.contact += hbar * fcon.dot(&vn);
                     if fx != 0 {
@@ -207,12 +208,9 @@ impl Body {
         }
         let e = &mut self.energy;
         e.kinetic = total.kinetic;
-        e.internal = self.pending_internal;
-        e.hourglass = self.pending_hourglass;
         e.external += total.external + total.reaction;
         e.contact -= total.contact;
-        e.damping += total.mass_damping + self.pending_damping;
-        self.pending_damping = 0.0;
+        e.damping += total.mass_damping;
         Ok(total)
     }
 }

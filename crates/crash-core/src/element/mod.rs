@@ -79,7 +79,7 @@ impl Default for Stabilization {
             hourglass_membrane: 0.05,
             hourglass_w: 0.05,
             hourglass_rotation: 0.05,
-            drilling: 0.01,
+            drilling: 0.1,
         }
     }
 }

@@ -105,7 +105,9 @@ pub fn quad_forces(
         q += x[i] * g[i];
     }
     let qt = (q - fr.e3 * q.dot(&fr.e3)) * el.k_m;
-    en.hourglass += 0.5 * qt.norm_squared() / el.k_m;
+    if el.k_m > 0.0 {
+        en.hourglass += 0.5 * qt.norm_squared() / el.k_m;
+    }
 
     let rates = LocalRates {
         v: [
@@ -132,8 +134,12 @@ pub fn quad_forces(
     hg.w += h * el.k_w * qw;
     hg.th[0] += h * el.k_th * qth[0];
     hg.th[1] += h * el.k_th * qth[1];
-    en.hourglass += 0.5 * hg.w * hg.w / el.k_w
-        + 0.5 * (hg.th[0] * hg.th[0] + hg.th[1] * hg.th[1]) / el.k_th;
+    if el.k_w > 0.0 {
+        en.hourglass += 0.5 * hg.w * hg.w / el.k_w;
+    }
+    if el.k_th > 0.0 {
+        en.hourglass += 0.5 * (hg.th[0] * hg.th[0] + hg.th[1] * hg.th[1]) / el.k_th;
+    }
 
     let kin = PlateKin {
         bx,

@@ -1,0 +1,37 @@
+//! Shared builders for the physics tests.
+#![allow(dead_code)]
+
+use crash_core::shapes::{plate, ElementKind};
+use crash_core::{Body, Material, Section, Stabilization, Vec3};
+
+pub fn steel() -> Material {
+    Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid material")
+}
+
+pub fn body(mesh: &crash_core::Mesh, mat: Material, t: f64) -> Body {
+    Body::new(0, "b", mesh, Section::new(mat, t), Stabilization::default()).expect("valid body")
+}
+
+/// Plate lx x ly with its corner at the origin (x in [0, lx], y in [0, ly]).
+pub fn corner_plate(lx: f64, ly: f64, nx: usize, ny: usize, kind: ElementKind, mat: Material, t: f64) -> Body {
+    let mut m = plate(lx, ly, nx, ny, kind);
+    m.transform(&nalgebra::Matrix3::identity(), Vec3::new(lx / 2.0, ly / 2.0, 0.0));
+    body(&m, mat, t)
+}
+
+/// Nodes whose coordinate `axis` is within tol of `value`.
+pub fn nodes_at(b: &Body, axis: usize, value: f64, tol: f64) -> Vec<usize> {
+    (0..b.x.len()).filter(|&i| (b.x0[i][axis] - value).abs() < tol).collect()
+}
+
+pub fn kinds() -> [ElementKind; 2] {
+    [ElementKind::Tri, ElementKind::Quad]
+}
+
+/// Observed order of convergence between successive (h, error) pairs.
+pub fn orders(ladder: &[(f64, f64)]) -> Vec<f64> {
+    ladder
+        .windows(2)
+        .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
+        .collect()
+}

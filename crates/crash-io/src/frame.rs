@@ -1,0 +1,114 @@
+//! A snapshot of every body at one time: what one .vtu file and one picture show.
+
+use crash_core::{Body, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// One body in a frame. Element arrays hold triangles first, then quads (the order of
+/// `Body::resultants`), and so do the cells of the .vtu file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameBody {
+    pub id: u32,
+    pub name: String,
+    /// Shell thickness [m].
+    pub thickness: f64,
+    /// Current positions [m].
+    pub x: Vec<Vec3>,
+    /// Initial positions [m].
+    pub x0: Vec<Vec3>,
+    /// Nodal velocities [m/s].
+    pub v: Vec<Vec3>,
+    pub tris: Vec<[u32; 3]>,
+    pub quads: Vec<[u32; 4]>,
+    /// von Mises stress at the top (+t/2) and bottom (-t/2) surface per element [Pa].
+    pub von_mises_top: Vec<f64>,
+    pub von_mises_bottom: Vec<f64>,
+    /// Membrane forces (Nxx, Nyy, Nxy) per element [N/m], element frame.
+    pub n: Vec<[f64; 3]>,
+    /// Bending moments (Mxx, Myy, Mxy) per element [N m/m], element frame.
+    pub m: Vec<[f64; 3]>,
+    /// Contact force per node [N] (zeros when the body has none).
+    pub f_contact: Vec<Vec3>,
+}
+
+impl FrameBody {
+    pub fn capture(b: &Body) -> Self {
+        let t = b.section.thickness;
+        let res = b.resultants();
+        let (top, bottom): (Vec<f64>, Vec<f64>) = res.iter().map(|r| r.von_mises(t)).unzip();
+        let f_contact = if b.f_contact.len() == b.x.len() {
+            b.f_contact.clone()
+        } else {
+            vec![Vec3::zeros(); b.x.len()]
+        };
+        Self {
+            id: b.id,
+            name: b.name.clone(),
+            thickness: t,
+            x: b.x.clone(),
+            x0: b.x0.clone(),
+            v: b.v.clone(),
+            tris: b.tris.iter().map(|e| e.nodes).collect(),
+            quads: b.quads.iter().map(|e| e.nodes).collect(),
+            von_mises_top: top,
+            von_mises_bottom: bottom,
+            n: res.iter().map(|r| r.n).collect(),
+            m: res.iter().map(|r| r.m).collect(),
+            f_contact,
+        }
+    }
+
+    pub fn element_count(&self) -> usize {
+        self.tris.len() + self.quads.len()
+    }
+
+    /// Larger of the top and bottom von Mises stress of element `e`.
+    pub fn von_mises_max(&self, e: usize) -> f64 {
+        self.von_mises_top[e].max(self.von_mises_bottom[e])
+    }
+}
+
+/// All bodies at one time, sorted by body id.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    /// Simulated time [s].
+    pub time: f64,
+    pub step: u64,
+    pub bodies: Vec<FrameBody>,
+}
+
+impl Frame {
+    /// Snapshot of the given bodies, in any order (gathered from several workers).
+    pub fn capture(time: f64, step: u64, bodies: &[&Body]) -> Self {
+        Self::from_bodies(time, step, bodies.iter().map(|b| FrameBody::capture(b)).collect())
+    }
+
+    /// Frame from already captured bodies (any order; sorted by id here).
+    pub fn from_bodies(time: f64, step: u64, mut bodies: Vec<FrameBody>) -> Self {
+        bodies.sort_by_key(|b| b.id);
+        Self { time, step, bodies }
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.x.len()).sum()
+    }
+
+    pub fn element_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.element_count()).sum()
+    }
+
+    /// Axis-aligned bounds of all current positions (None for an empty frame).
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut it = self.bodies.iter().flat_map(|b| b.x.iter());
+        let first = *it.next()?;
+        Some(it.fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p))))
+    }
+
+    /// Largest element von Mises stress (top or bottom) in the frame.
+    pub fn max_von_mises(&self) -> f64 {
+        self.bodies
+            .iter()
+            .flat_map(|b| (0..b.element_count()).map(move |e| b.von_mises_max(e)))
+            .filter(|s| s.is_finite())
+            .fold(0.0, f64::max)
+    }
+}

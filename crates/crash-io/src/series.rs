@@ -1,0 +1,191 @@
+//! The ParaView series of a run: one .vtu per frame under `frames/` and a .pvd
+//! collection that is rewritten atomically after every frame, so an interrupted run
+//! still leaves a valid series. Restart keeps the frames up to the restart time and
+//! continues the numbering.
+
+use crate::atomic::write_atomic;
+use crate::error::{AtPath, IoError};
+use crate::frame::Frame;
+use crate::vtu::{write_vtu, Encoding};
+use roxmltree::Document;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Name of the collection file inside the output directory.
+pub const PVD_FILE: &str = "frames.pvd";
+/// Sub-directory (of the output directory) that holds the .vtu files.
+pub const FRAMES_DIR: &str = "frames";
+
+/// One frame listed in the .pvd.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PvdEntry {
+    pub time: f64,
+    /// Path relative to the .pvd's directory, e.g. `frames/frame_000003.vtu`.
+    pub file: String,
+}
+
+/// Writes the frame series of one run.
+#[derive(Debug)]
+pub struct SeriesWriter {
+    dir: PathBuf,
+    encoding: Encoding,
+    entries: Vec<PvdEntry>,
+    next_index: u64,
+}
+
+fn frame_file(index: u64) -> String {
+    format!("{FRAMES_DIR}/frame_{index:06}.vtu")
+}
+
+fn index_of(file: &str) -> Option<u64> {
+    file.strip_prefix(&format!("{FRAMES_DIR}/frame_"))?
+        .strip_suffix(".vtu")?
+        .parse()
+        .ok()
+}
+
+/// Read the frames listed in a .pvd file.
+pub fn read_pvd(path: &Path) -> Result<Vec<PvdEntry>, IoError> {
+    let text = std::fs::read_to_string(path).at(path)?;
+    let doc = Document::parse(&text).map_err(|e| IoError::format(path, format!("XML: {e}")))?;
+    let mut out = Vec::new();
+    for d in doc.descendants().filter(|n| n.has_tag_name("DataSet")) {
+        let time = d
+            .attribute("timestep")
+            .and_then(|t| t.parse::<f64>().ok())
+            .ok_or_else(|| IoError::format(path, "DataSet without a valid timestep"))?;
+        let file = d
+            .attribute("file")
+            .ok_or_else(|| IoError::format(path, "DataSet without a file"))?;
+        out.push(PvdEntry {
+            time,
+            file: file.to_string(),
+        });
+    }
+    Ok(out)
+}
+
+fn write_pvd(path: &Path, entries: &[PvdEntry]) -> Result<(), IoError> {
+    write_atomic(path, |w| {
+        writeln!(w, r#"<?xml version="1.0"?>"#)?;
+        writeln!(w, r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#)?;
+        writeln!(w, "  <Collection>")?;
+        for e in entries {
+            writeln!(
+                w,
+                r#"    <DataSet timestep="{:e}" group="" part="0" file="{}"/>"#,
+                e.time, e.file
+            )?;
+        }
+        writeln!(w, "  </Collection>")?;
+        writeln!(w, "</VTKFile>")
+    })
+}
+
+impl SeriesWriter {
+    /// Start a new series in `dir` (created if needed). Frames of an earlier series that
+    /// its .pvd listed are removed so stale frames cannot mix in.
+    pub fn create(dir: impl AsRef<Path>) -> Result<Self, IoError> {
+        let dir = dir.as_ref().to_path_buf();
+        let frames = dir.join(FRAMES_DIR);
+        std::fs::create_dir_all(&frames).at(&frames)?;
+        let pvd = dir.join(PVD_FILE);
+        if pvd.exists() {
+            if let Ok(old) = read_pvd(&pvd) {
+                remove_frames(&dir, &old)?;
+            }
+        }
+        let s = Self {
+            dir,
+            encoding: Encoding::default(),
+            entries: Vec::new(),
+            next_index: 0,
+        };
+        write_pvd(&pvd, &s.entries)?;
+        Ok(s)
+    }
+
+    /// Continue the series in `dir` after a restart from `up_to_time`: frames with
+    /// time <= up_to_time are kept, later ones are dropped (and their files removed),
+    /// and numbering continues after the last kept frame.
+    pub fn reopen(dir: impl AsRef<Path>, up_to_time: f64) -> Result<Self, IoError> {
+        let dir = dir.as_ref().to_path_buf();
+        let frames = dir.join(FRAMES_DIR);
+        std::fs::create_dir_all(&frames).at(&frames)?;
+        let pvd = dir.join(PVD_FILE);
+        let all = if pvd.exists() { read_pvd(&pvd)? } else { Vec::new() };
+        let (keep, drop): (Vec<_>, Vec<_>) = all.into_iter().partition(|e| e.time <= up_to_time);
+        remove_frames(&dir, &drop)?;
+        let next_index = keep
+            .iter()
+            .filter_map(|e| index_of(&e.file))
+            .max()
+            .map_or(0, |i| i + 1);
+        write_pvd(&pvd, &keep)?;
+        Ok(Self {
+            dir,
+            encoding: Encoding::default(),
+            entries: keep,
+            next_index,
+        })
+    }
+
+    /// Choose how data arrays are stored (default: base64 binary).
+    pub fn with_encoding(mut self, encoding: Encoding) -> Self {
+        self.encoding = encoding;
+        self
+    }
+
+    /// Write one frame and rewrite the .pvd. A frame at or before the last listed time
+    /// replaces the listed frames from that time on. Returns the .vtu path.
+    pub fn write(&mut self, frame: &Frame) -> Result<PathBuf, IoError> {
+        if !frame.time.is_finite() {
+            return Err(IoError::Invalid(format!(
+                "frame at step {} has a non-finite time {}",
+                frame.step, frame.time
+            )));
+        }
+        if self.entries.last().is_some_and(|e| e.time >= frame.time) {
+            let (keep, drop): (Vec<_>, Vec<_>) =
+                self.entries.drain(..).partition(|e| e.time < frame.time);
+            remove_frames(&self.dir, &drop)?;
+            self.entries = keep;
+        }
+        let file = frame_file(self.next_index);
+        let path = self.dir.join(&file);
+        let enc = self.encoding;
+        write_atomic(&path, |w| write_vtu(w, frame, enc))?;
+        self.next_index += 1;
+        self.entries.push(PvdEntry {
+            time: frame.time,
+            file,
+        });
+        write_pvd(&self.pvd_path(), &self.entries)?;
+        Ok(path)
+    }
+
+    pub fn entries(&self) -> &[PvdEntry] {
+        &self.entries
+    }
+
+    pub fn pvd_path(&self) -> PathBuf {
+        self.dir.join(PVD_FILE)
+    }
+
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+}
+
+/// Remove the .vtu files of `entries` (only our own `frames/frame_N.vtu` names).
+fn remove_frames(dir: &Path, entries: &[PvdEntry]) -> Result<(), IoError> {
+    for e in entries.iter().filter(|e| index_of(&e.file).is_some()) {
+        let p = dir.join(&e.file);
+        match std::fs::remove_file(&p) {
+            Ok(()) => {}
+            Err(err) if err.kind() == std::io::ErrorKind::NotFound => {}
+            Err(err) => return Err(IoError::io(&p, err)),
+        }
+    }
+    Ok(())
+}

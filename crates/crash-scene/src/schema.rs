@@ -1,0 +1,187 @@
+//! The scene file as written (serde, unknown keys rejected). Values are checked and
+//! turned into core objects by `build`; defaults live there, next to their checks.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+pub type V3 = [f64; 3];
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Run name (default: the file stem).
+    pub name: Option<String>,
+    /// Simulated time [s].
+    pub end_time: f64,
+    /// Fraction of the critical time step used (default 0.9).
+    pub dt_safety: Option<f64>,
+    /// Gravity acceleration [m/s^2] (default zero).
+    pub gravity: Option<V3>,
+    /// Time between output frames [s] (default end_time / 100).
+    pub output_interval: Option<f64>,
+    /// Relative energy-balance error that draws a warning at the end (default 0.05).
+    pub energy_limit: Option<f64>,
+    #[serde(default)]
+    pub contact: ContactSpec,
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialSpec>,
+    #[serde(default)]
+    pub bodies: Vec<BodySpec>,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    pub enabled: Option<bool>,
+    /// Search margin [m] (default: derived, see `margin`).
+    pub margin: Option<f64>,
+    pub penalty_scale: Option<f64>,
+    /// "soft" or "element".
+    pub penalty: Option<String>,
+    pub damping_ratio: Option<f64>,
+}
+
+/// Either (young, poisson) or the seed's Lamé pair (lambda1, lambda2).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// [kg/m^3]
+    pub density: f64,
+    /// Young's modulus [Pa].
+    pub young: Option<f64>,
+    /// Poisson's ratio [-].
+    pub poisson: Option<f64>,
+    /// Lamé constants of the seed's energy density [Pa].
+    pub lambda1: Option<f64>,
+    pub lambda2: Option<f64>,
+    /// Kelvin damping time alpha [s] (default 0).
+    pub kelvin: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    pub name: String,
+    pub material: String,
+    /// Shell thickness [m].
+    pub thickness: f64,
+    /// "tri" or "quad" (default depends on the shape).
+    pub element: Option<String>,
+    /// Translation [m] applied after the rotation.
+    pub position: Option<V3>,
+    pub rotation: Option<RotationSpec>,
+    /// Initial velocity of the centre of mass [m/s].
+    pub velocity: Option<V3>,
+    /// Initial angular velocity [rad/s] about the centre of mass.
+    pub angular_velocity: Option<V3>,
+    /// Mass-proportional damping c [1/s].
+    pub mass_damping: Option<f64>,
+    /// Takes part in contact (default true).
+    pub contact: Option<bool>,
+    pub self_contact: Option<bool>,
+    // exactly one shape
+    pub plate: Option<PlateSpec>,
+    pub sphere: Option<SphereSpec>,
+    pub cylinder: Option<CylinderSpec>,
+    #[serde(rename = "box")]
+    pub cuboid: Option<BoxSpec>,
+    pub mesh: Option<MeshSpec>,
+    #[serde(default)]
+    pub fix: Vec<FixSpec>,
+    #[serde(default)]
+    pub prescribe: Vec<PrescribeSpec>,
+    #[serde(default)]
+    pub load: Vec<LoadSpec>,
+}
+
+/// Right-handed rotation by `angle` degrees about `axis` (any length > 0).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotationSpec {
+    pub axis: V3,
+    pub angle: f64,
+}
+
+/// Counts are read as signed integers so that a negative one gets a clear message.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlateSpec {
+    /// [lx, ly] in m.
+    pub size: [f64; 2],
+    /// [nx, ny] cells.
+    pub cells: Option<[i64; 2]>,
+    /// Target cell size [m] (instead of cells).
+    pub element_size: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    pub radius: f64,
+    /// Icosphere subdivision level: 20 * 4^level triangles.
+    pub level: Option<i64>,
+    /// Target edge length [m] (instead of level).
+    pub element_size: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CylinderSpec {
+    pub radius: f64,
+    pub length: f64,
+    /// [around, along] cells.
+    pub cells: Option<[i64; 2]>,
+    pub element_size: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// [lx, ly, lz] in m.
+    pub size: V3,
+    /// Cells along the longest side.
+    pub cells: Option<i64>,
+    pub element_size: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// Gmsh .msh (4.1 ASCII), relative to the scene file.
+    pub file: String,
+    /// Factor applied to the file's coordinates (e.g. 0.001 for mm), default 1.
+    pub scale: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FixSpec {
+    /// "all", "x-", "x+", "y-", "y+", "z-", "z+" or { min = [..], max = [..] }.
+    pub select: toml::Value,
+    /// "all" (default), "translations", "rotations" or a list of "x","y","z","rx","ry","rz".
+    pub dofs: Option<toml::Value>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrescribeSpec {
+    pub select: toml::Value,
+    /// Prescribed velocity [m/s] (rotations are held).
+    pub velocity: V3,
+    /// Ramp time from zero [s] (default 0: moving from the start).
+    pub ramp: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSpec {
+    pub select: toml::Value,
+    /// Total force [N], split equally over the selected nodes.
+    pub force: Option<V3>,
+    /// Total moment [N m], split equally over the selected nodes.
+    pub moment: Option<V3>,
+    /// Time the load starts to rise [s] (default 0).
+    pub start: Option<f64>,
+    /// Rise time to full value [s] (default 0: a step).
+    pub ramp: Option<f64>,
+}
