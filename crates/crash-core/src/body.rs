@@ -63,9 +63,9 @@ pub struct NodalLoad {
 }
 
 /// Energy record of one body. After a step from t_n to t_{n+1} it holds the values at
-/// t_{n+1/2}: kinetic energy of v_{n+1/2}, the mean of the internal (and hourglass)
-/// energies of x_n and x_{n+1}, and the work and dissipation summed up to then. With
-/// these time levels the balance closes to second order in the time step.
+/// t_{n+1/2}: kinetic energy of v_{n+1/2}, the shadow internal energy
+/// E(x_n) + h/2 f_int(x_n) . v_{n+1/2} (see integrate.rs), and the work and dissipation
+/// summed up to then.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct BodyEnergy {
     pub kinetic: f64,

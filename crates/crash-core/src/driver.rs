@@ -31,7 +31,7 @@ impl Default for RunConfig {
 }
 
 /// Consecutive steps above the runaway limit that stop a run.
-pub const RUNAWAY_PERSIST: u32 = 10;
+pub const RUNAWAY_PERSIST: u32 = 3;
 
 /// A run of one group in this process.
 #[derive(Debug)]

@@ -1,9 +1,11 @@
 //! The one-step pipeline of a group of bodies (the unit a worker owns):
-//! integrate (x_n -> x_{n+1}) -> contact at x_{n+1} -> element forces at x_{n+1}.
+//! integrate (x_n -> x_{n+1}) -> element forces at x_{n+1} -> contact at x_{n+1}
+//! (contact last: its soft penalty uses this pass's element critical steps).
 //! Forces are thus ready before the next step's time step is chosen, and the stable dt
 //! reported is that of the configuration the next step starts from.
 
 use crate::body::{Body, BodyEnergy};
+use crate::contact::{ContactConfig, ContactState, PairStats};
 use crate::error::Fault;
 use crate::forces::ForceSums;
 use crate::integrate::StepClock;
@@ -36,6 +38,13 @@ pub struct Group {
     pub step: u64,
     /// h_{n-1/2}: the last step taken (0 before the first).
     pub h_prev: f64,
+    /// Contact parameters.
+    #[serde(default)]
+    pub contact: ContactConfig,
+    /// Contact search caches and the last pass's statistics: not physical state,
+    /// rebuilt lazily (results never depend on them).
+    #[serde(skip)]
+    pub contact_state: ContactState,
 }
 
 fn report(b: &Body, f: &ForceSums, lo: Vec3, hi: Vec3, max_move: f64) -> BodyReport {
@@ -60,7 +69,29 @@ impl Group {
             time: 0.0,
             step: 0,
             h_prev: 0.0,
+            contact: ContactConfig::default(),
+            contact_state: ContactState::default(),
         }
+    }
+
+    /// Contact forces at the current positions; lowers each report's stable dt where
+    /// contact requires it.
+    fn contact_pass(&mut self, out: &mut [BodyReport]) {
+        let dts: Vec<f64> = out.iter().map(|r| r.stable_dt).collect();
+        let limit = crate::contact::contact_forces(
+            &mut self.bodies,
+            &self.contact,
+            &mut self.contact_state,
+            &dts,
+        );
+        for (r, d) in out.iter_mut().zip(limit) {
+            r.stable_dt = r.stable_dt.min(d);
+        }
+    }
+
+    /// Per body pair contact statistics of the last force pass, sorted by pair.
+    pub fn contact_stats(&self) -> &[PairStats] {
+        self.contact_state.stats()
     }
 
     /// Forces at the initial configuration (no rate increments).
@@ -75,6 +106,7 @@ impl Group {
             b.energy.kinetic = b.kinetic_energy_now();
             out.push(report(b, &f, lo, hi, 0.0));
         }
+        self.contact_pass(&mut out);
         Ok(out)
     }
 
@@ -93,14 +125,14 @@ impl Group {
         self.time += h;
         self.step += 1;
         self.h_prev = h;
+        let moves: Vec<(f64, usize)> = sums.iter().map(|s| (s.max_move, s.max_move_node)).collect();
+        crate::contact::check_moves(&self.bodies, &self.contact, &moves, h, self.step)?;
         let mut out = Vec::with_capacity(self.bodies.len());
         for (b, s) in self.bodies.iter_mut().zip(&sums) {
-            let (i_old, h_old) = (b.internal_now, b.hourglass_now);
             let f = b.internal_forces(h, self.step)?;
-            b.energy.internal = 0.5 * (i_old + b.internal_now);
-            b.energy.hourglass = 0.5 * (h_old + b.hourglass_now);
             out.push(report(b, &f, s.lo, s.hi, s.max_move));
         }
+        self.contact_pass(&mut out);
         Ok(out)
     }
 }

@@ -16,6 +16,7 @@ pub mod hash;
 pub mod integrate;
 pub mod material;
 pub mod mesh;
+pub mod modal;
 pub mod output;
 pub mod shapes;
 

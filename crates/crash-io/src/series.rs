@@ -90,19 +90,16 @@ impl SeriesWriter {
         let frames = dir.join(FRAMES_DIR);
         std::fs::create_dir_all(&frames).at(&frames)?;
         let pvd = dir.join(PVD_FILE);
-        if pvd.exists() {
-            if let Ok(old) = read_pvd(&pvd) {
-                remove_frames(&dir, &old)?;
-            }
-        }
-        let s = Self {
+        let old = if pvd.exists() { read_pvd(&pvd).unwrap_or_default() } else { Vec::new() };
+        // The .pvd first, then the files: it never lists a missing frame.
+        write_pvd(&pvd, &[])?;
+        remove_frames(&dir, &old)?;
+        Ok(Self {
             dir,
             encoding: Encoding::default(),
             entries: Vec::new(),
             next_index: 0,
-        };
-        write_pvd(&pvd, &s.entries)?;
-        Ok(s)
+        })
     }
 
     /// Continue the series in `dir` after a restart from `up_to_time`: frames with
@@ -115,13 +112,13 @@ impl SeriesWriter {
         let pvd = dir.join(PVD_FILE);
         let all = if pvd.exists() { read_pvd(&pvd)? } else { Vec::new() };
         let (keep, drop): (Vec<_>, Vec<_>) = all.into_iter().partition(|e| e.time <= up_to_time);
-        remove_frames(&dir, &drop)?;
         let next_index = keep
             .iter()
             .filter_map(|e| index_of(&e.file))
             .max()
             .map_or(0, |i| i + 1);
         write_pvd(&pvd, &keep)?;
+        remove_frames(&dir, &drop)?;
         Ok(Self {
             dir,
             encoding: Encoding::default(),
@@ -145,11 +142,12 @@ impl SeriesWriter {
                 frame.step, frame.time
             )));
         }
+        let mut replaced = Vec::new();
         if self.entries.last().is_some_and(|e| e.time >= frame.time) {
             let (keep, drop): (Vec<_>, Vec<_>) =
                 self.entries.drain(..).partition(|e| e.time < frame.time);
-            remove_frames(&self.dir, &drop)?;
             self.entries = keep;
+            replaced = drop;
         }
         let file = frame_file(self.next_index);
         let path = self.dir.join(&file);
@@ -161,6 +159,7 @@ impl SeriesWriter {
             file,
         });
         write_pvd(&self.pvd_path(), &self.entries)?;
+        remove_frames(&self.dir, &replaced)?;
         Ok(path)
     }
 

@@ -1,5 +1,7 @@
 //! Contact parameters of a scene.
 
+use crate::body::Body;
+use crate::error::CoreError;
 use serde::{Deserialize, Serialize};
 
 /// How the penalty stiffness is chosen.
@@ -7,18 +9,29 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "lowercase")]
 pub enum PenaltyKind {
     /// Soft constraint k = s * m* / dt^2 (m* the smaller of the node's and the segment
-    /// nodes' masses): stable by construction.
+    /// nodes' masses, dt the pair's reference step): stable by construction.
     Soft,
-    /// Element-based k = s * K A / L of the segment's element (membrane modulus K).
+    /// Element-based k = s * E/(1-nu^2) * A / L of the segment's element (plane-stress
+    /// modulus, initial area A, longest edge or diagonal L); its stable step enters the
+    /// global time step.
     Element,
 }
+
+/// Fraction of a pair's smallest element critical step used as the reference step of
+/// the soft penalty (the industry safety factor; docs/theory-contact.md).
+pub const REFERENCE_SAFETY: f64 = 0.9;
+
+/// Largest soft penalty scale: with the elements at 0.9 of their limit (omega h = 1.8),
+/// a contact spring adds (omega_c h)^2 <= 2 s, and (1.8)^2 + 2 s must stay below 4.
+pub const SOFT_SCALE_LIMIT: f64 = 0.3;
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ContactConfig {
     /// Contact between bodies switched on.
     pub enabled: bool,
-    /// Search margin [m] added to thickness-inflated boxes (level i) and capture boxes
-    /// (level ii); also the Verlet skin of the segment trees.
+    /// Search margin [m]: half of it inflates each thickness-inflated body box (level i),
+    /// it is the Verlet skin of the segment trees (level ii), and half of it is the most a
+    /// node may move in one step (tunnelling guard). <= 0: each body uses its thickness.
     pub margin: f64,
     /// Penalty scale s.
     pub penalty_scale: f64,
@@ -36,5 +49,47 @@ impl Default for ContactConfig {
             penalty: PenaltyKind::Soft,
             damping_ratio: 0.0,
         }
+    }
+}
+
+impl ContactConfig {
+    /// The search margin of one body: `margin` if set (> 0), otherwise its thickness.
+    pub fn margin_for(&self, body: &Body) -> f64 {
+        if self.margin > 0.0 {
+            self.margin
+        } else {
+            body.section.thickness
+        }
+    }
+
+    /// The most a node of `body` may move in one step: half its margin, so that two
+    /// bodies closing at full budget cannot cross the margin between two searches.
+    pub fn step_budget(&self, body: &Body) -> f64 {
+        0.5 * self.margin_for(body)
+    }
+
+    /// Reject values that would make contact meaningless or unstable.
+    pub fn validate(&self) -> Result<(), CoreError> {
+        let bad = |field: &str, value: f64, valid: &str| CoreError::Other {
+            body: "contact".into(),
+            what: format!("{field} = {value} is invalid: {valid}"),
+        };
+        if !self.margin.is_finite() {
+            return Err(bad("margin", self.margin, "must be finite (m; <= 0: thickness)"));
+        }
+        if !(self.penalty_scale.is_finite() && self.penalty_scale > 0.0) {
+            return Err(bad("penalty_scale", self.penalty_scale, "must be finite and > 0"));
+        }
+        if self.penalty == PenaltyKind::Soft && self.penalty_scale > SOFT_SCALE_LIMIT {
+            return Err(bad(
+                "penalty_scale",
+                self.penalty_scale,
+                "the soft penalty is stable only for s <= 0.3 (0.1 recommended)",
+            ));
+        }
+        if !(self.damping_ratio.is_finite() && (0.0..=1.0).contains(&self.damping_ratio)) {
+            return Err(bad("damping_ratio", self.damping_ratio, "must be in [0, 1]"));
+        }
+        Ok(())
     }
 }

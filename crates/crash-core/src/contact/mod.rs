@@ -1,6 +1,15 @@
 //! Contact: frictionless penalty node-to-segment with a two-level search
-//! (level i: body boxes; level ii: R-tree of segments per candidate pair).
+//! (level i: body boxes; level ii: R-tree of segments per body, queried per candidate
+//! pair). Theory and rules: docs/theory-contact.md.
 
+pub mod broad;
 pub mod config;
+pub mod narrow;
+pub mod segment;
+pub mod stage;
+pub mod surface;
 
-pub use config::{ContactConfig, PenaltyKind};
+pub use broad::{candidate_pairs, BodyBox};
+pub use config::{ContactConfig, PenaltyKind, REFERENCE_SAFETY, SOFT_SCALE_LIMIT};
+pub use segment::{project, segments, Projection, Segment};
+pub use stage::{check_moves, contact_forces, initial_penetrations, ContactState, PairStats, Penetration};

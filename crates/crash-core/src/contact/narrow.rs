@@ -1,0 +1,160 @@
+//! Narrow phase of one pass: the nodes of one body against the segments of another (or
+//! of itself). Each node takes the closest segment (ties: lowest segment index), so the
+//! outcome depends only on exact geometry, never on the tree or on thread count.
+//! Gap with shell thickness: g = d - (t_node + t_segment) / 2, d the distance of the node
+//! to the segment's mid-surface.
+
+use super::config::{ContactConfig, PenaltyKind};
+use super::segment::{project, Projection};
+use super::surface::Surface;
+use crate::body::Body;
+use crate::Vec3;
+use rayon::prelude::*;
+
+/// Nodes per parallel task (fixed: chunk results are concatenated in node order).
+const NODE_CHUNK: usize = 512;
+
+/// A node within contact distance of a segment.
+#[derive(Debug, Clone, Copy)]
+pub struct Hit {
+    pub node: u32,
+    pub segment: u32,
+    pub proj: Projection,
+    /// Penetration depth (t_a + t_b)/2 - d > 0.
+    pub depth: f64,
+}
+
+/// Box (lo, hi) beyond which a node cannot touch the segment body: its node box grown
+/// by both half-thicknesses.
+pub fn reach_box(seg_body: &Body, node_body: &Body) -> (Vec3, Vec3) {
+    let (lo, hi) = crate::mesh::bounds(&seg_body.x);
+    let c = 0.5 * (seg_body.section.thickness + node_body.section.thickness);
+    (lo.add_scalar(-c), hi.add_scalar(c))
+}
+
+/// All nodes of `nb` penetrating the surface of `sb` (`surf` its search data, fresh).
+/// `self_pass`: nb and sb are the same body; segments holding the node or a neighbour,
+/// and segments already within contact distance in the reference configuration, are
+/// excluded.
+pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit> {
+    let c = 0.5 * (nb.section.thickness + sb.section.thickness);
+    let r = 0.5 * nb.section.thickness;
+    let (lo, hi) = reach_box(sb, nb);
+    let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] && p[d] <= hi[d]);
+    let chunks: Vec<Vec<Hit>> = nb
+        .x
+        .par_chunks(NODE_CHUNK)
+        .enumerate()
+        .map(|(ci, xs)| {
+            let mut out = Vec::new();
+            let mut cand = Vec::new();
+            for (k, p) in xs.iter().enumerate() {
+                if !inside(p) {
+                    continue;
+                }
+                let i = (ci * NODE_CHUNK + k) as u32;
+                surf.candidates(p, r, &mut cand);
+                let mut best: Option<(Projection, u32)> = None;
+                for &j in &cand {
+                    if self_pass && surf.near_in_topology(i, j) {
+                        continue;
+                    }
+                    let pr = project(p, &surf.segments[j as usize], &sb.x);
+                    let better = match &best {
+                        None => true,
+                        Some((b, bj)) => pr.dist < b.dist || (pr.dist == b.dist && j < *bj),
+                    };
+                    if better {
+                        best = Some((pr, j));
+                    }
+                }
+                let Some((proj, j)) = best else { continue };
+                if !(proj.dist < c) {
+                    continue;
+                }
+                if self_pass {
+                    // already this close at the start: part of the shape, not a contact
+                    let seg = &surf.segments[j as usize];
+                    if project(&nb.x0[i as usize], seg, &sb.x0).dist < c {
+                        continue;
+                    }
+                }
+                out.push(Hit {
+                    node: i,
+                    segment: j,
+                    proj,
+                    depth: c - proj.dist,
+                });
+            }
+            out
+        })
+        .collect();
+    chunks.into_iter().flatten().collect()
+}
+
+/// The penalty force of a hit, acting on the node (the segment nodes get minus it times
+/// their weights).
+#[derive(Debug, Clone, Copy)]
+pub struct Push {
+    pub hit: Hit,
+    pub force: Vec3,
+    pub normal_force: f64,
+}
+
+/// Unit normal pointing from the segment to the node: the direction to the node, or
+/// the face normal on the node's side when the node sits on the mid-surface.
+fn normal(p: &Vec3, pr: &Projection, c: f64) -> Vec3 {
+    let d = p - pr.point;
+    if pr.dist > 1e-9 * c {
+        d / pr.dist
+    } else if d.dot(&pr.face_normal) < 0.0 {
+        -pr.face_normal
+    } else {
+        pr.face_normal
+    }
+}
+
+/// Penalty stiffness of a hit. Soft: s m* / dt_ref^2; element: s E' A / L.
+pub fn stiffness(cfg: &ContactConfig, surf: &Surface, m_star: f64, seg: u32, dt_ref: f64) -> f64 {
+    match cfg.penalty {
+        PenaltyKind::Soft => cfg.penalty_scale * m_star / (dt_ref * dt_ref),
+        PenaltyKind::Element => cfg.penalty_scale * surf.k_unit[seg as usize],
+    }
+}
+
+/// Forces of the hits, f = (k depth - c_d v_n)+ n, in hit order.
+pub fn forces(
+    hits: &[Hit],
+    nb: &Body,
+    sb: &Body,
+    surf: &Surface,
+    cfg: &ContactConfig,
+    dt_ref: f64,
+) -> Vec<Push> {
+    let c = 0.5 * (nb.section.thickness + sb.section.thickness);
+    hits.iter()
+        .filter_map(|h| {
+            let i = h.node as usize;
+            let p = nb.x[i];
+            let n = normal(&p, &h.proj, c);
+            let seg = &surf.segments[h.segment as usize];
+            let m_star = nb.mass[i].min(surf.seg_mass[h.segment as usize]);
+            let k = stiffness(cfg, surf, m_star, h.segment, dt_ref);
+            let mut fn_ = k * h.depth;
+            if cfg.damping_ratio > 0.0 {
+                let mut vs = Vec3::zeros();
+                for (q, &nd) in seg.nodes().iter().enumerate() {
+                    vs += sb.v[nd as usize] * h.proj.weights[q];
+                }
+                let vn = (nb.v[i] - vs).dot(&n);
+                fn_ -= 2.0 * cfg.damping_ratio * (k * m_star).sqrt() * vn;
+            }
+            // a penalty pushes, never pulls
+            (fn_ > 0.0 && fn_.is_finite()).then(|| Push {
+                hit: *h,
+                force: n * fn_,
+                normal_force: fn_,
+            })
+        })
+        .collect()
+}

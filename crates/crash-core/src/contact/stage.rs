@@ -1,0 +1,269 @@
+//! The contact stage of a group's step: level i (candidate body pairs), level ii (per
+//! pair, both passes), penalty forces into `Body::f_contact`, the contact stable step,
+//! per-pair statistics, the tunnelling guard and the initial-penetration report.
+//!
+//! Determinism: pairs run in sorted (body id, body id) order, each pair's first pass
+//! (nodes of the lower id against segments of the higher) before its second, hits in
+//! node order; forces are added to nodes sequentially in exactly that order. Only pairs
+//! with a contact add anything, so a body's forces depend only on the bodies it touches.
+
+use super::broad::{candidate_pairs, BodyBox};
+use super::config::{ContactConfig, PenaltyKind, REFERENCE_SAFETY};
+use super::narrow::{forces, search, Hit, Push};
+use super::segment::Segment;
+use super::surface::Surface;
+use crate::body::Body;
+use crate::error::Fault;
+use crate::Vec3;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Contact statistics of one candidate body pair after a force pass.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PairStats {
+    /// Body ids, a <= b (a == b: self-contact).
+    pub a: u32,
+    pub b: u32,
+    /// Nodes (of either body) pushed by a penalty force.
+    pub active_nodes: usize,
+    /// Largest penetration depth [m] and its ratio to the thinner body's thickness.
+    pub max_penetration: f64,
+    pub max_penetration_ratio: f64,
+    /// Sum of the normal force magnitudes [N].
+    pub normal_force: f64,
+    /// Resultant contact force on body a from body b [N].
+    pub force_on_a: Vec3,
+}
+
+/// Search caches of a group (R-trees, Verlet reference positions) and the last pass's
+/// statistics. Not part of the physical state: rebuilt lazily after deserialization.
+#[derive(Debug, Clone, Default)]
+pub struct ContactState {
+    surfaces: BTreeMap<u32, Surface>,
+    stats: Vec<PairStats>,
+}
+
+impl ContactState {
+    /// Per-pair statistics of the last force pass, sorted by (a, b).
+    pub fn stats(&self) -> &[PairStats] {
+        &self.stats
+    }
+
+    /// Total number of tree builds so far (for benchmarks and diagnostics).
+    pub fn tree_builds(&self) -> u64 {
+        self.surfaces.values().map(|s| s.builds).sum()
+    }
+}
+
+/// Candidate pairs among the contact bodies (indices into `bodies`), sorted by ids,
+/// with self pairs for bodies that have self-contact on.
+fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
+    let index: BTreeMap<u32, usize> = bodies
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.contact)
+        .map(|(k, b)| (b.id, k))
+        .collect();
+    let boxes: Vec<BodyBox> = index.values().map(|&k| BodyBox::of(&bodies[k])).collect();
+    let mut pairs: Vec<(u32, u32)> = candidate_pairs(&boxes, cfg.margin);
+    pairs.extend(index.iter().filter(|(_, &k)| bodies[k].self_contact).map(|(&id, _)| (id, id)));
+    pairs.sort_unstable();
+    pairs
+        .into_iter()
+        .filter_map(|(a, b)| Some((*index.get(&a)?, *index.get(&b)?)))
+        .collect()
+}
+
+fn ensure_surface<'s>(
+    surfaces: &'s mut BTreeMap<u32, Surface>,
+    body: &Body,
+    skin: f64,
+) -> &'s mut Surface {
+    let s = surfaces.entry(body.id).or_insert_with(|| Surface::new(body));
+    if !s.fits(body) {
+        *s = Surface::new(body);
+    }
+    s.refresh(body, skin);
+    s
+}
+
+/// Element-form stable step of nodes of `nb` against segments of `surf`: a two-mass
+/// spring k between m* and the segment gives omega^2 <= 2 k / m*, so dt = sqrt(2 m*/k).
+fn element_dt(cfg: &ContactConfig, nb: &Surface, surf: &Surface) -> f64 {
+    let s = cfg.penalty_scale;
+    let m_over_k = (nb.min_mass * surf.inv_k).min(surf.mass_per_k) / s;
+    (2.0 * m_over_k).sqrt()
+}
+
+/// Compute contact forces at the current positions into `f_contact` of every contact
+/// body. `element_dt[k]` is body k's element critical step of this force pass (sets the
+/// soft penalty's reference step: REFERENCE_SAFETY times the smaller of the pair's).
+/// Returns the contact stable step per body (infinite where contact sets no limit).
+pub fn contact_forces(
+    bodies: &mut [Body],
+    cfg: &ContactConfig,
+    state: &mut ContactState,
+    element_dt: &[f64],
+) -> Vec<f64> {
+    let mut dt = vec![f64::INFINITY; bodies.len()];
+    state.stats.clear();
+    for b in bodies.iter_mut() {
+        if b.contact && cfg.enabled {
+            b.f_contact.clear();
+            b.f_contact.resize(b.x.len(), Vec3::zeros());
+        } else if !b.f_contact.is_empty() {
+            b.f_contact.clear();
+        }
+    }
+    if !cfg.enabled {
+        return dt;
+    }
+    let pairs = pairs_of(bodies, cfg);
+    for &(ia, ib) in &pairs {
+        for k in [ia, ib] {
+            let skin = cfg.margin_for(&bodies[k]);
+            ensure_surface(&mut state.surfaces, &bodies[k], skin);
+        }
+    }
+    for &(ia, ib) in &pairs {
+        let (a, b) = (&bodies[ia], &bodies[ib]);
+        let (Some(sa), Some(sb)) = (state.surfaces.get(&a.id), state.surfaces.get(&b.id)) else {
+            continue;
+        };
+        if cfg.penalty == PenaltyKind::Element {
+            let d = element_dt(cfg, sa, sb).min(element_dt(cfg, sb, sa));
+            dt[ia] = dt[ia].min(d);
+            dt[ib] = dt[ib].min(d);
+        }
+        let dt_ref = REFERENCE_SAFETY * element_dt[ia].min(element_dt[ib]);
+        if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
+            continue; // two kinematic bodies: contact cannot move anything
+        }
+        let self_pair = ia == ib;
+        let first = forces(&search(a, b, sb, self_pair), a, b, sb, cfg, dt_ref);
+        let second = if self_pair {
+            Vec::new()
+        } else {
+            forces(&search(b, a, sa, false), b, a, sa, cfg, dt_ref)
+        };
+        let mut st = PairStats {
+            a: a.id,
+            b: b.id,
+            active_nodes: first.len() + second.len(),
+            max_penetration: 0.0,
+            max_penetration_ratio: 0.0,
+            normal_force: 0.0,
+            force_on_a: Vec3::zeros(),
+        };
+        let thin = a.section.thickness.min(b.section.thickness);
+        let segs_b: Vec<Segment> = first.iter().map(|p| sb.segments[p.hit.segment as usize]).collect();
+        let segs_a: Vec<Segment> = second.iter().map(|p| sa.segments[p.hit.segment as usize]).collect();
+        apply(bodies, ia, ib, &first, &segs_b, &mut st, true);
+        apply(bodies, ib, ia, &second, &segs_a, &mut st, false);
+        st.max_penetration_ratio = st.max_penetration / thin;
+        state.stats.push(st);
+    }
+    dt
+}
+
+/// Add the pushes of one pass: +f on the node of body `inode`, -w_k f on the segment
+/// nodes of body `iseg`, sequentially in hit order.
+fn apply(
+    bodies: &mut [Body],
+    inode: usize,
+    iseg: usize,
+    pushes: &[Push],
+    segs: &[Segment],
+    st: &mut PairStats,
+    node_body_is_a: bool,
+) {
+    for (p, seg) in pushes.iter().zip(segs) {
+        bodies[inode].f_contact[p.hit.node as usize] += p.force;
+        let fc = &mut bodies[iseg].f_contact;
+        for (q, &n) in seg.nodes().iter().enumerate() {
+            fc[n as usize] -= p.force * p.hit.proj.weights[q];
+        }
+        st.max_penetration = st.max_penetration.max(p.hit.depth);
+        st.normal_force += p.normal_force;
+        if inode != iseg {
+            st.force_on_a += if node_body_is_a { p.force } else { -p.force };
+        }
+    }
+}
+
+/// The tunnelling guard: a contact body whose node moved farther in this step than its
+/// per-step budget (half the search margin) stops the run. `moves[k]` is body k's
+/// largest nodal displacement in the step and its node.
+pub fn check_moves(
+    bodies: &[Body],
+    cfg: &ContactConfig,
+    moves: &[(f64, usize)],
+    h: f64,
+    step: u64,
+) -> Result<(), Fault> {
+    if !cfg.enabled {
+        return Ok(());
+    }
+    for (b, &(distance, node)) in bodies.iter().zip(moves) {
+        let budget = cfg.step_budget(b);
+        if b.contact && distance > budget {
+            return Err(Fault::Tunnelling {
+                step,
+                body: b.id,
+                node,
+                speed: if h > 0.0 { distance / h } else { f64::INFINITY },
+                distance,
+                budget,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A node that starts inside another body's contact surface.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Penetration {
+    /// The body of the penetrating node and the body whose segment it penetrates.
+    pub node_body: u32,
+    pub segment_body: u32,
+    /// The deepest node of this (node body, segment body) pass, its segment and depth
+    /// [m] below the contact surface ((t_a + t_b)/2 from the mid-surface).
+    pub node: usize,
+    pub segment: usize,
+    pub depth: f64,
+    /// How many nodes of the node body penetrate that body.
+    pub nodes: usize,
+}
+
+/// Initial penetrations between different bodies at the current positions, one entry
+/// per (node body, segment body) with any, sorted by that pair.
+pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetration> {
+    let mut out = Vec::new();
+    let mut surfaces = BTreeMap::new();
+    for (ia, ib) in pairs_of(bodies, cfg) {
+        if ia == ib {
+            continue;
+        }
+        for (n, s) in [(ia, ib), (ib, ia)] {
+            let (nb, sb) = (&bodies[n], &bodies[s]);
+            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb));
+            let hits = search(nb, sb, surf, false);
+            let deepest = hits.iter().fold(None::<&Hit>, |d, h| match d {
+                Some(d) if d.depth >= h.depth => Some(d),
+                _ => Some(h),
+            });
+            if let Some(h) = deepest {
+                out.push(Penetration {
+                    node_body: nb.id,
+                    segment_body: sb.id,
+                    node: h.node as usize,
+                    segment: h.segment as usize,
+                    depth: h.depth,
+                    nodes: hits.len(),
+                });
+            }
+        }
+    }
+    out.sort_by_key(|p| (p.node_body, p.segment_body));
+    out
+}

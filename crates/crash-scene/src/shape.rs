@@ -1,0 +1,259 @@
+//! A body's surface in its own frame: generated shapes (crash_core::shapes) or an
+//! imported Gmsh surface, with every size and count checked.
+
+use crate::context::Ctx;
+use crate::error::{ErrorKind, SceneError};
+use crate::msh::read_msh;
+use crate::schema::BodySpec;
+use crash_core::hash::Fnv;
+use crash_core::shapes::{self, ElementKind};
+use crash_core::Mesh;
+use std::path::Path;
+
+/// Largest element count of one body: beyond it a typo (an extra zero) would exhaust
+/// memory instead of producing an error.
+pub const MAX_ELEMENTS: usize = 20_000_000;
+/// Highest icosphere level (20 * 4^8 = 1.3 million triangles).
+pub const MAX_LEVEL: i64 = 8;
+/// Edge of the unit-circumradius icosahedron; a level-l icosphere's mean edge is
+/// about R * this / 2^l.
+const ICOSAHEDRON_EDGE: f64 = 1.051_462_224_238_267_2;
+
+/// An imported mesh: where it came from and each element's tag and line there.
+#[derive(Debug, Clone)]
+pub struct MeshSource {
+    pub display: String,
+    pub element_tags: Vec<(u64, usize)>,
+}
+
+/// A body's surface before placement.
+#[derive(Debug, Clone)]
+pub struct Shape {
+    pub mesh: Mesh,
+    /// Key path of the shape table, e.g. `bodies[0].plate`.
+    pub key: String,
+    /// Short description for summaries, e.g. `plate 0.4 x 0.4 m, 40 x 40 quad`.
+    pub describe: String,
+    pub source: Option<MeshSource>,
+}
+
+fn positive(ctx: &Ctx, key: &str, v: f64, unit: &str) -> Result<f64, SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(ctx.invalid(key, format!("must be finite and > 0 ({unit})")))
+    }
+}
+
+fn count(ctx: &Ctx, key: &str, v: i64, min: i64) -> Result<usize, SceneError> {
+    if v >= min {
+        Ok(v as usize)
+    } else {
+        Err(ctx.invalid(key, format!("must be an integer >= {min}")))
+    }
+}
+
+/// Cells needed to cover `length` with cells no longer than `size`.
+fn cells_for(length: f64, size: f64, min: usize) -> usize {
+    ((length / size - 1e-9).ceil().max(min as f64)).min(1e12) as usize
+}
+
+fn element_kind(ctx: &Ctx, key: &str, v: &Option<String>) -> Result<Option<ElementKind>, SceneError> {
+    match v.as_deref() {
+        None => Ok(None),
+        Some("tri") => Ok(Some(ElementKind::Tri)),
+        Some("quad") => Ok(Some(ElementKind::Quad)),
+        Some(_) => Err(ctx.invalid(key, "must be \"tri\" or \"quad\"")),
+    }
+}
+
+fn cap(ctx: &Ctx, key: &str, elements: usize) -> Result<(), SceneError> {
+    if elements > MAX_ELEMENTS {
+        return Err(ctx.invalid(
+            key,
+            format!("gives {elements} elements, more than the {MAX_ELEMENTS} a body may have"),
+        ));
+    }
+    Ok(())
+}
+
+fn kind_name(k: ElementKind) -> &'static str {
+    match k {
+        ElementKind::Tri => "tri",
+        ElementKind::Quad => "quad",
+    }
+}
+
+/// Exactly one of `cells` / `element_size` must be given.
+fn one_of<'a, C>(
+    ctx: &Ctx,
+    key: &str,
+    cells: &'a Option<C>,
+    size: Option<f64>,
+    cells_name: &str,
+) -> Result<Result<&'a C, f64>, SceneError> {
+    match (cells, size) {
+        (Some(c), None) => Ok(Ok(c)),
+        (None, Some(h)) => Ok(Err(positive(ctx, &format!("{key}.element_size"), h, "m")?)),
+        (Some(_), Some(_)) => Err(ctx.invalid(
+            &format!("{key}.element_size"),
+            format!("give either {cells_name} or element_size, not both"),
+        )),
+        (None, None) => Err(ctx.missing(
+            &format!("{key}.{cells_name}"),
+            format!("give {cells_name} or element_size (m) to set the mesh density"),
+        )),
+    }
+}
+
+/// Build the surface of body `i` in its own frame; imported files are fed to `hash`.
+pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> Result<Shape, SceneError> {
+    let base = format!("bodies[{i}]");
+    let given: Vec<&str> = [
+        ("plate", b.plate.is_some()),
+        ("sphere", b.sphere.is_some()),
+        ("cylinder", b.cylinder.is_some()),
+        ("box", b.cuboid.is_some()),
+        ("mesh", b.mesh.is_some()),
+    ]
+    .iter()
+    .filter(|s| s.1)
+    .map(|s| s.0)
+    .collect();
+    if given.len() > 1 {
+        return Err(ctx.key_error(
+            ErrorKind::Invalid,
+            &format!("{base}.{}", given[1]),
+            format!("body \"{}\" has two shapes ({} and {}): give exactly one", b.name, given[0], given[1]),
+        ));
+    }
+    let ekey = format!("{base}.element");
+    let kind = element_kind(ctx, &ekey, &b.element)?;
+    let mut source = None;
+    let (key, mesh, describe) = if let Some(p) = &b.plate {
+        let key = format!("{base}.plate");
+        let lx = positive(ctx, &format!("{key}.size[0]"), p.size[0], "m")?;
+        let ly = positive(ctx, &format!("{key}.size[1]"), p.size[1], "m")?;
+        let (nx, ny) = match one_of(ctx, &key, &p.cells, p.element_size, "cells")? {
+            Ok(c) => (
+                count(ctx, &format!("{key}.cells[0]"), c[0], 1)?,
+                count(ctx, &format!("{key}.cells[1]"), c[1], 1)?,
+            ),
+            Err(h) => (cells_for(lx, h, 1), cells_for(ly, h, 1)),
+        };
+        let k = kind.unwrap_or(ElementKind::Quad);
+        let per = if k == ElementKind::Tri { 2 } else { 1 };
+        cap(ctx, &key, nx.saturating_mul(ny).saturating_mul(per))?;
+        let d = format!("plate {lx} x {ly} m, {nx} x {ny} {}", kind_name(k));
+        (key, shapes::plate(lx, ly, nx, ny, k), d)
+    } else if let Some(s) = &b.sphere {
+        let key = format!("{base}.sphere");
+        let r = positive(ctx, &format!("{key}.radius"), s.radius, "m")?;
+        if kind == Some(ElementKind::Quad) {
+            return Err(ctx.invalid(&ekey, "a sphere is meshed with triangles (icosphere): use \"tri\" or omit element"));
+        }
+        let level = match one_of(ctx, &key, &s.level, s.element_size, "level")? {
+            Ok(&l) => {
+                if !(0..=MAX_LEVEL).contains(&l) {
+                    return Err(ctx.invalid(&format!("{key}.level"), format!("must be an integer in [0, {MAX_LEVEL}] (20 * 4^level triangles)")));
+                }
+                l as u32
+            }
+            Err(h) => {
+                let l = (0..=MAX_LEVEL as u32).find(|&l| r * ICOSAHEDRON_EDGE / f64::from(1u32 << l) <= h);
+                l.ok_or_else(|| {
+                    ctx.invalid(
+                        &format!("{key}.element_size"),
+                        format!("is too small for radius {r} m: level {MAX_LEVEL} (edge {:.3e} m) is the finest", r * ICOSAHEDRON_EDGE / f64::from(1u32 << MAX_LEVEL)),
+                    )
+                })?
+            }
+        };
+        let d = format!("sphere R {r} m, level {level} ({} tri)", 20usize << (2 * level));
+        (key, shapes::icosphere(r, level), d)
+    } else if let Some(c) = &b.cylinder {
+        let key = format!("{base}.cylinder");
+        let r = positive(ctx, &format!("{key}.radius"), c.radius, "m")?;
+        let len = positive(ctx, &format!("{key}.length"), c.length, "m")?;
+        let (na, nl) = match one_of(ctx, &key, &c.cells, c.element_size, "cells")? {
+            Ok(n) => (
+                count(ctx, &format!("{key}.cells[0]"), n[0], 3)?,
+                count(ctx, &format!("{key}.cells[1]"), n[1], 1)?,
+            ),
+            Err(h) => (cells_for(std::f64::consts::TAU * r, h, 3), cells_for(len, h, 1)),
+        };
+        let k = kind.unwrap_or(ElementKind::Quad);
+        let per = if k == ElementKind::Tri { 2 } else { 1 };
+        cap(ctx, &key, na.saturating_mul(nl).saturating_mul(per))?;
+        let d = format!("tube R {r} m, length {len} m, {na} x {nl} {}", kind_name(k));
+        (key, shapes::cylinder(r, len, na, nl, k), d)
+    } else if let Some(x) = &b.cuboid {
+        let key = format!("{base}.box");
+        let mut l = [0.0; 3];
+        for (d, v) in l.iter_mut().enumerate() {
+            *v = positive(ctx, &format!("{key}.size[{d}]"), x.size[d], "m")?;
+        }
+        let longest = l[0].max(l[1]).max(l[2]);
+        let n = match one_of(ctx, &key, &x.cells, x.element_size, "cells")? {
+            Ok(&n) => count(ctx, &format!("{key}.cells"), n, 1)?,
+            Err(h) => cells_for(longest, h, 1),
+        };
+        let k = kind.unwrap_or(ElementKind::Quad);
+        let per = if k == ElementKind::Tri { 2 } else { 1 };
+        let faces = l.iter().map(|&s| ((s / longest * n as f64).round()).max(1.0)).collect::<Vec<_>>();
+        let total = 2.0 * (faces[0] * faces[1] + faces[1] * faces[2] + faces[2] * faces[0]) * per as f64;
+        cap(ctx, &key, total.min(1e15) as usize)?;
+        let d = format!("box {} x {} x {} m, {n} cells on the longest side, {}", l[0], l[1], l[2], kind_name(k));
+        (key, shapes::cuboid(l[0], l[1], l[2], n, k), d)
+    } else if let Some(m) = &b.mesh {
+        let key = format!("{base}.mesh");
+        let fkey = format!("{key}.file");
+        let scale = positive(ctx, &format!("{key}.scale"), m.scale.unwrap_or(1.0), "-")?;
+        let path = dir.join(&m.file);
+        let bytes = std::fs::read(&path).map_err(|e| {
+            ctx.value_error(ErrorKind::Read, &fkey, format!("cannot read {}: {e}", path.display()))
+        })?;
+        hash.bytes(&bytes);
+        let text = String::from_utf8(bytes).map_err(|_| {
+            ctx.value_error(ErrorKind::MeshFile, &fkey, format!("{}: not a text file (binary .msh files are not read: export as ASCII)", m.file))
+        })?;
+        let surf = read_msh(&text)
+            .map_err(|e| ctx.value_error(ErrorKind::MeshFile, &fkey, format!("{}:{e}", m.file)))?;
+        let mut mesh = surf.mesh;
+        let mut tags = surf.element_tags;
+        for p in &mut mesh.nodes {
+            *p *= scale;
+        }
+        if kind == Some(ElementKind::Tri) && !mesh.quads.is_empty() {
+            // split every quad along its 0-2 diagonal; both halves keep the quad's tag
+            let nt = mesh.tris.len();
+            let quad_tags = tags.split_off(nt);
+            for (q, t) in mesh.quads.drain(..).zip(quad_tags) {
+                mesh.tris.push([q[0], q[1], q[2]]);
+                mesh.tris.push([q[0], q[2], q[3]]);
+                tags.push(t);
+                tags.push(t);
+            }
+        } else if kind == Some(ElementKind::Quad) && !mesh.tris.is_empty() {
+            return Err(ctx.invalid(&ekey, format!("{} holds triangles, which cannot become quads: omit element (keep the file's elements) or use \"tri\"", m.file)));
+        }
+        cap(ctx, &key, mesh.element_count())?;
+        let d = format!("mesh {} ({} tri, {} quad)", m.file, mesh.tris.len(), mesh.quads.len());
+        source = Some(MeshSource {
+            display: m.file.clone(),
+            element_tags: tags,
+        });
+        (key, mesh, d)
+    } else {
+        return Err(ctx.missing(
+            &format!("{base}.shape"),
+            format!("body \"{}\" has no shape: add exactly one of the tables plate, sphere, cylinder, box, mesh", b.name),
+        ));
+    };
+    Ok(Shape {
+        mesh,
+        key,
+        describe,
+        source,
+    })
+}
