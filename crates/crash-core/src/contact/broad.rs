@@ -95,14 +95,19 @@ mod tests {
         // 0-1: 0.15 (no), 1-2: 0.05 (yes), 2-3: 0.13 (yes), 3-4: 1.67 (no)
         let boxes = [cube(3, 3.33), cube(0, 0.0), cube(2, 2.2), cube(1, 1.15), cube(4, 6.0)];
         assert_eq!(candidate_pairs(&boxes, 0.04), vec![(1, 2), (2, 3)]);
-        // brute force agrees on a random-ish cloud
-        let many: Vec<BodyBox> = (0..60)
+        // brute force agrees on a pseudo-random cloud (LCG)
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let many: Vec<BodyBox> = (0..80)
             .map(|i| {
-                let f = i as f64;
+                let lo = Vec3::new(6.0 * rnd(), 6.0 * rnd(), 6.0 * rnd());
                 BodyBox {
-                    id: 100 - i,
-                    lo: Vec3::new((f * 7.3) % 10.0, (f * 3.1) % 10.0, (f * 5.7) % 10.0),
-                    hi: Vec3::new((f * 7.3) % 10.0 + 1.0, (f * 3.1) % 10.0 + 0.5, (f * 5.7) % 10.0 + 0.8),
+                    id: 200 - 2 * i,
+                    lo,
+                    hi: lo + Vec3::new(rnd(), rnd(), rnd()),
                     thickness: 0.05,
                 }
             })

@@ -89,7 +89,7 @@ fn ensure_surface<'s>(
 
 /// Element-form stable step of nodes of `nb` against segments of `surf`: a two-mass
 /// spring k between m* and the segment gives omega^2 <= 2 k / m*, so dt = sqrt(2 m*/k).
-fn element_dt(cfg: &ContactConfig, nb: &Surface, surf: &Surface) -> f64 {
+fn element_form_dt(cfg: &ContactConfig, nb: &Surface, surf: &Surface) -> f64 {
     let s = cfg.penalty_scale;
     let m_over_k = (nb.min_mass * surf.inv_k).min(surf.mass_per_k) / s;
     (2.0 * m_over_k).sqrt()
@@ -131,7 +131,7 @@ pub fn contact_forces(
             continue;
         };
         if cfg.penalty == PenaltyKind::Element {
-            let d = element_dt(cfg, sa, sb).min(element_dt(cfg, sb, sa));
+            let d = element_form_dt(cfg, sa, sb).min(element_form_dt(cfg, sb, sa));
             dt[ia] = dt[ia].min(d);
             dt[ib] = dt[ib].min(d);
         }
