@@ -7,7 +7,10 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    let mut name = path
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
     name.push(".tmp");
     path.with_file_name(name)
 }
@@ -21,7 +24,9 @@ pub fn write_atomic(
     let file = File::create(&tmp).at(&tmp)?;
     let mut w = BufWriter::new(file);
     fill(&mut w).at(&tmp)?;
-    let file = w.into_inner().map_err(|e| IoError::io(&tmp, e.into_error()))?;
+    let file = w
+        .into_inner()
+        .map_err(|e| IoError::io(&tmp, e.into_error()))?;
     file.sync_all().at(&tmp)?;
     drop(file);
     fs::rename(&tmp, path).at(path)?;

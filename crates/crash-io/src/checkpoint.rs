@@ -84,7 +84,10 @@ pub fn read_checkpoint<T: DeserializeOwned>(path: impl AsRef<Path>) -> Result<T,
     if bytes.len() as u64 > expected {
         return Err(IoError::format(
             path,
-            format!("checkpoint has {} bytes after its payload", bytes.len() as u64 - expected),
+            format!(
+                "checkpoint has {} bytes after its payload",
+                bytes.len() as u64 - expected
+            ),
         ));
     }
     let payload = &bytes[HEADER..];

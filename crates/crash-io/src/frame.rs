@@ -79,7 +79,11 @@ pub struct Frame {
 impl Frame {
     /// Snapshot of the given bodies, in any order (gathered from several workers).
     pub fn capture(time: f64, step: u64, bodies: &[&Body]) -> Self {
-        Self::from_bodies(time, step, bodies.iter().map(|b| FrameBody::capture(b)).collect())
+        Self::from_bodies(
+            time,
+            step,
+            bodies.iter().map(|b| FrameBody::capture(b)).collect(),
+        )
     }
 
     /// Frame from already captured bodies (any order; sorted by id here).

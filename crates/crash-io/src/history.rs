@@ -71,7 +71,10 @@ impl CsvFile {
         let keep: Vec<&str> = lines
             .take_while(|l| {
                 let complete = l.ends_with('\n') && l.split(',').count() == ncol;
-                let t = l.split(',').next().and_then(|t| t.trim().parse::<f64>().ok());
+                let t = l
+                    .split(',')
+                    .next()
+                    .and_then(|t| t.trim().parse::<f64>().ok());
                 complete && t.is_some_and(|t| t <= up_to_time)
             })
             .collect();
@@ -105,7 +108,14 @@ impl EnergyHistory {
         writeln!(
             f.w,
             "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
-            time, e.kinetic, e.internal, e.hourglass, e.contact, e.damping, e.external, e.balance_error
+            time,
+            e.kinetic,
+            e.internal,
+            e.hourglass,
+            e.contact,
+            e.damping,
+            e.external,
+            e.balance_error
         )
         .at(&f.path)
     }
@@ -130,7 +140,12 @@ impl ContactHistory {
 
     pub fn write(&mut self, r: &ContactRow) -> Result<(), IoError> {
         let f = &mut self.0;
-        writeln!(f.w, "{:e},{},{},{:e},{:e}", r.time, r.a, r.b, r.force, r.penetration).at(&f.path)
+        writeln!(
+            f.w,
+            "{:e},{},{},{:e},{:e}",
+            r.time, r.a, r.b, r.force, r.penetration
+        )
+        .at(&f.path)
     }
 
     pub fn flush(&mut self) -> Result<(), IoError> {

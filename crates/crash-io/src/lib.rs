@@ -1,1 +1,31 @@
-//! crash-io: Results: VTU/PVD series, CSV histories, PNG pictures and plots, checkpoints.
+//! crash-io: what a crash run writes. ParaView series (.vtu per frame + .pvd), CSV
+//! histories (energy, contacts), summary.json, PNG pictures and plots made in process,
+//! and exact binary checkpoints. docs/output.md describes every file.
+
+pub mod atomic;
+pub mod checkpoint;
+pub mod error;
+pub mod frame;
+pub mod history;
+pub mod render;
+pub mod run;
+pub mod series;
+pub mod summary;
+pub mod vtu;
+pub mod vtu_read;
+
+pub use checkpoint::{read_checkpoint, write_checkpoint};
+pub use error::IoError;
+pub use frame::{Frame, FrameBody};
+pub use history::{
+    read_contacts_csv, read_energy_csv, ContactHistory, ContactRow, EnergyHistory, EnergyRow,
+    CONTACTS_CSV, ENERGY_CSV,
+};
+pub use render::{
+    contact_sheet, energy_plot, render_frame, Camera, Colouring, Image, RenderOptions, View,
+};
+pub use run::render_run;
+pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};
+pub use summary::{hash_hex, read_summary, write_summary, Indicators, Summary, SUMMARY_JSON};
+pub use vtu::Encoding;
+pub use vtu_read::read_vtu;

@@ -8,7 +8,6 @@ use crate::error::{AtPath, IoError};
 use crate::frame::Frame;
 use crate::vtu::{write_vtu, Encoding};
 use roxmltree::Document;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Name of the collection file inside the output directory.
@@ -68,7 +67,10 @@ pub fn read_pvd(path: &Path) -> Result<Vec<PvdEntry>, IoError> {
 fn write_pvd(path: &Path, entries: &[PvdEntry]) -> Result<(), IoError> {
     write_atomic(path, |w| {
         writeln!(w, r#"<?xml version="1.0"?>"#)?;
-        writeln!(w, r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#)?;
+        writeln!(
+            w,
+            r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#
+        )?;
         writeln!(w, "  <Collection>")?;
         for e in entries {
             writeln!(
@@ -90,7 +92,11 @@ impl SeriesWriter {
         let frames = dir.join(FRAMES_DIR);
         std::fs::create_dir_all(&frames).at(&frames)?;
         let pvd = dir.join(PVD_FILE);
-        let old = if pvd.exists() { read_pvd(&pvd).unwrap_or_default() } else { Vec::new() };
+        let old = if pvd.exists() {
+            read_pvd(&pvd).unwrap_or_default()
+        } else {
+            Vec::new()
+        };
         // The .pvd first, then the files: it never lists a missing frame.
         write_pvd(&pvd, &[])?;
         remove_frames(&dir, &old)?;
@@ -110,7 +116,11 @@ impl SeriesWriter {
         let frames = dir.join(FRAMES_DIR);
         std::fs::create_dir_all(&frames).at(&frames)?;
         let pvd = dir.join(PVD_FILE);
-        let all = if pvd.exists() { read_pvd(&pvd)? } else { Vec::new() };
+        let all = if pvd.exists() {
+            read_pvd(&pvd)?
+        } else {
+            Vec::new()
+        };
         let (keep, drop): (Vec<_>, Vec<_>) = all.into_iter().partition(|e| e.time <= up_to_time);
         let next_index = keep
             .iter()

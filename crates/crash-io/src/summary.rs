@@ -63,7 +63,7 @@ impl Indicators {
     /// Human-readable warnings for every indicator beyond its limit.
     pub fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
-        if !(self.peak_balance_error <= BALANCE_LIMIT) {
+        if self.peak_balance_error > BALANCE_LIMIT || self.peak_balance_error.is_nan() {
             w.push(format!(
                 "energy balance error reached {:.2}% (limit {:.0}%): the time step or the contact penalty may be too large",
                 100.0 * self.peak_balance_error,

@@ -81,7 +81,7 @@ fn data_array(
             let mut k = 0usize;
             let mut sep = |w: &mut dyn Write| -> io::Result<()> {
                 k += 1;
-                if k % per_line == 0 {
+                if k.is_multiple_of(per_line) {
                     writeln!(w)
                 } else {
                     write!(w, " ")
@@ -107,7 +107,7 @@ fn data_array(
                     }
                 }
             }
-            if k % per_line != 0 {
+            if !k.is_multiple_of(per_line) {
                 writeln!(w)?;
             }
         }
@@ -123,7 +123,11 @@ fn data_array(
             let n = (bytes.len() - 8) as u64;
             bytes[..8].copy_from_slice(&n.to_le_bytes());
             writeln!(w)?;
-            writeln!(w, "{}", base64::engine::general_purpose::STANDARD.encode(&bytes))?;
+            writeln!(
+                w,
+                "{}",
+                base64::engine::general_purpose::STANDARD.encode(&bytes)
+            )?;
         }
     }
     writeln!(w, "        </DataArray>")
@@ -152,37 +156,77 @@ pub fn write_vtu(w: &mut dyn Write, frame: &Frame, enc: Encoding) -> io::Result<
         frame.step
     )?;
     writeln!(w, "    </FieldData>")?;
-    writeln!(w, r#"    <Piece NumberOfPoints="{np}" NumberOfCells="{nc}">"#)?;
+    writeln!(
+        w,
+        r#"    <Piece NumberOfPoints="{np}" NumberOfCells="{nc}">"#
+    )?;
     let bodies = &frame.bodies;
 
-    writeln!(w, r#"      <PointData Scalars="{BODY_ID}" Vectors="{DISPLACEMENT}">"#)?;
-    let disp = bodies
-        .iter()
-        .flat_map(|b| b.x.iter().zip(&b.x0).flat_map(|(x, x0)| [x.x - x0.x, x.y - x0.y, x.z - x0.z]));
+    writeln!(
+        w,
+        r#"      <PointData Scalars="{BODY_ID}" Vectors="{DISPLACEMENT}">"#
+    )?;
+    let disp = bodies.iter().flat_map(|b| {
+        b.x.iter()
+            .zip(&b.x0)
+            .flat_map(|(x, x0)| [x.x - x0.x, x.y - x0.y, x.z - x0.z])
+    });
     data_array(w, enc, Some(DISPLACEMENT), 3, Values::F64(Box::new(disp)))?;
-    data_array(w, enc, Some(VELOCITY), 3, vec3s(bodies.iter().flat_map(|b| b.v.iter())))?;
+    data_array(
+        w,
+        enc,
+        Some(VELOCITY),
+        3,
+        vec3s(bodies.iter().flat_map(|b| b.v.iter())),
+    )?;
     let fc = vec3s(bodies.iter().flat_map(|b| b.f_contact.iter()));
     data_array(w, enc, Some(CONTACT_FORCE), 3, fc)?;
-    let ids = bodies.iter().flat_map(|b| std::iter::repeat_n(b.id as i64, b.x.len()));
+    let ids = bodies
+        .iter()
+        .flat_map(|b| std::iter::repeat_n(b.id as i64, b.x.len()));
     data_array(w, enc, Some(BODY_ID), 1, Values::I64(Box::new(ids)))?;
     writeln!(w, "      </PointData>")?;
 
     writeln!(w, r#"      <CellData Scalars="{VM_TOP}">"#)?;
     let f = |g: fn(&crate::frame::FrameBody) -> &Vec<f64>| {
-        Values::F64(Box::new(bodies.iter().flat_map(move |b| g(b).iter().copied())))
+        Values::F64(Box::new(
+            bodies.iter().flat_map(move |b| g(b).iter().copied()),
+        ))
     };
     data_array(w, enc, Some(VM_TOP), 1, f(|b| &b.von_mises_top))?;
     data_array(w, enc, Some(VM_BOTTOM), 1, f(|b| &b.von_mises_bottom))?;
-    data_array(w, enc, Some(MEMBRANE), 3, triples(bodies.iter().flat_map(|b| b.n.iter())))?;
-    data_array(w, enc, Some(BENDING), 3, triples(bodies.iter().flat_map(|b| b.m.iter())))?;
-    let th = bodies.iter().flat_map(|b| std::iter::repeat_n(b.thickness, b.element_count()));
+    data_array(
+        w,
+        enc,
+        Some(MEMBRANE),
+        3,
+        triples(bodies.iter().flat_map(|b| b.n.iter())),
+    )?;
+    data_array(
+        w,
+        enc,
+        Some(BENDING),
+        3,
+        triples(bodies.iter().flat_map(|b| b.m.iter())),
+    )?;
+    let th = bodies
+        .iter()
+        .flat_map(|b| std::iter::repeat_n(b.thickness, b.element_count()));
     data_array(w, enc, Some(THICKNESS), 1, Values::F64(Box::new(th)))?;
-    let ids = bodies.iter().flat_map(|b| std::iter::repeat_n(b.id as i64, b.element_count()));
+    let ids = bodies
+        .iter()
+        .flat_map(|b| std::iter::repeat_n(b.id as i64, b.element_count()));
     data_array(w, enc, Some(BODY_ID), 1, Values::I64(Box::new(ids)))?;
     writeln!(w, "      </CellData>")?;
 
     writeln!(w, "      <Points>")?;
-    data_array(w, enc, Some("Points"), 3, vec3s(bodies.iter().flat_map(|b| b.x.iter())))?;
+    data_array(
+        w,
+        enc,
+        Some("Points"),
+        3,
+        vec3s(bodies.iter().flat_map(|b| b.x.iter())),
+    )?;
     writeln!(w, "      </Points>")?;
 
     writeln!(w, "      <Cells>")?;
@@ -203,9 +247,27 @@ pub fn write_vtu(w: &mut dyn Write, frame: &Frame, enc: Encoding) -> io::Result<
         }
         base += b.x.len() as i64;
     }
-    data_array(w, enc, Some("connectivity"), 1, Values::I64(Box::new(conn.into_iter())))?;
-    data_array(w, enc, Some("offsets"), 1, Values::I64(Box::new(offsets.into_iter())))?;
-    data_array(w, enc, Some("types"), 1, Values::U8(Box::new(types.into_iter())))?;
+    data_array(
+        w,
+        enc,
+        Some("connectivity"),
+        1,
+        Values::I64(Box::new(conn.into_iter())),
+    )?;
+    data_array(
+        w,
+        enc,
+        Some("offsets"),
+        1,
+        Values::I64(Box::new(offsets.into_iter())),
+    )?;
+    data_array(
+        w,
+        enc,
+        Some("types"),
+        1,
+        Values::U8(Box::new(types.into_iter())),
+    )?;
     writeln!(w, "      </Cells>")?;
     writeln!(w, "    </Piece>")?;
     writeln!(w, "  </UnstructuredGrid>")?;

@@ -104,8 +104,14 @@ impl Reader<'_> {
     fn arrays(&self, parent: Node, section: &str) -> Result<BTreeMap<String, Array>, IoError> {
         let mut out = BTreeMap::new();
         if let Some(s) = parent.children().find(|c| c.has_tag_name(section)) {
-            for (k, a) in s.children().filter(|c| c.has_tag_name("DataArray")).enumerate() {
-                let name = a.attribute("Name").map_or_else(|| format!("#{k}"), String::from);
+            for (k, a) in s
+                .children()
+                .filter(|c| c.has_tag_name("DataArray"))
+                .enumerate()
+            {
+                let name = a
+                    .attribute("Name")
+                    .map_or_else(|| format!("#{k}"), String::from);
                 out.insert(name, self.decode(a)?);
             }
         }
@@ -119,7 +125,9 @@ fn take(map: &mut BTreeMap<String, Array>, name: &str, r: &Reader) -> Result<Arr
 }
 
 fn vecs(v: &[f64], range: std::ops::Range<usize>) -> Vec<Vec3> {
-    range.map(|i| Vec3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2])).collect()
+    range
+        .map(|i| Vec3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]))
+        .collect()
 }
 
 /// Read one .vtu file into a frame.
@@ -139,8 +147,14 @@ pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
         .find(|c| c.has_tag_name("UnstructuredGrid"))
         .ok_or_else(|| r.err("no UnstructuredGrid element"))?;
     let mut field = r.arrays(grid, "FieldData")?;
-    let time = field.remove(names::TIME).map(|a| a.floats()).and_then(|v| v.first().copied());
-    let step = field.remove(names::STEP).map(|a| a.ints()).and_then(|v| v.first().copied());
+    let time = field
+        .remove(names::TIME)
+        .map(|a| a.floats())
+        .and_then(|v| v.first().copied());
+    let step = field
+        .remove(names::STEP)
+        .map(|a| a.ints())
+        .and_then(|v| v.first().copied());
     let piece = grid
         .children()
         .find(|c| c.has_tag_name("Piece"))
@@ -219,8 +233,11 @@ pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
         bodies.push((b, start, end, Vec::new(), Vec::new()));
         start = end;
     }
-    let slot_of: BTreeMap<i64, usize> =
-        bodies.iter().enumerate().map(|(k, s)| (s.0.id as i64, k)).collect();
+    let slot_of: BTreeMap<i64, usize> = bodies
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (s.0.id as i64, k))
+        .collect();
     let mut prev = 0usize;
     for c in 0..nc {
         let off = usize::try_from(offsets[c]).map_err(|_| r.err("negative offset"))?;
@@ -236,27 +253,44 @@ pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
         let mut local = [0u32; 4];
         for (k, &n) in nodes.iter().take(4).enumerate() {
             if n < lo || n >= hi {
-                return Err(r.err(format!("cell {c}: node {n} is not a point of body {}", cid[c])));
+                return Err(r.err(format!(
+                    "cell {c}: node {n} is not a point of body {}",
+                    cid[c]
+                )));
             }
             local[k] = (n - lo) as u32;
         }
         match (types[c] as u8, nodes.len()) {
             (VTK_TRIANGLE, 3) => slot.3.push((c, [local[0], local[1], local[2]])),
             (VTK_QUAD, 4) => slot.4.push((c, local)),
-            (t, k) => return Err(r.err(format!("cell {c}: type {t} with {k} nodes is not supported"))),
+            (t, k) => {
+                return Err(r.err(format!(
+                    "cell {c}: type {t} with {k} nodes is not supported"
+                )))
+            }
         }
     }
     let frame_bodies = bodies
         .into_iter()
         .map(|(mut b, _, _, tris, quads)| {
-            let order: Vec<usize> = tris.iter().map(|t| t.0).chain(quads.iter().map(|q| q.0)).collect();
+            let order: Vec<usize> = tris
+                .iter()
+                .map(|t| t.0)
+                .chain(quads.iter().map(|q| q.0))
+                .collect();
             b.tris = tris.into_iter().map(|t| t.1).collect();
             b.quads = quads.into_iter().map(|q| q.1).collect();
             b.thickness = order.first().map_or(0.0, |&c| th[c]);
             b.von_mises_top = order.iter().map(|&c| vt[c]).collect();
             b.von_mises_bottom = order.iter().map(|&c| vb[c]).collect();
-            b.n = order.iter().map(|&c| [nm[3 * c], nm[3 * c + 1], nm[3 * c + 2]]).collect();
-            b.m = order.iter().map(|&c| [bm[3 * c], bm[3 * c + 1], bm[3 * c + 2]]).collect();
+            b.n = order
+                .iter()
+                .map(|&c| [nm[3 * c], nm[3 * c + 1], nm[3 * c + 2]])
+                .collect();
+            b.m = order
+                .iter()
+                .map(|&c| [bm[3 * c], bm[3 * c + 1], bm[3 * c + 2]])
+                .collect();
             b
         })
         .collect();

@@ -42,8 +42,12 @@ impl View {
             half_height: 1.0,
         };
         let (r, u, _) = v.basis();
-        let (mut rmin, mut rmax, mut umin, mut umax) =
-            (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+        let (mut rmin, mut rmax, mut umin, mut umax) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
         for k in 0..8 {
             let c = Vec3::new(
                 if k & 1 == 0 { lo.x } else { hi.x },
@@ -68,7 +72,12 @@ impl View {
             .into_iter()
             .filter_map(Frame::bounds)
             .reduce(|(a, b), (c, d)| (a.inf(&c), b.sup(&d)))?;
-        Some(Self::fit_box(lo, hi, Self::three_quarter_direction(), Vec3::z()))
+        Some(Self::fit_box(
+            lo,
+            hi,
+            Self::three_quarter_direction(),
+            Vec3::z(),
+        ))
     }
 
     /// Grow the half extents by `f` (2 = twice as much around the target).
@@ -83,7 +92,11 @@ impl View {
         let f = -self.direction.normalize();
         let mut hint = self.up;
         if f.cross(&hint).norm() < 1e-9 * hint.norm().max(1e-300) {
-            hint = if f.z.abs() < 0.9 { Vec3::z() } else { Vec3::y() };
+            hint = if f.z.abs() < 0.9 {
+                Vec3::z()
+            } else {
+                Vec3::y()
+            };
         }
         let r = f.cross(&hint).normalize();
         let u = r.cross(&f);

@@ -44,9 +44,9 @@ impl Image {
         if x >= 0 && y >= 0 && x < self.width as i64 && y < self.height as i64 {
             let a = a.clamp(0.0, 1.0);
             let i = 3 * (y as usize * self.width as usize + x as usize);
-            for k in 0..3 {
-                let old = self.rgb[i + k] as f64;
-                self.rgb[i + k] = (old + (c[k] as f64 - old) * a).round() as u8;
+            for (dst, &src) in self.rgb[i..i + 3].iter_mut().zip(&c) {
+                let old = *dst as f64;
+                *dst = (old + (src as f64 - old) * a).round() as u8;
             }
         }
     }
@@ -85,7 +85,8 @@ impl Image {
                 } else {
                     0.0
                 };
-                let d = ((qx - x0 - t * (x1 - x0)).powi(2) + (qy - y0 - t * (y1 - y0)).powi(2)).sqrt();
+                let d =
+                    ((qx - x0 - t * (x1 - x0)).powi(2) + (qy - y0 - t * (y1 - y0)).powi(2)).sqrt();
                 let a = (r + 0.5 - d).clamp(0.0, 1.0);
                 if a > 0.0 {
                     self.blend(px, py, c, a);
@@ -107,15 +108,15 @@ impl Image {
     pub fn downsample(&self, f: u32) -> Image {
         let (w, h) = (self.width / f, self.height / f);
         let mut out = Image::new(w, h, WHITE);
-        let n = (f * f) as u32;
+        let n = f * f;
         for y in 0..h {
             for x in 0..w {
                 let mut acc = [0u32; 3];
                 for dy in 0..f {
                     for dx in 0..f {
                         let p = self.get(x * f + dx, y * f + dy);
-                        for k in 0..3 {
-                            acc[k] += p[k] as u32;
+                        for (a, v) in acc.iter_mut().zip(p) {
+                            *a += v as u32;
                         }
                     }
                 }
@@ -171,7 +172,9 @@ pub fn load_png(path: impl AsRef<Path>) -> Result<Image, IoError> {
         path: path.to_path_buf(),
         what: e.to_string(),
     };
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file)).read_info().map_err(err)?;
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .map_err(err)?;
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).map_err(err)?;
     let (w, h) = (info.width, info.height);
@@ -189,5 +192,9 @@ pub fn load_png(path: impl AsRef<Path>) -> Result<Image, IoError> {
         .chunks_exact(channels)
         .flat_map(|p| [p[0], p[1], p[2]])
         .collect();
-    Ok(Image { width: w, height: h, rgb })
+    Ok(Image {
+        width: w,
+        height: h,
+        rgb,
+    })
 }

@@ -26,15 +26,36 @@ impl Raster {
     pub fn triangle(&mut self, p: [(f64, f64, f64); 3], colour: Rgb, edges: u8, edge: (Rgb, f64)) {
         let (w, h) = (self.image.width as f64, self.image.height as f64);
         let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
-        if !(area.abs() > 1e-12) {
+        if area.abs() <= 1e-12 || area.is_nan() {
             return;
         }
-        let xmin = p.iter().map(|q| q.0).fold(f64::INFINITY, f64::min).max(0.0).floor() as i64;
-        let xmax = p.iter().map(|q| q.0).fold(f64::NEG_INFINITY, f64::max).min(w - 1.0).ceil() as i64;
-        let ymin = p.iter().map(|q| q.1).fold(f64::INFINITY, f64::min).max(0.0).floor() as i64;
-        let ymax = p.iter().map(|q| q.1).fold(f64::NEG_INFINITY, f64::max).min(h - 1.0).ceil() as i64;
+        let xmin = p
+            .iter()
+            .map(|q| q.0)
+            .fold(f64::INFINITY, f64::min)
+            .max(0.0)
+            .floor() as i64;
+        let xmax = p
+            .iter()
+            .map(|q| q.0)
+            .fold(f64::NEG_INFINITY, f64::max)
+            .min(w - 1.0)
+            .ceil() as i64;
+        let ymin = p
+            .iter()
+            .map(|q| q.1)
+            .fold(f64::INFINITY, f64::min)
+            .max(0.0)
+            .floor() as i64;
+        let ymax = p
+            .iter()
+            .map(|q| q.1)
+            .fold(f64::NEG_INFINITY, f64::max)
+            .min(h - 1.0)
+            .ceil() as i64;
         // Edge lengths (edge i is opposite vertex i): pixel distance = w_i * 2A / len_i.
-        let len = |a: usize, b: usize| ((p[a].0 - p[b].0).powi(2) + (p[a].1 - p[b].1).powi(2)).sqrt();
+        let len =
+            |a: usize, b: usize| ((p[a].0 - p[b].0).powi(2) + (p[a].1 - p[b].1).powi(2)).sqrt();
         let lens = [len(1, 2), len(2, 0), len(0, 1)];
         let heights = lens.map(|l| area.abs() / l.max(1e-12));
         let outline = edges != 0 && heights.iter().all(|&hgt| hgt > EDGE_MIN_HEIGHT);

@@ -1,0 +1,199 @@
+//! Pictures of a frame: shaded shells coloured by body or by von Mises stress, with the
+//! time and (for stress) a colour legend.
+
+use super::camera::{Projector, View};
+use super::colour::{body_colour, shade, turbo};
+use super::font::{draw_label, draw_text, text_width};
+use super::image::{Image, Rgb, BLACK, WHITE};
+use super::raster::Raster;
+use crate::frame::Frame;
+use crash_core::Vec3;
+
+/// What the surface colour shows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Colouring {
+    /// One colour per body (by id).
+    ByBody,
+    /// Larger of top/bottom von Mises stress per element, 0 .. `max` [Pa]
+    /// (None: the frame's own maximum).
+    ByVonMises { max: Option<f64> },
+}
+
+/// Where the camera looks from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Camera {
+    /// 3/4 view fitted to this frame. For a series, fit once with `View::fit_frames`
+    /// and pass `Camera::View` so every picture shares it.
+    Auto,
+    View(View),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    pub colour: Colouring,
+    pub camera: Camera,
+    /// Print "t = ..." in the top-left corner.
+    pub time_label: bool,
+    /// Outline elements that are large enough on screen.
+    pub edges: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            width: 800,
+            height: 600,
+            colour: Colouring::ByBody,
+            camera: Camera::Auto,
+            time_label: true,
+            edges: true,
+        }
+    }
+}
+
+/// Supersampling factor of the 3D part (anti-aliasing).
+const SUPERSAMPLE: u32 = 2;
+const LEGEND_WIDTH: u32 = 120;
+
+/// Time with a readable unit: "1.250 ms".
+pub fn format_time(t: f64) -> String {
+    let a = t.abs();
+    if a == 0.0 {
+        "0 s".into()
+    } else if a >= 1.0 {
+        format!("{t:.4} s")
+    } else if a >= 1e-3 {
+        format!("{:.3} ms", t * 1e3)
+    } else {
+        format!("{:.3} us", t * 1e6)
+    }
+}
+
+/// Short number for labels: 3 significant digits, exponent form when far from 1.
+pub fn format_number(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e5).contains(&a) {
+        let s = format!("{v:.2e}");
+        s.replace(".00e", "e").replace("0e", "e")
+    } else {
+        let digits = (2 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    }
+}
+
+fn light_intensity(n: &Vec3, light: &Vec3) -> f64 {
+    // Two-sided: shells are seen from both faces.
+    0.32 + 0.68 * n.dot(light).abs()
+}
+
+/// Render one frame.
+pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
+    let legend = matches!(opts.colour, Colouring::ByVonMises { .. });
+    let plot_w = if legend {
+        opts.width.saturating_sub(LEGEND_WIDTH)
+    } else {
+        opts.width
+    };
+    let ss = SUPERSAMPLE;
+    let view = match opts.camera {
+        Camera::View(v) => Some(v),
+        Camera::Auto => View::fit_frames(std::iter::once(frame)),
+    };
+    let vm_max = match opts.colour {
+        Colouring::ByVonMises { max: Some(m) } if m > 0.0 => m,
+        _ => frame.max_von_mises().max(f64::MIN_POSITIVE),
+    };
+    let mut raster = Raster::new(Image::new(plot_w * ss, opts.height * ss, WHITE));
+    if let Some(view) = view {
+        let proj = Projector::new(
+            &view,
+            (0.0, 0.0, (plot_w * ss) as f64, (opts.height * ss) as f64),
+        );
+        let (r, u, f) = proj.axes();
+        let light = (-0.35 * r + 0.55 * u - 0.75 * f).normalize();
+        let edge_w = 0.6 * ss as f64;
+        for b in &frame.bodies {
+            let pts: Vec<_> = b.x.iter().map(|p| proj.project(p)).collect();
+            let base = body_colour(b.id);
+            let colour_of = |e: usize| -> Rgb {
+                match opts.colour {
+                    Colouring::ByBody => base,
+                    Colouring::ByVonMises { .. } => turbo(b.von_mises_max(e) / vm_max),
+                }
+            };
+            let mut draw = |nodes: [u32; 3], c: Rgb, mask: u8| {
+                let q = nodes.map(|n| b.x[n as usize]);
+                let nrm = (q[1] - q[0]).cross(&(q[2] - q[0]));
+                let k = if nrm.norm() > 0.0 {
+                    light_intensity(&nrm.normalize(), &light)
+                } else {
+                    1.0
+                };
+                let c = shade(c, k);
+                let edge = (shade(c, 0.72), edge_w);
+                let mask = if opts.edges { mask } else { 0 };
+                raster.triangle(nodes.map(|n| pts[n as usize]), c, mask, edge);
+            };
+            for (e, t) in b.tris.iter().enumerate() {
+                draw(*t, colour_of(e), 0b111);
+            }
+            let nt = b.tris.len();
+            for (e, q) in b.quads.iter().enumerate() {
+                let c = colour_of(nt + e);
+                draw([q[0], q[1], q[2]], c, 0b101);
+                draw([q[0], q[2], q[3]], c, 0b011);
+            }
+        }
+    }
+    let mut img = Image::new(opts.width, opts.height, WHITE);
+    img.paste(&raster.image.downsample(ss), 0, 0);
+    if opts.time_label {
+        draw_label(
+            &mut img,
+            10,
+            10,
+            &format!("t = {}", format_time(frame.time)),
+            2,
+            BLACK,
+        );
+    }
+    if legend {
+        draw_legend(&mut img, plot_w as i64, vm_max);
+    }
+    img
+}
+
+/// Vertical colour bar with ticks in MPa, in the strip right of `x0`.
+fn draw_legend(img: &mut Image, x0: i64, max_pa: f64) {
+    let h = img.height as i64;
+    let (top, bottom) = (48i64, h - 24);
+    if bottom - top < 20 {
+        return;
+    }
+    let bx = x0 + 14;
+    let bw = 18i64;
+    draw_text(img, x0 + 6, 10, "von Mises", 1, BLACK);
+    draw_text(img, x0 + 6, 22, "[MPa]", 1, BLACK);
+    for y in top..=bottom {
+        let s = (bottom - y) as f64 / (bottom - top) as f64;
+        img.fill_rect(bx, y, bw, 1, turbo(s));
+    }
+    img.stroke_rect(bx - 1, top - 1, bw + 2, bottom - top + 3, BLACK);
+    for k in 0..=4 {
+        let s = k as f64 / 4.0;
+        let y = bottom - ((bottom - top) as f64 * s).round() as i64;
+        img.fill_rect(bx + bw, y, 5, 1, BLACK);
+        let label = format_number(s * max_pa / 1e6);
+        let tx = (bx + bw + 8).min(img.width as i64 - text_width(&label, 1) - 2);
+        draw_text(img, tx, y - 3, &label, 1, BLACK);
+    }
+}
