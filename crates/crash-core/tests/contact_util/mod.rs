@@ -1,0 +1,121 @@
+//! Shared scene builders of the contact tests (steel shells, SI units).
+#![allow(dead_code)]
+
+use crash_core::contact::ContactConfig;
+use crash_core::shapes::{icosphere, plate, ElementKind};
+use crash_core::{dof, Body, Group, Material, Mesh, Section, Stabilization, Vec3};
+
+pub fn steel() -> Material {
+    Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid steel")
+}
+
+pub fn shell(id: u32, mesh: &Mesh, t: f64) -> Body {
+    let mut b = Body::new(id, &format!("b{id}"), mesh, Section::new(steel(), t), Stabilization::default())
+        .expect("valid body");
+    b.contact = true;
+    b
+}
+
+/// Icosphere shell of radius r at `centre`, moving rigidly with `v`.
+pub fn sphere(id: u32, r: f64, t: f64, level: u32, centre: Vec3, v: Vec3) -> Body {
+    let mut m = icosphere(r, level);
+    m.transform(&nalgebra::Matrix3::identity(), centre);
+    let mut b = shell(id, &m, t);
+    b.set_rigid_velocity(v, Vec3::zeros(), centre);
+    b
+}
+
+/// Square plate lx x lx in the plane z = z0, n x n quads, every DOF held (kinematic).
+pub fn fixed_plate(id: u32, lx: f64, n: usize, t: f64, z0: f64) -> Body {
+    let mut m = plate(lx, lx, n, n, ElementKind::Quad);
+    m.transform(&nalgebra::Matrix3::identity(), Vec3::new(0.0, 0.0, z0));
+    let mut b = shell(id, &m, t);
+    for i in 0..b.x.len() {
+        b.fix(i, dof::ALL);
+    }
+    b
+}
+
+pub fn group(bodies: Vec<Body>, contact: ContactConfig) -> Group {
+    let mut g = Group::new(bodies, Vec3::zeros());
+    g.contact = contact;
+    g
+}
+
+/// Velocity of the centre of mass.
+pub fn com_velocity(b: &Body) -> Vec3 {
+    b.linear_momentum() / b.total_mass()
+}
+
+pub fn total_momentum(g: &Group) -> Vec3 {
+    g.bodies.iter().map(|b| b.linear_momentum()).sum()
+}
+
+pub fn total_angular_momentum(g: &Group) -> Vec3 {
+    g.bodies.iter().map(|b| b.angular_momentum()).sum()
+}
+
+/// Spherical cap of radius r around the south pole (a mesh vertex sits exactly at
+/// (0, 0, -r)): the triangles of an icosphere of the given level whose nodes all lie
+/// below z = -r cos(theta). Returns the mesh and its rim nodes (boundary edges).
+pub fn cap(r: f64, level: u32, theta: f64) -> (Mesh, Vec<usize>) {
+    let mut m = icosphere(1.0, level);
+    let a = m.nodes[0];
+    let rot = nalgebra::Rotation3::rotation_between(&a, &Vec3::new(0.0, 0.0, -1.0))
+        .expect("not antiparallel");
+    for p in &mut m.nodes {
+        *p = rot * *p;
+    }
+    let zcut = -theta.cos() + 1e-9;
+    let tris: Vec<[u32; 3]> = m
+        .tris
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&n| m.nodes[n as usize].z <= zcut))
+        .collect();
+    let mut new_id = vec![u32::MAX; m.nodes.len()];
+    let mut nodes = Vec::new();
+    for t in &tris {
+        for &n in t {
+            if new_id[n as usize] == u32::MAX {
+                new_id[n as usize] = nodes.len() as u32;
+                nodes.push(m.nodes[n as usize] * r);
+            }
+        }
+    }
+    let tris: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|n| new_id[n as usize])).collect();
+    let mut edges = std::collections::BTreeMap::new();
+    for t in &tris {
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            *edges.entry((a, b)).or_insert(0) += 1;
+        }
+    }
+    let mut rim: Vec<usize> = edges
+        .iter()
+        .filter(|(_, &c)| c == 1)
+        .flat_map(|(&(a, b), _)| [a as usize, b as usize])
+        .collect();
+    rim.sort_unstable();
+    rim.dedup();
+    (Mesh { nodes, tris, quads: Vec::new() }, rim)
+}
+
+/// Reissner's point-load stiffness of a thin spherical shell: 4 E t^2 / (R sqrt(3(1-nu^2))).
+pub fn reissner_stiffness(r: f64, t: f64) -> f64 {
+    let m = steel();
+    4.0 * m.young * t * t / (r * (3.0 * (1.0 - m.poisson * m.poisson)).sqrt())
+}
+
+/// Least-squares slope of y over x.
+pub fn slope(pts: &[(f64, f64)]) -> f64 {
+    let n = pts.len() as f64;
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, my) = (sx / n, sy / n);
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (x, y) in pts {
+        sxy += (x - mx) * (y - my);
+        sxx += (x - mx) * (x - mx);
+    }
+    sxy / sxx
+}
