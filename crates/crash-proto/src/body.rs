@@ -1,0 +1,407 @@
+//! Body <-> (BodyDef, BodyState): all the state needed to continue a body bit for bit,
+//! as packed repeated doubles with fixed strides (see proto/crash/v1/body.proto).
+//!
+//! Decoding rebuilds the body with `Body::new` from the reference mesh (so that fields
+//! this crate does not know about get their constructor values) and then overwrites
+//! every field the wire carries with the exact transmitted bits; the round-trip test
+//! compares the complete serialized body, so a field added to `Body` and not carried
+//! here makes it fail.
+
+use crate::error::ProtoError;
+use crate::pb;
+use crash_core::body::NodalLoad;
+use crash_core::element::Stabilization;
+use crash_core::{Body, BodyEnergy, Material, Mesh, Section, Vec3, VelocityProgram};
+
+const TRI_REF: usize = 7;
+const QUAD_REF: usize = 19;
+const PROGRAM: usize = 7;
+const LOAD: usize = 8;
+
+pub(crate) fn pack3(v: &[Vec3]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(3 * v.len());
+    for p in v {
+        out.extend_from_slice(&[p.x, p.y, p.z]);
+    }
+    out
+}
+
+pub(crate) fn vec3(d: &[f64]) -> Vec3 {
+    Vec3::new(d[0], d[1], d[2])
+}
+
+/// Check that `data` has `count * stride` values.
+fn check<T>(
+    body: u32,
+    field: &'static str,
+    data: &[T],
+    count: usize,
+    stride: usize,
+) -> Result<(), ProtoError> {
+    if data.len() != count * stride {
+        return Err(ProtoError::Length {
+            body,
+            field,
+            got: data.len(),
+            expected: count * stride,
+        });
+    }
+    Ok(())
+}
+
+fn unpack3(body: u32, field: &'static str, d: &[f64], n: usize) -> Result<Vec<Vec3>, ProtoError> {
+    check(body, field, d, n, 3)?;
+    Ok(d.chunks_exact(3).map(vec3).collect())
+}
+
+fn energy_to_pb(e: &BodyEnergy) -> pb::Energy {
+    pb::Energy {
+        kinetic: e.kinetic,
+        internal: e.internal,
+        hourglass: e.hourglass,
+        contact: e.contact,
+        damping: e.damping,
+        external: e.external,
+    }
+}
+
+pub(crate) fn energy_from_pb(e: &pb::Energy) -> BodyEnergy {
+    BodyEnergy {
+        kinetic: e.kinetic,
+        internal: e.internal,
+        hourglass: e.hourglass,
+        contact: e.contact,
+        damping: e.damping,
+        external: e.external,
+    }
+}
+
+/// The static part of a body.
+pub fn def_to_pb(b: &Body) -> pb::BodyDef {
+    let s = &b.section;
+    let m = &s.material;
+    let mut tri_nodes = Vec::with_capacity(3 * b.tris.len());
+    let mut tri_ref = Vec::with_capacity(TRI_REF * b.tris.len());
+    for e in &b.tris {
+        tri_nodes.extend_from_slice(&e.nodes);
+        tri_ref.extend_from_slice(&e.bx0);
+        tri_ref.extend_from_slice(&e.by0);
+        tri_ref.push(e.area0);
+    }
+    let mut quad_nodes = Vec::with_capacity(4 * b.quads.len());
+    let mut quad_ref = Vec::with_capacity(QUAD_REF * b.quads.len());
+    for e in &b.quads {
+        quad_nodes.extend_from_slice(&e.nodes);
+        quad_ref.extend_from_slice(&e.bx0);
+        quad_ref.extend_from_slice(&e.by0);
+        quad_ref.extend_from_slice(&e.gamma);
+        quad_ref.push(e.area0);
+        quad_ref.extend_from_slice(&e.e0);
+        quad_ref.extend_from_slice(&[e.k_m, e.k_w, e.k_th]);
+    }
+    let mut programs = Vec::with_capacity(PROGRAM * b.programs.len());
+    for p in &b.programs {
+        programs.extend_from_slice(&[p.velocity.x, p.velocity.y, p.velocity.z]);
+        programs.extend_from_slice(&[p.angular.x, p.angular.y, p.angular.z]);
+        programs.push(p.ramp);
+    }
+    let mut load_values = Vec::with_capacity(LOAD * b.loads.len());
+    for l in &b.loads {
+        load_values.extend_from_slice(&[l.force.x, l.force.y, l.force.z]);
+        load_values.extend_from_slice(&[l.moment.x, l.moment.y, l.moment.z, l.t0, l.t1]);
+    }
+    pb::BodyDef {
+        id: b.id,
+        name: b.name.clone(),
+        section: Some(pb::Section {
+            material: Some(pb::Material {
+                density: m.density,
+                young: m.young,
+                poisson: m.poisson,
+                kelvin: m.kelvin,
+            }),
+            thickness: s.thickness,
+            membrane: s.membrane,
+            bending: s.bending,
+            shear: s.shear,
+            wave_speed: s.wave_speed,
+        }),
+        stab: Some(pb::Stabilization {
+            hourglass_membrane: b.stab.hourglass_membrane,
+            hourglass_w: b.stab.hourglass_w,
+            hourglass_rotation: b.stab.hourglass_rotation,
+            drilling: b.stab.drilling,
+        }),
+        x0: pack3(&b.x0),
+        tri_nodes,
+        tri_ref,
+        quad_nodes,
+        quad_ref,
+        mass: b.mass.clone(),
+        inertia: b.inertia.clone(),
+        fixed: b.fixed.clone(),
+        program: b.program.iter().map(|&p| p as u32).collect(),
+        programs,
+        load_nodes: b.loads.iter().map(|l| l.node).collect(),
+        load_values,
+        load_of: b.load_of.clone(),
+        gather_start: b.gather_start.clone(),
+        gather_slot: b.gather_slot.clone(),
+        mass_damping: b.mass_damping,
+        contact: b.contact,
+        self_contact: b.self_contact,
+        kinematic: b.kinematic,
+    }
+}
+
+/// The evolving part of a body.
+pub fn state_to_pb(b: &Body) -> pb::BodyState {
+    let mut shell = Vec::with_capacity(6 * b.shell.len());
+    for s in &b.shell {
+        shell.extend_from_slice(&s.m);
+        shell.extend_from_slice(&s.q);
+        shell.push(s.drill);
+    }
+    let mut hourglass = Vec::with_capacity(3 * b.hourglass.len());
+    for h in &b.hourglass {
+        hourglass.push(h.w);
+        hourglass.extend_from_slice(&h.th);
+    }
+    pb::BodyState {
+        id: b.id,
+        x: pack3(&b.x),
+        v: pack3(&b.v),
+        w: pack3(&b.w),
+        shell,
+        hourglass,
+        slots: b.slots.iter().flatten().copied().collect(),
+        f_contact: pack3(&b.f_contact),
+        energy: Some(energy_to_pb(&b.energy)),
+        internal_now: b.internal_now,
+        hourglass_now: b.hourglass_now,
+    }
+}
+
+pub fn body_to_pb(b: &Body) -> pb::Body {
+    pb::Body {
+        def: Some(def_to_pb(b)),
+        state: Some(state_to_pb(b)),
+    }
+}
+
+fn section_from_pb(s: &pb::Section) -> Result<Section, ProtoError> {
+    let m = s
+        .material
+        .as_ref()
+        .ok_or(ProtoError::Missing("section.material"))?;
+    let material = Material::new(m.density, m.young, m.poisson, m.kelvin)?;
+    let mut section = Section::new(material, s.thickness);
+    section.membrane = s.membrane;
+    section.bending = s.bending;
+    section.shear = s.shear;
+    section.wave_speed = s.wave_speed;
+    Ok(section)
+}
+
+fn stab_from_pb(s: &pb::Stabilization) -> Stabilization {
+    Stabilization {
+        hourglass_membrane: s.hourglass_membrane,
+        hourglass_w: s.hourglass_w,
+        hourglass_rotation: s.hourglass_rotation,
+        drilling: s.drilling,
+    }
+}
+
+/// Rebuild a body from its definition and state.
+pub fn body_from_pb(p: &pb::Body) -> Result<Body, ProtoError> {
+    let d = p.def.as_ref().ok_or(ProtoError::Missing("body.def"))?;
+    let st = p.state.as_ref().ok_or(ProtoError::Missing("body.state"))?;
+    let id = d.id;
+    if st.id != id {
+        return Err(ProtoError::Invalid(format!(
+            "body definition {id} carries the state of body {}",
+            st.id
+        )));
+    }
+    let section = section_from_pb(
+        d.section
+            .as_ref()
+            .ok_or(ProtoError::Missing("body.section"))?,
+    )?;
+    let stab = stab_from_pb(d.stab.as_ref().ok_or(ProtoError::Missing("body.stab"))?);
+    if d.x0.len() % 3 != 0 || d.tri_nodes.len() % 3 != 0 || d.quad_nodes.len() % 4 != 0 {
+        return Err(ProtoError::Invalid(format!(
+            "body {id}: node or connectivity arrays are not whole triples/quadruples"
+        )));
+    }
+    let nn = d.x0.len() / 3;
+    let mesh = Mesh {
+        nodes: unpack3(id, "x0", &d.x0, nn)?,
+        tris: d
+            .tri_nodes
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect(),
+        quads: (d.quad_nodes.chunks_exact(4))
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect(),
+    };
+    let mut b = Body::new(id, &d.name, &mesh, section, stab)?;
+    let (nt, nq) = (b.tris.len(), b.quads.len());
+
+    check(id, "tri_ref", &d.tri_ref, nt, TRI_REF)?;
+    for (e, r) in b.tris.iter_mut().zip(d.tri_ref.chunks_exact(TRI_REF)) {
+        e.bx0.copy_from_slice(&r[0..3]);
+        e.by0.copy_from_slice(&r[3..6]);
+        e.area0 = r[6];
+    }
+    check(id, "quad_ref", &d.quad_ref, nq, QUAD_REF)?;
+    for (e, r) in b.quads.iter_mut().zip(d.quad_ref.chunks_exact(QUAD_REF)) {
+        e.bx0.copy_from_slice(&r[0..4]);
+        e.by0.copy_from_slice(&r[4..8]);
+        e.gamma.copy_from_slice(&r[8..12]);
+        e.area0 = r[12];
+        e.e0.copy_from_slice(&r[13..16]);
+        (e.k_m, e.k_w, e.k_th) = (r[16], r[17], r[18]);
+    }
+    check(id, "mass", &d.mass, nn, 1)?;
+    check(id, "inertia", &d.inertia, nn, 1)?;
+    check(id, "fixed", &d.fixed, nn, 1)?;
+    check(id, "program", &d.program, nn, 1)?;
+    check(id, "load_of", &d.load_of, nn, 1)?;
+    check(id, "gather_start", &d.gather_start, b.gather_start.len(), 1)?;
+    check(id, "gather_slot", &d.gather_slot, b.gather_slot.len(), 1)?;
+    if d.programs.len() % PROGRAM != 0 {
+        return Err(ProtoError::Invalid(format!(
+            "body {id}: programs not whole"
+        )));
+    }
+    check(id, "load_values", &d.load_values, d.load_nodes.len(), LOAD)?;
+    b.mass.clone_from(&d.mass);
+    b.inertia.clone_from(&d.inertia);
+    b.fixed.clone_from(&d.fixed);
+    b.program = d
+        .program
+        .iter()
+        .map(|&p| {
+            u16::try_from(p).map_err(|_| ProtoError::Invalid(format!("body {id}: program {p}")))
+        })
+        .collect::<Result<_, _>>()?;
+    b.programs = d
+        .programs
+        .chunks_exact(PROGRAM)
+        .map(|c| VelocityProgram {
+            velocity: vec3(&c[0..3]),
+            angular: vec3(&c[3..6]),
+            ramp: c[6],
+        })
+        .collect();
+    b.loads = d
+        .load_nodes
+        .iter()
+        .zip(d.load_values.chunks_exact(LOAD))
+        .map(|(&node, c)| NodalLoad {
+            node,
+            force: vec3(&c[0..3]),
+            moment: vec3(&c[3..6]),
+            t0: c[6],
+            t1: c[7],
+        })
+        .collect();
+    b.load_of.clone_from(&d.load_of);
+    b.gather_start.clone_from(&d.gather_start);
+    b.gather_slot.clone_from(&d.gather_slot);
+    b.mass_damping = d.mass_damping;
+    b.contact = d.contact;
+    b.self_contact = d.self_contact;
+    b.kinematic = d.kinematic;
+    validate_indices(&b)?;
+    apply_state(&mut b, st)?;
+    Ok(b)
+}
+
+/// Indices that the physics uses to index arrays must be in range (a corrupt message
+/// must not make a worker panic).
+fn validate_indices(b: &Body) -> Result<(), ProtoError> {
+    let id = b.id;
+    let bad = |what: String| Err(ProtoError::Invalid(format!("body {id}: {what}")));
+    let np = b.programs.len();
+    if let Some(p) = b
+        .program
+        .iter()
+        .find(|&&p| p != crash_core::body::NO_PROGRAM && p as usize >= np)
+    {
+        return bad(format!("velocity program {p} of {np}"));
+    }
+    let nl = b.loads.len();
+    if let Some(l) = b
+        .load_of
+        .iter()
+        .find(|&&l| l != u32::MAX && l as usize >= nl)
+    {
+        return bad(format!("load {l} of {nl}"));
+    }
+    let nn = b.x0.len();
+    if let Some(l) = b.loads.iter().find(|l| l.node as usize >= nn) {
+        return bad(format!("load on node {} of {nn}", l.node));
+    }
+    let ns = b.slots.len() as u32;
+    if b.gather_slot.iter().any(|&s| s >= ns)
+        || b.gather_start
+            .iter()
+            .any(|&s| s as usize > b.gather_slot.len())
+        || b.gather_start.windows(2).any(|w| w[0] > w[1])
+    {
+        return bad("gather map out of range".into());
+    }
+    Ok(())
+}
+
+/// Overwrite the evolving state of `b` with `s` (exact bits). The sizes must match the
+/// body's definition.
+pub fn apply_state(b: &mut Body, s: &pb::BodyState) -> Result<(), ProtoError> {
+    let id = b.id;
+    if s.id != id {
+        return Err(ProtoError::Invalid(format!(
+            "state of body {} applied to body {id}",
+            s.id
+        )));
+    }
+    let nn = b.x.len();
+    let ne = b.shell.len();
+    let nq = b.hourglass.len();
+    let nslot = b.slots.len();
+    let x = unpack3(id, "x", &s.x, nn)?;
+    let v = unpack3(id, "v", &s.v, nn)?;
+    let w = unpack3(id, "w", &s.w, nn)?;
+    check(id, "shell", &s.shell, ne, 6)?;
+    check(id, "hourglass", &s.hourglass, nq, 3)?;
+    check(id, "slots", &s.slots, nslot, 6)?;
+    if !(s.f_contact.is_empty() || s.f_contact.len() == 3 * nn) {
+        check(id, "f_contact", &s.f_contact, nn, 3)?;
+    }
+    let energy = s
+        .energy
+        .as_ref()
+        .ok_or(ProtoError::Missing("state.energy"))?;
+    b.x = x;
+    b.v = v;
+    b.w = w;
+    for (st, c) in b.shell.iter_mut().zip(s.shell.chunks_exact(6)) {
+        st.m = [c[0], c[1], c[2]];
+        st.q = [c[3], c[4]];
+        st.drill = c[5];
+    }
+    for (h, c) in b.hourglass.iter_mut().zip(s.hourglass.chunks_exact(3)) {
+        h.w = c[0];
+        h.th = [c[1], c[2]];
+    }
+    for (slot, c) in b.slots.iter_mut().zip(s.slots.chunks_exact(6)) {
+        slot.copy_from_slice(c);
+    }
+    b.f_contact = s.f_contact.chunks_exact(3).map(vec3).collect();
+    b.energy = energy_from_pb(energy);
+    b.internal_now = s.internal_now;
+    b.hourglass_now = s.hourglass_now;
+    Ok(())
+}

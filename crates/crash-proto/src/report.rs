@@ -1,0 +1,239 @@
+//! Step reports and faults <-> wire.
+
+use crate::body::vec3;
+use crate::error::ProtoError;
+use crate::pb;
+use crate::pb::fault::Kind;
+use crash_core::{BodyEnergy, BodyReport, Fault};
+
+const VALUES: usize = 15;
+const ELEMENTS: usize = 2;
+
+/// Column-pack the per-body reports of one worker.
+pub fn reports_to_pb(reports: &[BodyReport]) -> pb::BodyReports {
+    let n = reports.len();
+    let mut out = pb::BodyReports {
+        id: Vec::with_capacity(n),
+        values: Vec::with_capacity(VALUES * n),
+        elements: Vec::with_capacity(ELEMENTS * n),
+    };
+    for r in reports {
+        let e = &r.energy;
+        out.id.push(r.id);
+        out.values.extend_from_slice(&[
+            e.kinetic,
+            e.internal,
+            e.hourglass,
+            e.contact,
+            e.damping,
+            e.external,
+            r.stable_dt,
+            r.lo.x,
+            r.lo.y,
+            r.lo.z,
+            r.hi.x,
+            r.hi.y,
+            r.hi.z,
+            r.max_move,
+            r.hot_density,
+        ]);
+        out.elements
+            .extend_from_slice(&[r.dt_element as u64, r.hot_element as u64]);
+    }
+    out
+}
+
+fn index(v: u64) -> Result<usize, ProtoError> {
+    usize::try_from(v).map_err(|_| ProtoError::Invalid(format!("index {v} out of range")))
+}
+
+pub fn reports_from_pb(p: &pb::BodyReports) -> Result<Vec<BodyReport>, ProtoError> {
+    let n = p.id.len();
+    if p.values.len() != VALUES * n || p.elements.len() != ELEMENTS * n {
+        return Err(ProtoError::Invalid(format!(
+            "report of {n} bodies has {} values and {} element indices",
+            p.values.len(),
+            p.elements.len()
+        )));
+    }
+    let mut out = Vec::with_capacity(n);
+    for ((&id, v), e) in
+        p.id.iter()
+            .zip(p.values.chunks_exact(VALUES))
+            .zip(p.elements.chunks_exact(ELEMENTS))
+    {
+        out.push(BodyReport {
+            id,
+            energy: BodyEnergy {
+                kinetic: v[0],
+                internal: v[1],
+                hourglass: v[2],
+                contact: v[3],
+                damping: v[4],
+                external: v[5],
+            },
+            stable_dt: v[6],
+            dt_element: index(e[0])?,
+            lo: vec3(&v[7..10]),
+            hi: vec3(&v[10..13]),
+            max_move: v[13],
+            hot_element: index(e[1])?,
+            hot_density: v[14],
+        });
+    }
+    Ok(out)
+}
+
+pub fn fault_to_pb(f: &Fault) -> pb::Fault {
+    let (step, body, kind) = match f {
+        Fault::NonFinite {
+            step,
+            body,
+            place,
+            what,
+        } => (
+            *step,
+            *body,
+            Kind::NonFinite(pb::NonFinite {
+                place: place.clone(),
+                what: (*what).into(),
+            }),
+        ),
+        Fault::Collapsed {
+            step,
+            body,
+            element,
+            ratio,
+        } => (
+            *step,
+            *body,
+            Kind::Collapsed(pb::Collapsed {
+                element: *element as u64,
+                ratio: *ratio,
+            }),
+        ),
+        Fault::Inverted {
+            step,
+            body,
+            element,
+            corner,
+        } => (
+            *step,
+            *body,
+            Kind::Inverted(pb::Inverted {
+                element: *element as u64,
+                corner: *corner as u64,
+            }),
+        ),
+        Fault::EnergyRunaway {
+            step,
+            error,
+            limit,
+            body,
+            element,
+        } => (
+            *step,
+            *body,
+            Kind::EnergyRunaway(pb::EnergyRunaway {
+                error: *error,
+                limit: *limit,
+                element: *element as u64,
+            }),
+        ),
+        Fault::DtCollapse {
+            step,
+            dt,
+            floor,
+            body,
+            element,
+        } => (
+            *step,
+            *body,
+            Kind::DtCollapse(pb::DtCollapse {
+                dt: *dt,
+                floor: *floor,
+                element: *element as u64,
+            }),
+        ),
+        Fault::Tunnelling {
+            step,
+            body,
+            node,
+            speed,
+            distance,
+            budget,
+        } => (
+            *step,
+            *body,
+            Kind::Tunnelling(pb::Tunnelling {
+                node: *node as u64,
+                speed: *speed,
+                distance: *distance,
+                budget: *budget,
+            }),
+        ),
+    };
+    pb::Fault {
+        step,
+        body,
+        kind: Some(kind),
+    }
+}
+
+/// `Fault::NonFinite::what` is a static string: the known texts map back to themselves;
+/// another text (a newer peer) is kept by leaking it once (a fault ends the run).
+fn static_text(s: &str) -> &'static str {
+    const KNOWN: [&str; 2] = ["internal energy", "velocity or position"];
+    match KNOWN.iter().find(|k| **k == s) {
+        Some(k) => k,
+        None => Box::leak(s.to_owned().into_boxed_str()),
+    }
+}
+
+pub fn fault_from_pb(p: &pb::Fault) -> Result<Fault, ProtoError> {
+    let (step, body) = (p.step, p.body);
+    Ok(
+        match p.kind.as_ref().ok_or(ProtoError::Missing("fault.kind"))? {
+            Kind::NonFinite(k) => Fault::NonFinite {
+                step,
+                body,
+                place: k.place.clone(),
+                what: static_text(&k.what),
+            },
+            Kind::Collapsed(k) => Fault::Collapsed {
+                step,
+                body,
+                element: index(k.element)?,
+                ratio: k.ratio,
+            },
+            Kind::Inverted(k) => Fault::Inverted {
+                step,
+                body,
+                element: index(k.element)?,
+                corner: index(k.corner)?,
+            },
+            Kind::EnergyRunaway(k) => Fault::EnergyRunaway {
+                step,
+                error: k.error,
+                limit: k.limit,
+                body,
+                element: index(k.element)?,
+            },
+            Kind::DtCollapse(k) => Fault::DtCollapse {
+                step,
+                dt: k.dt,
+                floor: k.floor,
+                body,
+                element: index(k.element)?,
+            },
+            Kind::Tunnelling(k) => Fault::Tunnelling {
+                step,
+                body,
+                node: index(k.node)?,
+                speed: k.speed,
+                distance: k.distance,
+                budget: k.budget,
+            },
+        },
+    )
+}

@@ -1,0 +1,245 @@
+//! Round trips through the wire format must be bit-exact.
+#![allow(clippy::unwrap_used)] // a test panics on failure
+
+use crash_core::body::NodalLoad;
+use crash_core::shapes::{icosphere, plate, ElementKind};
+use crash_core::{
+    dof, hash::state_hash, Body, BodyReport, Fault, Group, Material, Section, Stabilization, Vec3,
+    VelocityProgram,
+};
+use crash_proto::msg::{command_from_pb, command_to_pb, reply_to_pb, report_from_pb};
+use crash_proto::pb::worker_message::Reply as PbReply;
+use crash_proto::report::{fault_from_pb, fault_to_pb};
+use crash_proto::{body_from_pb, body_to_pb, Command, Reply, StepReport};
+use prost::Message;
+
+fn steel() -> Section {
+    Section::new(Material::new(7800.0, 200e9, 0.3, 1e-7).unwrap(), 0.002)
+}
+
+/// A plate of quads with a clamped edge, a moving edge and a load, and a sphere of
+/// triangles, both after some steps (so that every state array holds non-zero bits).
+fn evolved_bodies() -> Vec<Body> {
+    let mut p = Body::new(
+        0,
+        "plate",
+        &plate(0.2, 0.1, 6, 3, ElementKind::Quad),
+        steel(),
+        Stabilization::default(),
+    )
+    .unwrap();
+    p.fix(0, dof::ALL);
+    p.fix(7, dof::X | dof::RZ);
+    p.prescribe(
+        &[6, 13],
+        VelocityProgram {
+            velocity: Vec3::new(0.0, 0.0, 1.5),
+            angular: Vec3::new(0.1, 0.0, 0.0),
+            ramp: 1e-5,
+        },
+    );
+    p.add_load(NodalLoad {
+        node: 20,
+        force: Vec3::new(1.0, -2.0, 30.0),
+        moment: Vec3::new(0.0, 0.01, 0.0),
+        t0: 0.0,
+        t1: 2e-5,
+    });
+    p.mass_damping = 3.0;
+    p.contact = true;
+    p.self_contact = true;
+    let mut s = Body::new(
+        1,
+        "ball",
+        &icosphere(0.05, 1),
+        steel(),
+        Stabilization::default(),
+    )
+    .unwrap();
+    s.set_rigid_velocity(
+        Vec3::new(1.0, 0.0, -4.0),
+        Vec3::new(0.0, 30.0, 0.0),
+        Vec3::zeros(),
+    );
+    let mut g = Group::new(vec![p, s], Vec3::new(0.0, 0.0, -9.81));
+    g.start().unwrap();
+    for _ in 0..25 {
+        g.advance(2e-7).unwrap();
+    }
+    for b in &mut g.bodies {
+        // Contact forces are written by the contact stage; give them non-trivial bits.
+        b.f_contact = (0..b.x.len())
+            .map(|i| Vec3::new(i as f64 * 0.1, -1e-300, 3.0))
+            .collect();
+    }
+    g.bodies
+}
+
+fn json(b: &Body) -> String {
+    serde_json::to_string(b).unwrap()
+}
+
+#[test]
+fn body_round_trip_keeps_every_field_bit_exact() {
+    for b in evolved_bodies() {
+        let bytes = body_to_pb(&b).encode_to_vec();
+        let back = body_from_pb(&crash_proto::pb::Body::decode(bytes.as_slice()).unwrap()).unwrap();
+        assert_eq!(json(&b), json(&back), "body {}", b.name);
+        assert!(!b.hourglass.is_empty() || b.name == "ball");
+    }
+}
+
+#[test]
+fn migrated_bodies_continue_bit_identically() {
+    let bodies = evolved_bodies();
+    let copies: Vec<Body> = bodies
+        .iter()
+        .map(|b| body_from_pb(&body_to_pb(b)).unwrap())
+        .collect();
+    let mut a = Group::new(bodies, Vec3::new(0.0, 0.0, -9.81));
+    let mut b = Group::new(copies, Vec3::new(0.0, 0.0, -9.81));
+    for g in [&mut a, &mut b] {
+        g.time = 25.0 * 2e-7;
+        g.step = 25;
+        g.h_prev = 2e-7;
+    }
+    for _ in 0..40 {
+        let ra = a.advance(2.1e-7).unwrap();
+        let rb = b.advance(2.1e-7).unwrap();
+        assert_eq!(ra, rb);
+    }
+    assert_eq!(state_hash(&a.bodies), state_hash(&b.bodies));
+}
+
+#[test]
+fn corrupt_state_is_refused_not_panicking() {
+    let b = &evolved_bodies()[0];
+    let mut m = body_to_pb(b);
+    m.state.as_mut().unwrap().x.pop();
+    let e = body_from_pb(&m).unwrap_err().to_string();
+    assert!(e.contains("'x' has"), "{e}");
+    let mut m = body_to_pb(b);
+    m.def.as_mut().unwrap().gather_slot[0] = 1_000_000;
+    assert!(body_from_pb(&m).is_err());
+    let mut m = body_to_pb(b);
+    m.def.as_mut().unwrap().program[3] = 7;
+    assert!(body_from_pb(&m).is_err());
+}
+
+#[test]
+fn every_fault_variant_round_trips() {
+    let faults = [
+        Fault::NonFinite {
+            step: 3,
+            body: 4,
+            place: "node 7".into(),
+            what: "velocity or position",
+        },
+        Fault::Collapsed {
+            step: 1,
+            body: 2,
+            element: 3,
+            ratio: 1e-4,
+        },
+        Fault::Inverted {
+            step: 1,
+            body: 2,
+            element: 3,
+            corner: 2,
+        },
+        Fault::EnergyRunaway {
+            step: 9,
+            error: 0.3,
+            limit: 0.25,
+            body: 1,
+            element: 17,
+        },
+        Fault::DtCollapse {
+            step: 9,
+            dt: 1e-12,
+            floor: 1e-10,
+            body: 1,
+            element: 5,
+        },
+        Fault::Tunnelling {
+            step: 2,
+            body: 0,
+            node: 11,
+            speed: 400.0,
+            distance: 1e-3,
+            budget: 5e-4,
+        },
+    ];
+    for f in faults {
+        let bytes = fault_to_pb(&f).encode_to_vec();
+        let back =
+            fault_from_pb(&crash_proto::pb::Fault::decode(bytes.as_slice()).unwrap()).unwrap();
+        assert_eq!(f, back);
+        assert_eq!(f.to_string(), back.to_string());
+    }
+}
+
+#[test]
+fn step_report_round_trips_bit_exact() {
+    let mut g = Group::new(evolved_bodies(), Vec3::zeros());
+    let bodies: Vec<BodyReport> = g.advance(1e-7).unwrap();
+    let rep = StepReport {
+        bodies,
+        groups: vec![crash_proto::GroupTime {
+            first: 0,
+            nanos: 12345,
+        }],
+        compute_ns: 99,
+    };
+    let msg = reply_to_pb(&Reply::Report(rep.clone()));
+    let bytes = msg.encode_to_vec();
+    let back = crash_proto::pb::WorkerMessage::decode(bytes.as_slice()).unwrap();
+    let Some(PbReply::Report(r)) = back.reply else {
+        panic!("not a report")
+    };
+    let got = report_from_pb(&r).unwrap();
+    assert_eq!(got, rep);
+    for (a, b) in got.bodies.iter().zip(&rep.bodies) {
+        assert_eq!(a.stable_dt.to_bits(), b.stable_dt.to_bits());
+        assert_eq!(a.energy.kinetic.to_bits(), b.energy.kinetic.to_bits());
+    }
+}
+
+#[test]
+fn commands_round_trip() {
+    let bodies = evolved_bodies();
+    let cmds = [
+        Command::Regroup(vec![vec![0, 3, 9], vec![1], vec![2, 4]]),
+        Command::Step {
+            step: 41,
+            dt: 1.234e-7,
+        },
+        Command::Unload(vec![5, 2]),
+        Command::Load(bodies.clone()),
+        Command::Shutdown("done".into()),
+    ];
+    for c in cmds {
+        let bytes = command_to_pb(&c).encode_to_vec();
+        let back =
+            command_from_pb(&crash_proto::pb::MasterMessage::decode(bytes.as_slice()).unwrap())
+                .unwrap();
+        match (&c, &back) {
+            (Command::Load(a), Command::Load(b)) => {
+                assert_eq!(a.len(), b.len());
+                for (x, y) in a.iter().zip(b) {
+                    assert_eq!(json(x), json(y));
+                }
+            }
+            _ => assert_eq!(format!("{c:?}"), format!("{back:?}")),
+        }
+    }
+}
+
+#[test]
+fn regroup_with_inconsistent_sizes_is_refused() {
+    let mut m = command_to_pb(&Command::Regroup(vec![vec![0, 1], vec![2]]));
+    if let Some(crash_proto::pb::master_message::Command::Regroup(r)) = m.command.as_mut() {
+        r.sizes[1] = 5;
+    }
+    assert!(command_from_pb(&m).is_err());
+}
