@@ -222,7 +222,7 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
         info.push(inf);
     }
     let mut contact = g.contact;
-    if !g.margin_given {
+    if !g.margin_given && contact.enabled {
         contact.margin = default_margin(&bodies, g.gravity, g.end_time, g.safety);
     }
     if let Some(p) = check_initial_overlap(&bodies, &contact) {

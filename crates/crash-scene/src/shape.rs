@@ -218,7 +218,7 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
             ctx.value_error(ErrorKind::MeshFile, &fkey, format!("{}: not a text file (binary .msh files are not read: export as ASCII)", m.file))
         })?;
         let surf = read_msh(&text)
-            .map_err(|e| ctx.value_error(ErrorKind::MeshFile, &fkey, format!("{}:{e}", m.file)))?;
+            .map_err(|e| ctx.value_error(ErrorKind::MeshFile, &fkey, format!("{}:{}: {}", m.file, e.line, e.message)))?;
         let mut mesh = surf.mesh;
         let mut tags = surf.element_tags;
         for p in &mut mesh.nodes {
