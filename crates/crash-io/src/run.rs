@@ -2,9 +2,10 @@
 
 use crate::error::{AtPath, IoError};
 use crate::history::{read_energy_csv, ENERGY_CSV};
+use crate::render::camera::Fit;
+use crate::render::energy_plot;
 use crate::render::scene::{render_frame, Camera, Colouring, RenderOptions};
 use crate::render::sheet::sheet_from_cells;
-use crate::render::{energy_plot, View};
 use crate::series::{read_pvd, PVD_FILE};
 use crate::vtu_read::read_vtu;
 use std::path::{Path, PathBuf};
@@ -39,27 +40,14 @@ pub fn render_run(out_dir: impl AsRef<Path>) -> Result<Vec<PathBuf>, IoError> {
     let mut written = Vec::new();
 
     // Pass 1: common camera and stress scale (frames are read twice to bound memory).
-    let mut bounds = None;
+    let mut fit = Fit::three_quarter();
     let mut vm_max = 0.0f64;
     for e in &entries {
         let f = read_vtu(&dir.join(&e.file))?;
         vm_max = vm_max.max(f.max_von_mises());
-        if let Some((lo, hi)) = f.bounds() {
-            bounds = Some(match bounds {
-                None => (lo, hi),
-                Some((a, b)) => (lo.inf(&a), hi.sup(&b)),
-            });
-        }
+        fit.add_frame(&f);
     }
-    let camera = match bounds {
-        Some((lo, hi)) => Camera::View(View::fit_box(
-            lo,
-            hi,
-            View::three_quarter_direction(),
-            crash_core::Vec3::z(),
-        )),
-        None => Camera::Auto,
-    };
+    let camera = fit.view().map_or(Camera::Auto, Camera::View);
     let snap = RenderOptions {
         colour: Colouring::ByVonMises {
             max: (vm_max > 0.0).then_some(vm_max),

@@ -32,52 +32,32 @@ impl View {
         Vec3::new(a.sin() * e.cos(), -a.cos() * e.cos(), e.sin())
     }
 
-    /// Fit the box [lo, hi] seen from `direction`.
+    /// Fit the box [lo, hi] seen from `direction` (all eight corners visible).
     pub fn fit_box(lo: Vec3, hi: Vec3, direction: Vec3, up: Vec3) -> View {
-        let mut v = View {
+        let mut fit = Fit::new(direction, up);
+        for k in 0..8 {
+            fit.add(&Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            ));
+        }
+        fit.view().unwrap_or(View {
             target: 0.5 * (lo + hi),
             direction: direction.normalize(),
             up,
             half_width: 1.0,
             half_height: 1.0,
-        };
-        let (r, u, _) = v.basis();
-        let (mut rmin, mut rmax, mut umin, mut umax) = (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        );
-        for k in 0..8 {
-            let c = Vec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            ) - v.target;
-            rmin = rmin.min(c.dot(&r));
-            rmax = rmax.max(c.dot(&r));
-            umin = umin.min(c.dot(&u));
-            umax = umax.max(c.dot(&u));
-        }
-        v.target += r * 0.5 * (rmin + rmax) + u * 0.5 * (umin + umax);
-        let floor = 1e-6 + 1e-3 * (hi - lo).norm();
-        v.half_width = (0.5 * (rmax - rmin) * MARGIN).max(floor);
-        v.half_height = (0.5 * (umax - umin) * MARGIN).max(floor);
-        v
+        })
     }
 
-    /// 3/4 view of the union of the bounds of `frames` (None when they hold no nodes).
+    /// 3/4 view fitted tightly to every node of `frames` (None when they hold no nodes).
     pub fn fit_frames<'a>(frames: impl IntoIterator<Item = &'a Frame>) -> Option<View> {
-        let (lo, hi) = frames
-            .into_iter()
-            .filter_map(Frame::bounds)
-            .reduce(|(a, b), (c, d)| (a.inf(&c), b.sup(&d)))?;
-        Some(Self::fit_box(
-            lo,
-            hi,
-            Self::three_quarter_direction(),
-            Vec3::z(),
-        ))
+        let mut fit = Fit::three_quarter();
+        for f in frames {
+            fit.add_frame(f);
+        }
+        fit.view()
     }
 
     /// Grow the half extents by `f` (2 = twice as much around the target).
@@ -101,6 +81,75 @@ impl View {
         let r = f.cross(&hint).normalize();
         let u = r.cross(&f);
         (r, u, f)
+    }
+}
+
+/// Accumulates the extents of points seen from a fixed direction, to fit a view to
+/// many frames without keeping them.
+#[derive(Debug, Clone, Copy)]
+pub struct Fit {
+    base: View,
+    right: Vec3,
+    up: Vec3,
+    fwd: Vec3,
+    /// min/max along right, up, forward.
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Fit {
+    pub fn new(direction: Vec3, up: Vec3) -> Self {
+        let base = View {
+            target: Vec3::zeros(),
+            direction: direction.normalize(),
+            up,
+            half_width: 1.0,
+            half_height: 1.0,
+        };
+        let (right, up, fwd) = base.basis();
+        Self {
+            base,
+            right,
+            up,
+            fwd,
+            lo: Vec3::repeat(f64::INFINITY),
+            hi: Vec3::repeat(f64::NEG_INFINITY),
+        }
+    }
+
+    /// The standard 3/4 view, z up.
+    pub fn three_quarter() -> Self {
+        Self::new(View::three_quarter_direction(), Vec3::z())
+    }
+
+    pub fn add(&mut self, p: &Vec3) {
+        if p.iter().all(|c| c.is_finite()) {
+            let q = Vec3::new(p.dot(&self.right), p.dot(&self.up), p.dot(&self.fwd));
+            self.lo = self.lo.inf(&q);
+            self.hi = self.hi.sup(&q);
+        }
+    }
+
+    pub fn add_frame(&mut self, f: &Frame) {
+        for b in &f.bodies {
+            b.x.iter().for_each(|p| self.add(p));
+        }
+    }
+
+    /// The fitted view (None when no point was added).
+    pub fn view(&self) -> Option<View> {
+        if self.lo.x > self.hi.x {
+            return None;
+        }
+        let c = 0.5 * (self.lo + self.hi);
+        let size = self.hi - self.lo;
+        let floor = 1e-9 + 1e-3 * size.norm();
+        Some(View {
+            target: self.right * c.x + self.up * c.y + self.fwd * c.z,
+            half_width: (0.5 * size.x * MARGIN).max(floor),
+            half_height: (0.5 * size.y * MARGIN).max(floor),
+            ..self.base
+        })
     }
 }
 

@@ -55,6 +55,17 @@ pub fn turbo(s: f64) -> Rgb {
     [r, g, b].map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
 }
 
+/// Stress colour for s in [0, 1]: turbo without its darkest ends, so low stress reads
+/// as blue and high stress as red on shaded surfaces.
+pub fn stress_colour(s: f64) -> Rgb {
+    let x = if s.is_finite() {
+        s.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    turbo(0.1 + 0.82 * x)
+}
+
 /// Scale a colour by a light intensity in [0, 1].
 pub fn shade(c: Rgb, k: f64) -> Rgb {
     c.map(|v| (v as f64 * k).round().clamp(0.0, 255.0) as u8)

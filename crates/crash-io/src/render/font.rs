@@ -91,11 +91,28 @@ const GLYPHS: &[(char, [u8; 7])] = &[
     ('"', [0x0A, 0x0A, 0x0A, 0x00, 0x00, 0x00, 0x00]),
 ];
 
+/// Lower-case letters with descenders: 9 rows, the last two below the baseline.
+const DESCENDERS: &[(char, [u8; 9])] = &[
+    ('g', [0x00, 0x00, 0x0F, 0x11, 0x11, 0x11, 0x0F, 0x01, 0x0E]),
+    ('j', [0x02, 0x00, 0x06, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C]),
+    ('p', [0x00, 0x00, 0x1E, 0x11, 0x11, 0x11, 0x1E, 0x10, 0x10]),
+    ('q', [0x00, 0x00, 0x0F, 0x11, 0x11, 0x11, 0x0F, 0x01, 0x01]),
+    ('y', [0x00, 0x00, 0x11, 0x11, 0x11, 0x11, 0x0F, 0x01, 0x0E]),
+];
+
 /// A hollow box for characters the font lacks.
 const MISSING: [u8; 7] = [0x1F, 0x11, 0x11, 0x11, 0x11, 0x11, 0x1F];
 
-pub fn glyph(c: char) -> [u8; 7] {
-    GLYPHS.iter().find(|g| g.0 == c).map_or(MISSING, |g| g.1)
+/// Rows of a glyph (7, or 9 for descenders), top first.
+pub fn glyph(c: char) -> Vec<u8> {
+    if let Some(g) = DESCENDERS.iter().find(|g| g.0 == c) {
+        return g.1.to_vec();
+    }
+    GLYPHS
+        .iter()
+        .find(|g| g.0 == c)
+        .map_or(MISSING, |g| g.1)
+        .to_vec()
 }
 
 /// Width in pixels of `text` at integer `scale` (6 columns per character, incl. spacing).
@@ -103,7 +120,7 @@ pub fn text_width(text: &str, scale: u32) -> i64 {
     (text.chars().count() as i64 * 6 - 1).max(0) * scale as i64
 }
 
-/// Height in pixels of one line at `scale`.
+/// Height in pixels of one line at `scale` (descenders hang 2 rows below it).
 pub fn text_height(scale: u32) -> i64 {
     7 * scale as i64
 }
@@ -131,7 +148,7 @@ pub fn draw_label(img: &mut Image, x: i64, y: i64, text: &str, scale: u32, colou
         x - pad,
         y - pad,
         text_width(text, scale) + 2 * pad,
-        text_height(scale) + 2 * pad,
+        text_height(scale) + 3 * pad,
         super::image::WHITE,
     );
     draw_text(img, x, y, text, scale, colour);

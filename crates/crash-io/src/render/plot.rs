@@ -73,9 +73,17 @@ const SERIES: [Series; 7] = [
 pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
     let mut img = Image::new(width, height, WHITE);
     let s = if width >= 700 { 2 } else { 1 };
+    // The legend sits right of the plot so it never hides a curve.
+    let lh = text_height(s) + 8;
+    let lw = SERIES
+        .iter()
+        .map(|se| text_width(se.name, s))
+        .max()
+        .unwrap_or(0)
+        + 40;
     let (left, right, top, bottom) = (
         14 + text_width("-8.88e-88", s),
-        20i64,
+        lw + 24,
         18 + 2 * text_height(s),
         28 + 2 * text_height(s),
     );
@@ -164,7 +172,7 @@ pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
         s,
         BLACK,
     );
-    draw_text(&mut img, 6, 8, "[J]", s, BLACK);
+    draw_text(&mut img, 6, 8, "energy [J]", s, BLACK);
 
     // Lines, decimated to about two points per pixel column (min and max kept).
     for se in &SERIES {
@@ -183,15 +191,7 @@ pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
         }
     }
 
-    // Legend, top right inside the plot.
-    let lh = text_height(s) + 6;
-    let lw = SERIES
-        .iter()
-        .map(|se| text_width(se.name, s))
-        .max()
-        .unwrap_or(0)
-        + 40;
-    let (lx, ly) = (left + pw - lw - 10, top + 10);
+    let (lx, ly) = (left + pw + 14, top);
     img.fill_rect(lx, ly, lw, lh * SERIES.len() as i64 + 8, WHITE);
     img.stroke_rect(lx, ly, lw, lh * SERIES.len() as i64 + 8, [160, 160, 160]);
     for (k, se) in SERIES.iter().enumerate() {

@@ -10,7 +10,7 @@ pub struct Raster {
 
 /// Edge lines are drawn only on triangles whose smallest height exceeds this (pixels),
 /// so fine meshes do not turn dark.
-const EDGE_MIN_HEIGHT: f64 = 6.0;
+const EDGE_MIN_HEIGHT: f64 = 10.0;
 
 impl Raster {
     pub fn new(image: Image) -> Self {

@@ -2,8 +2,8 @@
 //! time and (for stress) a colour legend.
 
 use super::camera::{Projector, View};
-use super::colour::{body_colour, shade, turbo};
-use super::font::{draw_label, draw_text, text_width};
+use super::colour::{body_colour, shade, stress_colour};
+use super::font::{draw_label, draw_text, text_height, text_width};
 use super::image::{Image, Rgb, BLACK, WHITE};
 use super::raster::Raster;
 use crate::frame::Frame;
@@ -56,6 +56,8 @@ impl Default for RenderOptions {
 /// Supersampling factor of the 3D part (anti-aliasing).
 const SUPERSAMPLE: u32 = 2;
 const LEGEND_WIDTH: u32 = 120;
+/// Height of the band above the picture kept free for the time label [px].
+const LABEL_BAND: u32 = 30;
 
 /// Time with a readable unit: "1.250 ms".
 pub fn format_time(t: f64) -> String {
@@ -114,10 +116,19 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
     };
     let mut raster = Raster::new(Image::new(plot_w * ss, opts.height * ss, WHITE));
     if let Some(view) = view {
-        let proj = Projector::new(
-            &view,
-            (0.0, 0.0, (plot_w * ss) as f64, (opts.height * ss) as f64),
+        // Keep the top band free for the time label.
+        let band = if opts.time_label {
+            LABEL_BAND.min(opts.height / 4)
+        } else {
+            0
+        };
+        let viewport = (
+            0.0,
+            (band * ss) as f64,
+            (plot_w * ss) as f64,
+            ((opts.height - band) * ss) as f64,
         );
+        let proj = Projector::new(&view, viewport);
         let (r, u, f) = proj.axes();
         let light = (-0.35 * r + 0.55 * u - 0.75 * f).normalize();
         let edge_w = 0.6 * ss as f64;
@@ -127,7 +138,7 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
             let colour_of = |e: usize| -> Rgb {
                 match opts.colour {
                     Colouring::ByBody => base,
-                    Colouring::ByVonMises { .. } => turbo(b.von_mises_max(e) / vm_max),
+                    Colouring::ByVonMises { .. } => stress_colour(b.von_mises_max(e) / vm_max),
                 }
             };
             let mut draw = |nodes: [u32; 3], c: Rgb, mask: u8| {
@@ -157,14 +168,13 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
     let mut img = Image::new(opts.width, opts.height, WHITE);
     img.paste(&raster.image.downsample(ss), 0, 0);
     if opts.time_label {
-        draw_label(
-            &mut img,
-            10,
-            10,
-            &format!("t = {}", format_time(frame.time)),
-            2,
-            BLACK,
-        );
+        let s = if opts.width >= 300 { 2 } else { 1 };
+        let text = if opts.width >= 600 {
+            format!("t = {}   step {}", format_time(frame.time), frame.step)
+        } else {
+            format!("t = {}", format_time(frame.time))
+        };
+        draw_label(&mut img, 8, 8, &text, s, BLACK);
     }
     if legend {
         draw_legend(&mut img, plot_w as i64, vm_max);
@@ -175,25 +185,27 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
 /// Vertical colour bar with ticks in MPa, in the strip right of `x0`.
 fn draw_legend(img: &mut Image, x0: i64, max_pa: f64) {
     let h = img.height as i64;
-    let (top, bottom) = (48i64, h - 24);
+    let s = if h >= 400 { 2 } else { 1 };
+    let top = 16 + 2 * text_height(s) + 8;
+    let bottom = h - 8 - text_height(s);
     if bottom - top < 20 {
         return;
     }
-    let bx = x0 + 14;
+    let bx = x0 + 8;
     let bw = 18i64;
-    draw_text(img, x0 + 6, 10, "von Mises", 1, BLACK);
-    draw_text(img, x0 + 6, 22, "[MPa]", 1, BLACK);
+    draw_text(img, x0 + 4, 8, "von Mises", s, BLACK);
+    draw_text(img, x0 + 4, 12 + text_height(s), "[MPa]", s, BLACK);
     for y in top..=bottom {
-        let s = (bottom - y) as f64 / (bottom - top) as f64;
-        img.fill_rect(bx, y, bw, 1, turbo(s));
+        let f = (bottom - y) as f64 / (bottom - top) as f64;
+        img.fill_rect(bx, y, bw, 1, stress_colour(f));
     }
     img.stroke_rect(bx - 1, top - 1, bw + 2, bottom - top + 3, BLACK);
     for k in 0..=4 {
-        let s = k as f64 / 4.0;
-        let y = bottom - ((bottom - top) as f64 * s).round() as i64;
+        let f = k as f64 / 4.0;
+        let y = bottom - ((bottom - top) as f64 * f).round() as i64;
         img.fill_rect(bx + bw, y, 5, 1, BLACK);
-        let label = format_number(s * max_pa / 1e6);
-        let tx = (bx + bw + 8).min(img.width as i64 - text_width(&label, 1) - 2);
-        draw_text(img, tx, y - 3, &label, 1, BLACK);
+        let label = format_number(f * max_pa / 1e6);
+        let tx = (bx + bw + 8).min(img.width as i64 - text_width(&label, s) - 2);
+        draw_text(img, tx, y - text_height(s) / 2, &label, s, BLACK);
     }
 }
