@@ -13,14 +13,30 @@ fn contact_duration_matches_reissner_spring() {
     let (r, t, tp) = (0.1, 0.001, 0.001);
     let gap0 = 2e-5;
     let v0 = 0.5;
-    let s = sphere(0, r, t, 4, Vec3::new(0.0, 0.0, r + 0.5 * (t + tp) + gap0), Vec3::new(0.0, 0.0, -v0));
+    let s = sphere(
+        0,
+        r,
+        t,
+        4,
+        Vec3::new(0.0, 0.0, r + 0.5 * (t + tp) + gap0),
+        Vec3::new(0.0, 0.0, -v0),
+    );
     let m = s.total_mass();
     let p = fixed_plate(1, 0.1, 10, tp, 0.0);
     let k = reissner_stiffness(r, t);
     let expected = std::f64::consts::PI * (m / k).sqrt();
-    let cfg = ContactConfig { margin: 5e-4, ..Default::default() };
-    let mut run = Run::new(group(vec![s, p], cfg), RunConfig { end_time: gap0 / v0 + 1.3 * expected, ..Default::default() })
-        .expect("start");
+    let cfg = ContactConfig {
+        margin: 5e-4,
+        ..Default::default()
+    };
+    let mut run = Run::new(
+        group(vec![s, p], cfg),
+        RunConfig {
+            end_time: gap0 / v0 + 1.3 * expected,
+            ..Default::default()
+        },
+    )
+    .expect("start");
     let (mut first, mut last) = (None, 0.0);
     let mut peak: f64 = 0.0;
     run.run(|r| {
@@ -42,6 +58,9 @@ fn contact_duration_matches_reissner_spring() {
         v0 * (k * m).sqrt(),
         run.dt0
     );
-    assert!(vz > 0.0 && last < run.time(), "the shell left the plane before the end");
+    assert!(
+        vz > 0.0 && last < run.time(),
+        "the shell left the plane before the end"
+    );
     assert!((duration / expected - 1.0).abs() < 0.15);
 }

@@ -14,11 +14,27 @@ fn sphere_dropped_on_fixed_plate_rebounds_with_small_penetration() {
     let gap0 = 2e-4;
     let z0 = r + 0.5 * (t + tp) + gap0;
     let v0 = 2.0;
-    let s = sphere(0, r, t, 4, Vec3::new(0.0, 0.0, z0), Vec3::new(0.0, 0.0, -v0));
+    let s = sphere(
+        0,
+        r,
+        t,
+        4,
+        Vec3::new(0.0, 0.0, z0),
+        Vec3::new(0.0, 0.0, -v0),
+    );
     let p = fixed_plate(1, 0.3, 20, tp, 0.0);
-    let cfg = ContactConfig { margin: 1e-3, ..Default::default() };
-    let mut run = Run::new(group(vec![s, p], cfg), RunConfig { end_time: 2.5e-3, ..Default::default() })
-        .expect("start");
+    let cfg = ContactConfig {
+        margin: 1e-3,
+        ..Default::default()
+    };
+    let mut run = Run::new(
+        group(vec![s, p], cfg),
+        RunConfig {
+            end_time: 2.5e-3,
+            ..Default::default()
+        },
+    )
+    .expect("start");
     let mut max_ratio: f64 = 0.0;
     let mut active = 0;
     let mut lowest = f64::INFINITY;
@@ -27,11 +43,21 @@ fn sphere_dropped_on_fixed_plate_rebounds_with_small_penetration() {
             max_ratio = max_ratio.max(st.max_penetration_ratio);
             active = active.max(st.active_nodes);
         }
-        lowest = lowest.min(r.group.bodies[0].x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min));
+        lowest = lowest.min(
+            r.group.bodies[0]
+                .x
+                .iter()
+                .map(|p| p.z)
+                .fold(f64::INFINITY, f64::min),
+        );
     })
     .expect("run");
     let vz = com_velocity(&run.group.bodies[0]).z;
-    let zmin = run.group.bodies[0].x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    let zmin = run.group.bodies[0]
+        .x
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::INFINITY, f64::min);
     println!(
         "rebound vz {vz:.4} m/s (restitution {:.3}), most active nodes {active}, max penetration / t {max_ratio:.4}, lowest node z {lowest:.3e} m (contact surface at {:.3e}), final {zmin:.3e}, balance max error {:.2e}, tree builds {}",
         vz / v0,

@@ -8,10 +8,26 @@ use crash_core::{Fault, Run, RunConfig, Vec3};
 
 fn fast_sphere_run(margin: f64, speed: f64) -> Result<Run, Fault> {
     let (r, t) = (0.1, 0.002);
-    let s = sphere(0, r, t, 3, Vec3::new(0.0, 0.0, r + 0.01), Vec3::new(0.0, 0.0, -speed));
+    let s = sphere(
+        0,
+        r,
+        t,
+        3,
+        Vec3::new(0.0, 0.0, r + 0.01),
+        Vec3::new(0.0, 0.0, -speed),
+    );
     let p = fixed_plate(1, 0.3, 10, t, 0.0);
-    let cfg = ContactConfig { margin, ..Default::default() };
-    let mut run = Run::new(group(vec![s, p], cfg), RunConfig { end_time: 1.0, ..Default::default() })?;
+    let cfg = ContactConfig {
+        margin,
+        ..Default::default()
+    };
+    let mut run = Run::new(
+        group(vec![s, p], cfg),
+        RunConfig {
+            end_time: 1.0,
+            ..Default::default()
+        },
+    )?;
     for _ in 0..10 {
         run.step()?;
     }
@@ -24,7 +40,14 @@ fn node_crossing_the_margin_in_one_step_stops_the_run() {
     let err = fast_sphere_run(margin, speed).expect_err("must stop");
     println!("{err}");
     match err {
-        Fault::Tunnelling { step, body, speed: s, distance, budget, .. } => {
+        Fault::Tunnelling {
+            step,
+            body,
+            speed: s,
+            distance,
+            budget,
+            ..
+        } => {
             assert_eq!(step, 1);
             assert_eq!(body, 0);
             assert!((s - speed).abs() < 1e-6 * speed, "speed {s}");
@@ -36,7 +59,10 @@ fn node_crossing_the_margin_in_one_step_stops_the_run() {
     // the same sphere with a margin that covers its step runs on
     let run = fast_sphere_run(20.0 * margin, speed).expect("runs");
     let step = speed * run.dt0;
-    println!("step length {step:.3e} m, budget {:.3e} m", 0.5 * 20.0 * margin);
+    println!(
+        "step length {step:.3e} m, budget {:.3e} m",
+        0.5 * 20.0 * margin
+    );
     assert!(step > 0.5 * margin && step < 0.5 * 20.0 * margin);
 }
 
@@ -45,18 +71,34 @@ fn initial_penetrations_name_bodies_and_depth() {
     let (r, t, tp) = (0.1, 0.002, 0.004);
     let depth = 3e-4;
     // sphere pole sits `depth` inside the plate's contact surface
-    let s = sphere(0, r, t, 3, Vec3::new(0.0, 0.0, r + 0.5 * (t + tp) - depth), Vec3::zeros());
+    let s = sphere(
+        0,
+        r,
+        t,
+        3,
+        Vec3::new(0.0, 0.0, r + 0.5 * (t + tp) - depth),
+        Vec3::zeros(),
+    );
     let p = fixed_plate(7, 0.3, 10, tp, 0.0);
     let far = sphere(3, r, t, 2, Vec3::new(2.0, 0.0, 0.5), Vec3::zeros());
     let found = initial_penetrations(&[s.clone(), p.clone(), far], &ContactConfig::default());
     println!("{found:?}");
     // the sphere's pole node penetrates the plate (and the plate's centre node the
     // sphere's pole, reported as the reverse pass); the far sphere is not involved
-    let hit = found.iter().find(|q| q.node_body == 0 && q.segment_body == 7).expect("reported");
+    let hit = found
+        .iter()
+        .find(|q| q.node_body == 0 && q.segment_body == 7)
+        .expect("reported");
     assert!((hit.depth - depth).abs() < 1e-12, "depth {}", hit.depth);
-    assert!((s.x[hit.node].z - s.x.iter().map(|q| q.z).fold(f64::INFINITY, f64::min)).abs() < 1e-15);
-    assert!(found.iter().all(|q| q.node_body != 3 && q.segment_body != 3));
-    assert!(found.iter().all(|q| q.nodes == 1 && (q.depth - depth).abs() < 1e-12));
+    assert!(
+        (s.x[hit.node].z - s.x.iter().map(|q| q.z).fold(f64::INFINITY, f64::min)).abs() < 1e-15
+    );
+    assert!(found
+        .iter()
+        .all(|q| q.node_body != 3 && q.segment_body != 3));
+    assert!(found
+        .iter()
+        .all(|q| q.nodes == 1 && (q.depth - depth).abs() < 1e-12));
     // moved clear: nothing to report
     let mut lifted = s.clone();
     for x in &mut lifted.x {

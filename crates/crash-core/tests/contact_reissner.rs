@@ -23,16 +23,42 @@ fn force_approach_slope_matches_reissner_stiffness() {
     let vp = 0.2;
     let mut p = fixed_plate(1, 0.04, 8, tp, -r - 0.5 * (t + tp) - gap0);
     let all: Vec<usize> = (0..p.x.len()).collect();
-    p.prescribe(&all, VelocityProgram { velocity: Vec3::new(0.0, 0.0, vp), angular: Vec3::zeros(), ramp: 2e-4 });
-    let cfg = ContactConfig { margin: 1e-3, ..Default::default() };
+    p.prescribe(
+        &all,
+        VelocityProgram {
+            velocity: Vec3::new(0.0, 0.0, vp),
+            angular: Vec3::zeros(),
+            ramp: 2e-4,
+        },
+    );
+    let cfg = ContactConfig {
+        margin: 1e-3,
+        ..Default::default()
+    };
     let end = 2e-4 / 2.0 + (gap0 + 0.52 * t) / vp;
-    let mut run = Run::new(group(vec![c, p], cfg), RunConfig { end_time: end, ..Default::default() }).expect("start");
-    println!("elements {}, dt {:.3e}, steps ~{:.0}", run.group.bodies[0].element_count(), run.dt0, end / run.dt0);
+    let mut run = Run::new(
+        group(vec![c, p], cfg),
+        RunConfig {
+            end_time: end,
+            ..Default::default()
+        },
+    )
+    .expect("start");
+    println!(
+        "elements {}, dt {:.3e}, steps ~{:.0}",
+        run.group.bodies[0].element_count(),
+        run.dt0,
+        end / run.dt0
+    );
     let z0 = run.group.bodies[0].x[pole].z;
     let mut curve = Vec::new();
     run.run(|r| {
         let w = r.group.bodies[0].x[pole].z - z0;
-        let f = r.group.contact_stats().first().map_or(0.0, |s| s.normal_force);
+        let f = r
+            .group
+            .contact_stats()
+            .first()
+            .map_or(0.0, |s| s.normal_force);
         curve.push((w, f));
     })
     .expect("run");
@@ -44,9 +70,18 @@ fn force_approach_slope_matches_reissner_stiffness() {
     }
     // chord slope through the origin over the whole range w <= t/2 (least squares),
     // and the initial tangent (w <= t/4)
-    let below: Vec<(f64, f64)> = curve.iter().copied().filter(|(w, _)| *w > 0.0 && *w <= 0.5 * t).collect();
-    let chord = below.iter().map(|(w, f)| w * f).sum::<f64>() / below.iter().map(|(w, _)| w * w).sum::<f64>();
-    let early: Vec<(f64, f64)> = below.iter().copied().filter(|(w, _)| *w <= 0.25 * t).collect();
+    let below: Vec<(f64, f64)> = curve
+        .iter()
+        .copied()
+        .filter(|(w, _)| *w > 0.0 && *w <= 0.5 * t)
+        .collect();
+    let chord = below.iter().map(|(w, f)| w * f).sum::<f64>()
+        / below.iter().map(|(w, _)| w * w).sum::<f64>();
+    let early: Vec<(f64, f64)> = below
+        .iter()
+        .copied()
+        .filter(|(w, _)| *w <= 0.25 * t)
+        .collect();
     let tangent = slope(&early);
     let reach = below.iter().map(|p| p.0).fold(0.0, f64::max);
     println!(

@@ -93,12 +93,20 @@ mod tests {
     fn pairs_follow_the_inflated_gap_and_are_sorted() {
         // each box grows by (0.1 + 0.04) / 2, so boxes pair up to a gap of 0.14:
         // 0-1: 0.15 (no), 1-2: 0.05 (yes), 2-3: 0.13 (yes), 3-4: 1.67 (no)
-        let boxes = [cube(3, 3.33), cube(0, 0.0), cube(2, 2.2), cube(1, 1.15), cube(4, 6.0)];
+        let boxes = [
+            cube(3, 3.33),
+            cube(0, 0.0),
+            cube(2, 2.2),
+            cube(1, 1.15),
+            cube(4, 6.0),
+        ];
         assert_eq!(candidate_pairs(&boxes, 0.04), vec![(1, 2), (2, 3)]);
         // brute force agrees on a pseudo-random cloud (LCG)
         let mut seed = 12345u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         let many: Vec<BodyBox> = (0..80)

@@ -75,10 +75,18 @@ impl ContactConfig {
             what: format!("{field} = {value} is invalid: {valid}"),
         };
         if !self.margin.is_finite() {
-            return Err(bad("margin", self.margin, "must be finite (m; <= 0: thickness)"));
+            return Err(bad(
+                "margin",
+                self.margin,
+                "must be finite (m; <= 0: thickness)",
+            ));
         }
         if !(self.penalty_scale.is_finite() && self.penalty_scale > 0.0) {
-            return Err(bad("penalty_scale", self.penalty_scale, "must be finite and > 0"));
+            return Err(bad(
+                "penalty_scale",
+                self.penalty_scale,
+                "must be finite and > 0",
+            ));
         }
         if self.penalty == PenaltyKind::Soft && self.penalty_scale > SOFT_SCALE_LIMIT {
             return Err(bad(
@@ -88,7 +96,11 @@ impl ContactConfig {
             ));
         }
         if !(self.damping_ratio.is_finite() && (0.0..=1.0).contains(&self.damping_ratio)) {
-            return Err(bad("damping_ratio", self.damping_ratio, "must be in [0, 1]"));
+            return Err(bad(
+                "damping_ratio",
+                self.damping_ratio,
+                "must be in [0, 1]",
+            ));
         }
         Ok(())
     }

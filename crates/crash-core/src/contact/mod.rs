@@ -12,4 +12,6 @@ pub mod surface;
 pub use broad::{candidate_pairs, BodyBox};
 pub use config::{ContactConfig, PenaltyKind, REFERENCE_SAFETY, SOFT_SCALE_LIMIT};
 pub use segment::{project, segments, Projection, Segment};
-pub use stage::{check_moves, contact_forces, initial_penetrations, ContactState, PairStats, Penetration};
+pub use stage::{
+    check_moves, contact_forces, initial_penetrations, ContactState, PairStats, Penetration,
+};

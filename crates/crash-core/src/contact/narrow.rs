@@ -41,54 +41,53 @@ pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit>
     let r = 0.5 * nb.section.thickness;
     let (lo, hi) = reach_box(sb, nb);
     let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] && p[d] <= hi[d]);
-    let chunks: Vec<Vec<Hit>> = nb
-        .x
-        .par_chunks(NODE_CHUNK)
-        .enumerate()
-        .map(|(ci, xs)| {
-            let mut out = Vec::new();
-            let mut cand = Vec::new();
-            for (k, p) in xs.iter().enumerate() {
-                if !inside(p) {
-                    continue;
-                }
-                let i = (ci * NODE_CHUNK + k) as u32;
-                surf.candidates(p, r, &mut cand);
-                let mut best: Option<(Projection, u32)> = None;
-                for &j in &cand {
-                    if self_pass && surf.near_in_topology(i, j) {
+    let chunks: Vec<Vec<Hit>> =
+        nb.x.par_chunks(NODE_CHUNK)
+            .enumerate()
+            .map(|(ci, xs)| {
+                let mut out = Vec::new();
+                let mut cand = Vec::new();
+                for (k, p) in xs.iter().enumerate() {
+                    if !inside(p) {
                         continue;
                     }
-                    let pr = project(p, &surf.segments[j as usize], &sb.x);
-                    let better = match &best {
-                        None => true,
-                        Some((b, bj)) => pr.dist < b.dist || (pr.dist == b.dist && j < *bj),
-                    };
-                    if better {
-                        best = Some((pr, j));
+                    let i = (ci * NODE_CHUNK + k) as u32;
+                    surf.candidates(p, r, &mut cand);
+                    let mut best: Option<(Projection, u32)> = None;
+                    for &j in &cand {
+                        if self_pass && surf.near_in_topology(i, j) {
+                            continue;
+                        }
+                        let pr = project(p, &surf.segments[j as usize], &sb.x);
+                        let better = match &best {
+                            None => true,
+                            Some((b, bj)) => pr.dist < b.dist || (pr.dist == b.dist && j < *bj),
+                        };
+                        if better {
+                            best = Some((pr, j));
+                        }
                     }
-                }
-                let Some((proj, j)) = best else { continue };
-                if !(proj.dist < c) {
-                    continue;
-                }
-                if self_pass {
-                    // already this close at the start: part of the shape, not a contact
-                    let seg = &surf.segments[j as usize];
-                    if project(&nb.x0[i as usize], seg, &sb.x0).dist < c {
+                    let Some((proj, j)) = best else { continue };
+                    if proj.dist.is_nan() || proj.dist >= c {
                         continue;
                     }
+                    if self_pass {
+                        // already this close at the start: part of the shape, not a contact
+                        let seg = &surf.segments[j as usize];
+                        if project(&nb.x0[i as usize], seg, &sb.x0).dist < c {
+                            continue;
+                        }
+                    }
+                    out.push(Hit {
+                        node: i,
+                        segment: j,
+                        proj,
+                        depth: c - proj.dist,
+                    });
                 }
-                out.push(Hit {
-                    node: i,
-                    segment: j,
-                    proj,
-                    depth: c - proj.dist,
-                });
-            }
-            out
-        })
-        .collect();
+                out
+            })
+            .collect();
     chunks.into_iter().flatten().collect()
 }
 

@@ -178,8 +178,14 @@ mod tests {
             Vec3::new(1.1, 0.9, 0.0),
             Vec3::new(-0.1, 1.0, 0.05),
         ];
-        let tri = Segment { nodes: [0, 1, 2, 2], count: 3 };
-        let quad = Segment { nodes: [0, 1, 2, 3], count: 4 };
+        let tri = Segment {
+            nodes: [0, 1, 2, 2],
+            count: 3,
+        };
+        let quad = Segment {
+            nodes: [0, 1, 2, 3],
+            count: 4,
+        };
         // points over interior, beyond edges and beyond vertices, both sides
         for i in 0..7 {
             for j in 0..7 {
@@ -189,7 +195,11 @@ mod tests {
                         let pr = project(&p, seg, &x);
                         let b = brute(&p, seg, &x);
                         // sampling is 1/200 of the size: the exact value is a bit below
-                        assert!(pr.dist <= b + 1e-12 && pr.dist > b - 0.01, "{p:?} {} {b}", pr.dist);
+                        assert!(
+                            pr.dist <= b + 1e-12 && pr.dist > b - 0.01,
+                            "{p:?} {} {b}",
+                            pr.dist
+                        );
                         let s: f64 = pr.weights.iter().sum();
                         assert!((s - 1.0).abs() < 1e-14);
                         assert!(pr.weights.iter().all(|&w| w >= -1e-15));

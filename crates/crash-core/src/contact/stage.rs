@@ -66,7 +66,12 @@ fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
         .collect();
     let boxes: Vec<BodyBox> = index.values().map(|&k| BodyBox::of(&bodies[k])).collect();
     let mut pairs: Vec<(u32, u32)> = candidate_pairs(&boxes, cfg.margin);
-    pairs.extend(index.iter().filter(|(_, &k)| bodies[k].self_contact).map(|(&id, _)| (id, id)));
+    pairs.extend(
+        index
+            .iter()
+            .filter(|(_, &k)| bodies[k].self_contact)
+            .map(|(&id, _)| (id, id)),
+    );
     pairs.sort_unstable();
     pairs
         .into_iter()
@@ -79,7 +84,9 @@ fn ensure_surface<'s>(
     body: &Body,
     skin: f64,
 ) -> &'s mut Surface {
-    let s = surfaces.entry(body.id).or_insert_with(|| Surface::new(body));
+    let s = surfaces
+        .entry(body.id)
+        .or_insert_with(|| Surface::new(body));
     if !s.fits(body) {
         *s = Surface::new(body);
     }
@@ -156,8 +163,14 @@ pub fn contact_forces(
             force_on_a: Vec3::zeros(),
         };
         let thin = a.section.thickness.min(b.section.thickness);
-        let segs_b: Vec<Segment> = first.iter().map(|p| sb.segments[p.hit.segment as usize]).collect();
-        let segs_a: Vec<Segment> = second.iter().map(|p| sa.segments[p.hit.segment as usize]).collect();
+        let segs_b: Vec<Segment> = first
+            .iter()
+            .map(|p| sb.segments[p.hit.segment as usize])
+            .collect();
+        let segs_a: Vec<Segment> = second
+            .iter()
+            .map(|p| sa.segments[p.hit.segment as usize])
+            .collect();
         apply(bodies, ia, ib, &first, &segs_b, &mut st, true);
         apply(bodies, ib, ia, &second, &segs_a, &mut st, false);
         st.max_penetration_ratio = st.max_penetration / thin;

@@ -123,10 +123,10 @@ impl Surface {
     pub fn refresh(&mut self, body: &Body, skin: f64) -> bool {
         let moved = || {
             let s2 = skin * skin;
-            body.x
-                .iter()
-                .zip(&self.reference)
-                .any(|(a, b)| !((a - b).norm_squared() <= s2))
+            body.x.iter().zip(&self.reference).any(|(a, b)| {
+                let d2 = (a - b).norm_squared();
+                d2.is_nan() || d2 > s2
+            })
         };
         if self.built && self.skin == skin && self.reference.len() == body.x.len() && !moved() {
             return false;
@@ -164,13 +164,18 @@ impl Surface {
     pub fn candidates(&self, p: &Vec3, r: f64, out: &mut Vec<u32>) {
         out.clear();
         let q = AABB::from_corners([p.x - r, p.y - r, p.z - r], [p.x + r, p.y + r, p.z + r]);
-        out.extend(self.tree.locate_in_envelope_intersecting(&q).map(|e| e.data));
+        out.extend(
+            self.tree
+                .locate_in_envelope_intersecting(&q)
+                .map(|e| e.data),
+        );
     }
 
     /// Is segment `j` excluded from self-contact with node `i` (it holds the node or one
     /// of its neighbours)?
     pub fn near_in_topology(&self, i: u32, j: u32) -> bool {
-        let nb = &self.adj[self.adj_start[i as usize] as usize..self.adj_start[i as usize + 1] as usize];
+        let nb =
+            &self.adj[self.adj_start[i as usize] as usize..self.adj_start[i as usize + 1] as usize];
         self.segments[j as usize]
             .nodes()
             .iter()

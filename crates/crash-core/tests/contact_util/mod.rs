@@ -10,8 +10,14 @@ pub fn steel() -> Material {
 }
 
 pub fn shell(id: u32, mesh: &Mesh, t: f64) -> Body {
-    let mut b = Body::new(id, &format!("b{id}"), mesh, Section::new(steel(), t), Stabilization::default())
-        .expect("valid body");
+    let mut b = Body::new(
+        id,
+        &format!("b{id}"),
+        mesh,
+        Section::new(steel(), t),
+        Stabilization::default(),
+    )
+    .expect("valid body");
     b.contact = true;
     b
 }
@@ -98,7 +104,14 @@ pub fn cap(r: f64, level: u32, theta: f64) -> (Mesh, Vec<usize>) {
         .collect();
     rim.sort_unstable();
     rim.dedup();
-    (Mesh { nodes, tris, quads: Vec::new() }, rim)
+    (
+        Mesh {
+            nodes,
+            tris,
+            quads: Vec::new(),
+        },
+        rim,
+    )
 }
 
 /// Reissner's point-load stiffness of a thin spherical shell: 4 E t^2 / (R sqrt(3(1-nu^2))).
