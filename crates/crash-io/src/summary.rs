@@ -15,7 +15,8 @@ pub const CONTACT_LIMIT: f64 = 0.10;
 pub const BALANCE_LIMIT: f64 = 0.01;
 pub const PENETRATION_LIMIT: f64 = 0.5;
 
-/// Run-time error indicators, updated as the run goes.
+/// Run-time error indicators, updated as the run goes (serde: keep it in a checkpoint
+/// so a restarted run continues its peaks).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Indicators {
     /// Energy-balance error (relative to the largest energy) at the end.
@@ -30,12 +31,10 @@ pub struct Indicators {
     pub max_penetration_ratio: f64,
     /// Most negative contact energy seen [J] (clearly negative means contact did work).
     pub min_contact_energy: f64,
-    #[serde(skip)]
-    peak_internal: f64,
-    #[serde(skip)]
-    peak_hourglass: f64,
-    #[serde(skip)]
-    peak_contact: f64,
+    /// Peak internal, hourglass and |contact| energies [J] (the ratios' bases).
+    pub peak_internal: f64,
+    pub peak_hourglass: f64,
+    pub peak_contact: f64,
 }
 
 impl Indicators {

@@ -1,0 +1,97 @@
+//! Checkpoints: a stepped group round-trips bit-exactly and continues identically;
+//! damaged files are refused with errors that name the file.
+
+mod common;
+
+use common::{stepped_group, test_dir};
+use crash_core::hash::state_hash;
+use crash_core::Group;
+use crash_io::checkpoint::checkpoint_payload;
+use crash_io::{read_checkpoint, write_checkpoint, IoError};
+
+fn advance(g: &mut Group, n: usize) {
+    let mut reports = g.start().expect("start");
+    // start() recomputes forces at the current state without changing it.
+    for _ in 0..n {
+        let h = 0.9
+            * reports
+                .iter()
+                .map(|r| r.stable_dt)
+                .fold(f64::INFINITY, f64::min);
+        reports = g.advance(h).expect("step");
+    }
+}
+
+#[test]
+fn group_round_trips_bit_exactly_and_continues_identically() {
+    let dir = test_dir("checkpoint_group");
+    let path = dir.join("checkpoint.bin");
+    let mut original = stepped_group(25);
+    write_checkpoint(&path, &original).expect("write");
+    assert!(
+        !dir.join("checkpoint.bin.tmp").exists(),
+        "temp file renamed away"
+    );
+    let mut restored: Group = read_checkpoint(&path).expect("read");
+
+    assert_eq!(state_hash(&restored.bodies), state_hash(&original.bodies));
+    assert_eq!(
+        checkpoint_payload(&restored).expect("encode"),
+        checkpoint_payload(&original).expect("encode"),
+        "every serialized byte equal"
+    );
+    assert_eq!(restored.time.to_bits(), original.time.to_bits());
+    assert_eq!(
+        (restored.step, restored.h_prev.to_bits()),
+        (original.step, original.h_prev.to_bits())
+    );
+
+    advance(&mut original, 30);
+    advance(&mut restored, 30);
+    assert_eq!(state_hash(&restored.bodies), state_hash(&original.bodies));
+    assert_eq!(restored.step, 55);
+    // The continued state is not the checkpointed one (the test can fail).
+    let saved: Group = read_checkpoint(&path).expect("read");
+    assert_ne!(state_hash(&saved.bodies), state_hash(&original.bodies));
+}
+
+#[test]
+fn damaged_checkpoints_are_refused_with_the_file_named() {
+    let dir = test_dir("checkpoint_damage");
+    let path = dir.join("state.ckp");
+    write_checkpoint(&path, &stepped_group(2)).expect("write");
+    let good = std::fs::read(&path).expect("bytes");
+    let named = |e: &IoError| e.to_string().contains("state.ckp");
+
+    std::fs::write(&path, &good[..good.len() - 10]).expect("truncate");
+    let e = read_checkpoint::<Group>(&path).expect_err("truncated");
+    assert!(matches!(e, IoError::Truncated { .. }) && named(&e), "{e}");
+
+    let mut bad = good.clone();
+    bad[0] = b'X';
+    std::fs::write(&path, &bad).expect("magic");
+    let e = read_checkpoint::<Group>(&path).expect_err("magic");
+    assert!(matches!(e, IoError::BadMagic { .. }) && named(&e), "{e}");
+
+    let mut bad = good.clone();
+    bad[8] = 99;
+    std::fs::write(&path, &bad).expect("version");
+    let e = read_checkpoint::<Group>(&path).expect_err("version");
+    assert!(
+        matches!(e, IoError::Version { found: 99, .. }) && named(&e),
+        "{e}"
+    );
+
+    let mut bad = good.clone();
+    let k = bad.len() / 2;
+    bad[k] ^= 0x40;
+    std::fs::write(&path, &bad).expect("flip");
+    let e = read_checkpoint::<Group>(&path).expect_err("checksum");
+    assert!(matches!(e, IoError::Checksum { .. }) && named(&e), "{e}");
+
+    let e = read_checkpoint::<Group>(dir.join("missing.ckp")).expect_err("missing");
+    assert!(e.to_string().contains("missing.ckp"), "{e}");
+
+    std::fs::write(&path, &good).expect("restore");
+    assert!(read_checkpoint::<Group>(&path).is_ok());
+}
