@@ -13,7 +13,10 @@ use crate::shape::{shape, Shape};
 use crate::Scene;
 use crash_core::contact::ContactConfig;
 use crash_core::hash::Fnv;
-use crash_core::{Body, CoreError, NodalLoad, RunConfig, Section, Stabilization, Vec3, VelocityProgram};
+use crash_core::{
+    Body, CoreError, Fault, Group, NodalLoad, RunConfig, Section, Stabilization, Vec3,
+    VelocityProgram,
+};
 use nalgebra::{Matrix3, Rotation3, Unit};
 
 /// What a body was built from, for summaries and output metadata.
@@ -60,6 +63,14 @@ impl Built {
             ..RunConfig::default()
         }
     }
+
+    /// The core's critical time step at t = 0 (no safety factor) with the body id and
+    /// element that set it: one force pass over a copy of the bodies (for `crash check`).
+    pub fn critical_dt(&self) -> Result<(f64, u32, usize), Fault> {
+        let mut g = Group::new(self.bodies.clone(), self.gravity);
+        let reports = g.start()?;
+        Ok(crash_core::driver::critical(&reports))
+    }
 }
 
 fn rotation(ctx: &Ctx, key: &str, b: &BodySpec) -> Result<Matrix3<f64>, SceneError> {
@@ -68,7 +79,10 @@ fn rotation(ctx: &Ctx, key: &str, b: &BodySpec) -> Result<Matrix3<f64>, SceneErr
     };
     let axis = Vec3::from(r.axis);
     if !(axis.iter().all(|c| c.is_finite()) && axis.norm() > 0.0) {
-        return Err(ctx.invalid(&format!("{key}.axis"), "must be a finite non-zero vector [x, y, z]"));
+        return Err(ctx.invalid(
+            &format!("{key}.axis"),
+            "must be a finite non-zero vector [x, y, z]",
+        ));
     }
     if !r.angle.is_finite() {
         return Err(ctx.invalid(&format!("{key}.angle"), "must be finite (degrees)"));
@@ -107,10 +121,20 @@ fn non_negative(ctx: &Ctx, key: &str, v: Option<f64>, unit: &str) -> Result<f64,
     }
 }
 
-fn body(scene: &Scene, ctx: &Ctx, i: usize, b: &BodySpec, hash: &mut Fnv) -> Result<(Body, BodyInfo), SceneError> {
+fn body(
+    scene: &Scene,
+    ctx: &Ctx,
+    i: usize,
+    b: &BodySpec,
+    hash: &mut Fnv,
+) -> Result<(Body, BodyInfo), SceneError> {
     let key = format!("bodies[{i}]");
     let material = scene.materials.get(&b.material).copied().ok_or_else(|| {
-        ctx.value_error(ErrorKind::Reference, &format!("{key}.material"), "no material of that name")
+        ctx.value_error(
+            ErrorKind::Reference,
+            &format!("{key}.material"),
+            "no material of that name",
+        )
     })?;
     if !(b.thickness.is_finite() && b.thickness > 0.0) {
         return Err(ctx.invalid(&format!("{key}.thickness"), "must be finite and > 0 (m)"));
@@ -121,12 +145,22 @@ fn body(scene: &Scene, ctx: &Ctx, i: usize, b: &BodySpec, hash: &mut Fnv) -> Res
     let pos = finite_vec(ctx, &format!("{key}.position"), b.position)?;
     let mut mesh = s.mesh.clone();
     mesh.transform(&rot, pos);
-    let mut body = Body::new(i as u32, &b.name, &mesh, Section::new(material, b.thickness), Stabilization::default())
-        .map_err(|e| match e {
-            CoreError::Thickness { .. } => ctx.invalid(&format!("{key}.thickness"), "must be finite and > 0 (m)"),
-            CoreError::Material { field, valid, .. } => ctx.invalid(&format!("materials.{}.{field}", b.material), valid),
-            other => geometry_error(ctx, &s, other),
-        })?;
+    let mut body = Body::new(
+        i as u32,
+        &b.name,
+        &mesh,
+        Section::new(material, b.thickness),
+        Stabilization::default(),
+    )
+    .map_err(|e| match e {
+        CoreError::Thickness { .. } => {
+            ctx.invalid(&format!("{key}.thickness"), "must be finite and > 0 (m)")
+        }
+        CoreError::Material { field, valid, .. } => {
+            ctx.invalid(&format!("materials.{}.{field}", b.material), valid)
+        }
+        other => geometry_error(ctx, &s, other),
+    })?;
     body.mass_damping = non_negative(ctx, &format!("{key}.mass_damping"), b.mass_damping, "1/s")?;
     body.contact = b.contact.unwrap_or(true);
     body.self_contact = b.self_contact.unwrap_or(false);
@@ -172,7 +206,10 @@ fn body(scene: &Scene, ctx: &Ctx, i: usize, b: &BodySpec, hash: &mut Fnv) -> Res
         let lk = format!("{key}.load[{k}]");
         let nodes = select(ctx, &format!("{lk}.select"), &l.select, &local, &global)?;
         if l.force.is_none() && l.moment.is_none() {
-            return Err(ctx.missing(&format!("{lk}.force"), "a load needs force (N) and/or moment (N m)"));
+            return Err(ctx.missing(
+                &format!("{lk}.force"),
+                "a load needs force (N) and/or moment (N m)",
+            ));
         }
         let force = finite_vec(ctx, &format!("{lk}.force"), l.force)? / nodes.len() as f64;
         let moment = finite_vec(ctx, &format!("{lk}.moment"), l.moment)? / nodes.len() as f64;
@@ -208,7 +245,11 @@ fn body(scene: &Scene, ctx: &Ctx, i: usize, b: &BodySpec, hash: &mut Fnv) -> Res
         info.loaded_nodes += 1;
     }
     info.fixed_nodes = body.fixed.iter().filter(|&&f| f != 0).count();
-    info.prescribed_nodes = body.program.iter().filter(|&&p| p != crash_core::body::NO_PROGRAM).count();
+    info.prescribed_nodes = body
+        .program
+        .iter()
+        .filter(|&&p| p != crash_core::body::NO_PROGRAM)
+        .count();
     Ok((body, info))
 }
 

@@ -41,14 +41,22 @@ impl Ctx {
         let s = self.text.get(e.value.clone())?;
         let one_line = s.split_whitespace().collect::<Vec<_>>().join(" ");
         Some(if one_line.chars().count() > QUOTE_MAX {
-            format!("{}...", one_line.chars().take(QUOTE_MAX).collect::<String>())
+            format!(
+                "{}...",
+                one_line.chars().take(QUOTE_MAX).collect::<String>()
+            )
         } else {
             one_line
         })
     }
 
     /// `key = <value as written>: what` at the value.
-    pub fn value_error(&self, kind: ErrorKind, key: &str, what: impl std::fmt::Display) -> SceneError {
+    pub fn value_error(
+        &self,
+        kind: ErrorKind,
+        key: &str,
+        what: impl std::fmt::Display,
+    ) -> SceneError {
         let message = match self.source(key) {
             Some(v) => format!("{key} = {v}: {what}"),
             None => format!("{key}: {what}"),
@@ -71,8 +79,18 @@ impl Ctx {
     }
 
     /// An error about a key as a whole (located at the key, not the value).
-    pub fn key_error(&self, kind: ErrorKind, key: &str, what: impl std::fmt::Display) -> SceneError {
-        self.at(kind, self.spans.key_offset(key), key, format!("{key}: {what}"))
+    pub fn key_error(
+        &self,
+        kind: ErrorKind,
+        key: &str,
+        what: impl std::fmt::Display,
+    ) -> SceneError {
+        self.at(
+            kind,
+            self.spans.key_offset(key),
+            key,
+            format!("{key}: {what}"),
+        )
     }
 
     /// Turn a toml error (syntax or serde) into a located scene error.
@@ -85,7 +103,9 @@ impl Ctx {
             let (name, valid) = split_unknown(&msg);
             let mut text = format!("{key}: unknown key `{name}`; valid keys here: {valid}");
             if is_body_table(&key) {
-                text.push_str(" (a body's shape is one of the keys plate, sphere, cylinder, box, mesh)");
+                text.push_str(
+                    " (a body's shape is one of the keys plate, sphere, cylinder, box, mesh)",
+                );
             }
             return self.at(ErrorKind::UnknownKey, offset, &key, text);
         }

@@ -50,25 +50,41 @@ pub fn check_end_time(ctx: &Ctx, end_time: f64, overridden: bool) -> Result<f64,
     }
 }
 
-pub fn globals(ctx: &Ctx, s: &SceneFile, end_time: f64, output_interval: Option<f64>) -> Result<Globals, SceneError> {
+pub fn globals(
+    ctx: &Ctx,
+    s: &SceneFile,
+    end_time: f64,
+    output_interval: Option<f64>,
+) -> Result<Globals, SceneError> {
     let safety = s.dt_safety.unwrap_or(DEFAULT_SAFETY);
     if !(safety.is_finite() && safety > 0.0 && safety <= 1.0) {
-        return Err(ctx.invalid("dt_safety", "must be in (0, 1] (fraction of the critical time step)"));
+        return Err(ctx.invalid(
+            "dt_safety",
+            "must be in (0, 1] (fraction of the critical time step)",
+        ));
     }
     let gravity = finite_vec(ctx, "gravity", s.gravity)?;
-    let output_interval = output_interval.or(s.output_interval).unwrap_or(end_time / DEFAULT_FRAMES);
+    let output_interval = output_interval
+        .or(s.output_interval)
+        .unwrap_or(end_time / DEFAULT_FRAMES);
     if !(output_interval.is_finite() && output_interval > 0.0) {
         return Err(ctx.invalid("output_interval", "must be finite and > 0 (s)"));
     }
     let energy_limit = s.energy_limit.unwrap_or(DEFAULT_ENERGY_LIMIT);
     if !(energy_limit.is_finite() && energy_limit > 0.0 && energy_limit <= 1.0) {
-        return Err(ctx.invalid("energy_limit", "must be in (0, 1] (energy balance error relative to the largest energy)"));
+        return Err(ctx.invalid(
+            "energy_limit",
+            "must be in (0, 1] (energy balance error relative to the largest energy)",
+        ));
     }
     let c = &s.contact;
     let d = ContactConfig::default();
     let margin = c.margin.unwrap_or(0.0);
     if !(margin.is_finite() && margin >= 0.0) {
-        return Err(ctx.invalid("contact.margin", "must be finite and >= 0 (m); omit it for the derived default"));
+        return Err(ctx.invalid(
+            "contact.margin",
+            "must be finite and >= 0 (m); omit it for the derived default",
+        ));
     }
     let penalty_scale = c.penalty_scale.unwrap_or(d.penalty_scale);
     if !(penalty_scale.is_finite() && penalty_scale > 0.0) {
@@ -82,7 +98,10 @@ pub fn globals(ctx: &Ctx, s: &SceneFile, end_time: f64, output_interval: Option<
     };
     let damping_ratio = c.damping_ratio.unwrap_or(d.damping_ratio);
     if !(damping_ratio.is_finite() && (0.0..=1.0).contains(&damping_ratio)) {
-        return Err(ctx.invalid("contact.damping_ratio", "must be in [0, 1] (fraction of critical damping)"));
+        return Err(ctx.invalid(
+            "contact.damping_ratio",
+            "must be in [0, 1] (fraction of critical damping)",
+        ));
     }
     Ok(Globals {
         end_time,
@@ -108,14 +127,35 @@ fn material(ctx: &Ctx, name: &str, m: &MaterialSpec) -> Result<Material, SceneEr
         (Some(e), Some(nu), None, None) => Material::new(m.density, e, nu, kelvin),
         (None, None, Some(l1), Some(l2)) => Material::from_lame(m.density, l1, l2, kelvin),
         (None, None, None, None) => {
-            return Err(ctx.missing(&format!("{key}.young"), "give young (Pa) and poisson, or the Lamé pair lambda1 and lambda2 (Pa)"))
+            return Err(ctx.missing(
+                &format!("{key}.young"),
+                "give young (Pa) and poisson, or the Lamé pair lambda1 and lambda2 (Pa)",
+            ))
         }
-        (Some(_), None, None, None) => return Err(ctx.missing(&format!("{key}.poisson"), "young needs poisson (in [0, 0.5))")),
-        (None, Some(_), None, None) => return Err(ctx.missing(&format!("{key}.young"), "poisson needs young (Pa)")),
-        (None, None, Some(_), None) => return Err(ctx.missing(&format!("{key}.lambda2"), "lambda1 needs lambda2 (Pa, the shear modulus)")),
-        (None, None, None, Some(_)) => return Err(ctx.missing(&format!("{key}.lambda1"), "lambda2 needs lambda1 (Pa)")),
+        (Some(_), None, None, None) => {
+            return Err(ctx.missing(
+                &format!("{key}.poisson"),
+                "young needs poisson (in [0, 0.5))",
+            ))
+        }
+        (None, Some(_), None, None) => {
+            return Err(ctx.missing(&format!("{key}.young"), "poisson needs young (Pa)"))
+        }
+        (None, None, Some(_), None) => {
+            return Err(ctx.missing(
+                &format!("{key}.lambda2"),
+                "lambda1 needs lambda2 (Pa, the shear modulus)",
+            ))
+        }
+        (None, None, None, Some(_)) => {
+            return Err(ctx.missing(&format!("{key}.lambda1"), "lambda2 needs lambda1 (Pa)"))
+        }
         _ => {
-            let k = if m.lambda1.is_some() { "lambda1" } else { "lambda2" };
+            let k = if m.lambda1.is_some() {
+                "lambda1"
+            } else {
+                "lambda2"
+            };
             return Err(ctx.key_error(
                 ErrorKind::Invalid,
                 &format!("{key}.{k}"),
@@ -139,7 +179,11 @@ pub fn materials(ctx: &Ctx, s: &SceneFile) -> Result<BTreeMap<String, Material>,
 }
 
 /// Body names unique and non-empty, materials defined.
-pub fn references(ctx: &Ctx, s: &SceneFile, mats: &BTreeMap<String, Material>) -> Result<(), SceneError> {
+pub fn references(
+    ctx: &Ctx,
+    s: &SceneFile,
+    mats: &BTreeMap<String, Material>,
+) -> Result<(), SceneError> {
     if s.bodies.is_empty() {
         return Err(ctx.missing("bodies", "a scene needs at least one [[bodies]] table"));
     }
@@ -150,7 +194,10 @@ pub fn references(ctx: &Ctx, s: &SceneFile, mats: &BTreeMap<String, Material>) -
             return Err(ctx.invalid(&key, "must not be empty"));
         }
         if let Some(j) = seen.insert(b.name.as_str(), i) {
-            return Err(ctx.invalid(&key, format!("bodies[{j}] has the same name: names must be unique")));
+            return Err(ctx.invalid(
+                &key,
+                format!("bodies[{j}] has the same name: names must be unique"),
+            ));
         }
         if !mats.contains_key(&b.material) {
             let defined: Vec<&str> = mats.keys().map(String::as_str).collect();

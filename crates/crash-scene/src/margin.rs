@@ -18,12 +18,19 @@ pub const MARGIN_STEPS: f64 = 10.0;
 /// Characteristic length of each element, triangles then quads: the smallest altitude
 /// 2A / (longest edge) of a triangle, A / (longest diagonal) of a quad (the lengths the
 /// explicit time step is set by).
-pub fn element_lengths(x: &[Vec3], tris: impl Iterator<Item = [u32; 3]>, quads: impl Iterator<Item = [u32; 4]>) -> Vec<f64> {
+pub fn element_lengths(
+    x: &[Vec3],
+    tris: impl Iterator<Item = [u32; 3]>,
+    quads: impl Iterator<Item = [u32; 4]>,
+) -> Vec<f64> {
     let mut out = Vec::new();
     for t in tris {
         let p = t.map(|n| x[n as usize]);
         let area2 = (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
-        let longest = (p[1] - p[0]).norm().max((p[2] - p[1]).norm()).max((p[0] - p[2]).norm());
+        let longest = (p[1] - p[0])
+            .norm()
+            .max((p[2] - p[1]).norm())
+            .max((p[0] - p[2]).norm());
         out.push(area2 / longest);
     }
     for q in quads {
@@ -37,9 +44,13 @@ pub fn element_lengths(x: &[Vec3], tris: impl Iterator<Item = [u32; 3]>, quads: 
 
 /// Smallest characteristic element length of a body.
 pub fn min_length(b: &Body) -> f64 {
-    element_lengths(&b.x, b.tris.iter().map(|e| e.nodes), b.quads.iter().map(|e| e.nodes))
-        .into_iter()
-        .fold(f64::INFINITY, f64::min)
+    element_lengths(
+        &b.x,
+        b.tris.iter().map(|e| e.nodes),
+        b.quads.iter().map(|e| e.nodes),
+    )
+    .into_iter()
+    .fold(f64::INFINITY, f64::min)
 }
 
 /// Critical time step estimate L_min / c (no safety factor; Kelvin damping lowers it
@@ -52,7 +63,11 @@ pub fn dt_estimate(b: &Body) -> f64 {
 /// Largest node speed at t = 0, including rigid rotation and prescribed programs.
 pub fn max_speed(b: &Body) -> f64 {
     let v0 = b.v.iter().map(|v| v.norm()).fold(0.0, f64::max);
-    let vp = b.programs.iter().map(|p| p.velocity.norm()).fold(0.0, f64::max);
+    let vp = b
+        .programs
+        .iter()
+        .map(|p| p.velocity.norm())
+        .fold(0.0, f64::max);
     v0.max(vp)
 }
 
@@ -62,7 +77,10 @@ pub fn default_margin(bodies: &[Body], gravity: Vec3, end_time: f64, safety: f64
     if contact.is_empty() {
         return 0.0;
     }
-    let h = contact.iter().map(|b| min_length(b)).fold(f64::INFINITY, f64::min);
+    let h = contact
+        .iter()
+        .map(|b| min_length(b))
+        .fold(f64::INFINITY, f64::min);
     let dt = safety * bodies.iter().map(dt_estimate).fold(f64::INFINITY, f64::min);
     let v = contact.iter().map(|b| max_speed(b)).fold(0.0, f64::max) + gravity.norm() * end_time;
     MARGIN_ELEMENT_FRACTION * h + 2.0 * v * dt * MARGIN_STEPS

@@ -58,7 +58,10 @@ impl<'a> Tokens<'a> {
         let (v, l) = self.uint(what)?;
         // a count larger than the file could hold is corrupt, not a reason to allocate
         if v as usize > self.toks.len() {
-            return Err(err(l, format!("{what} = {v} is more than this section holds")));
+            return Err(err(
+                l,
+                format!("{what} = {v} is more than this section holds"),
+            ));
         }
         Ok(v as usize)
     }
@@ -66,7 +69,10 @@ impl<'a> Tokens<'a> {
         let (t, l) = self.next(what)?;
         match t.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(err(l, format!("expected {what} (a finite number), found `{t}`"))),
+            _ => Err(err(
+                l,
+                format!("expected {what} (a finite number), found `{t}`"),
+            )),
         }
     }
 }
@@ -95,7 +101,10 @@ fn sections(text: &str) -> Result<Vec<Section<'_>>, MshError> {
             }
         } else if let Some(name) = l.strip_prefix('$') {
             if let Some(s) = &cur {
-                return Err(err(line, format!("`{l}` inside ${} (missing $End{})", s.name, s.name)));
+                return Err(err(
+                    line,
+                    format!("`{l}` inside ${} (missing $End{})", s.name, s.name),
+                ));
             }
             cur = Some(Section {
                 name,
@@ -109,7 +118,10 @@ fn sections(text: &str) -> Result<Vec<Section<'_>>, MshError> {
         }
     }
     if let Some(s) = cur {
-        return Err(err(text.lines().count(), format!("${} is never closed", s.name)));
+        return Err(err(
+            text.lines().count(),
+            format!("${} is never closed", s.name),
+        ));
     }
     Ok(out)
 }
@@ -143,7 +155,14 @@ fn check_format(s: &Section<'_>) -> Result<(), MshError> {
     Ok(())
 }
 
-fn read_nodes(s: &Section<'_>) -> Result<(Vec<u64>, Vec<Vec3>, HashMap<u64, usize>), MshError> {
+/// The $Nodes section: tags and positions in file order, and tag -> index.
+struct Nodes {
+    tags: Vec<u64>,
+    pos: Vec<Vec3>,
+    index: HashMap<u64, usize>,
+}
+
+fn read_nodes(s: &Section<'_>) -> Result<Nodes, MshError> {
     let mut t = tokens(s);
     let blocks = t.count("numEntityBlocks")?;
     let total = t.count("numNodes")?;
@@ -157,7 +176,11 @@ fn read_nodes(s: &Section<'_>) -> Result<(Vec<u64>, Vec<Vec3>, HashMap<u64, usiz
         t.uint("entityTag")?;
         let (parametric, _) = t.uint("parametric")?;
         let n = t.count("numNodesInBlock")?;
-        let extra = if parametric == 1 { dim.min(2) as usize } else { 0 };
+        let extra = if parametric == 1 {
+            dim.min(2) as usize
+        } else {
+            0
+        };
         let first = tags.len();
         for _ in 0..n {
             let (tag, line) = t.uint("a node tag")?;
@@ -181,7 +204,7 @@ fn read_nodes(s: &Section<'_>) -> Result<(Vec<u64>, Vec<Vec3>, HashMap<u64, usiz
             format!("header says {total} nodes, the blocks hold {}", tags.len()),
         ));
     }
-    Ok((tags, pos, index))
+    Ok(Nodes { tags, pos, index })
 }
 
 /// Nodes per element for the element types that are skipped (points, lines).
@@ -198,11 +221,16 @@ fn skipped_nodes(kind: u64) -> Option<usize> {
 pub fn read_msh(text: &str) -> Result<MshSurface, MshError> {
     let secs = sections(text)?;
     let find = |name: &str| secs.iter().find(|s| s.name == name);
-    let fmt = find("MeshFormat").ok_or_else(|| err(1, "no $MeshFormat section: not a Gmsh .msh file"))?;
+    let fmt =
+        find("MeshFormat").ok_or_else(|| err(1, "no $MeshFormat section: not a Gmsh .msh file"))?;
     check_format(fmt)?;
     let nodes = find("Nodes").ok_or_else(|| err(fmt.end_line, "no $Nodes section"))?;
     let elems = find("Elements").ok_or_else(|| err(nodes.end_line, "no $Elements section"))?;
-    let (node_tags, pos, index) = read_nodes(nodes)?;
+    let Nodes {
+        tags: node_tags,
+        pos,
+        index,
+    } = read_nodes(nodes)?;
 
     let mut t = tokens(elems);
     let blocks = t.count("numEntityBlocks")?;
@@ -235,9 +263,12 @@ pub fn read_msh(text: &str) -> Result<MshSurface, MshError> {
             let mut ids = [0usize; 4];
             for slot in ids.iter_mut().take(per.min(4)) {
                 let (nt, l) = t.uint("a node tag")?;
-                *slot = *index
-                    .get(&nt)
-                    .ok_or_else(|| err(l, format!("element {tag} refers to node {nt}, which $Nodes does not define")))?;
+                *slot = *index.get(&nt).ok_or_else(|| {
+                    err(
+                        l,
+                        format!("element {tag} refers to node {nt}, which $Nodes does not define"),
+                    )
+                })?;
             }
             for _ in 4..per {
                 t.uint("a node tag")?;
@@ -250,7 +281,10 @@ pub fn read_msh(text: &str) -> Result<MshSurface, MshError> {
         }
     }
     if tris.is_empty() && quads.is_empty() {
-        return Err(err(elems.end_line, "no triangles or quads: the file holds no surface to build a shell from"));
+        return Err(err(
+            elems.end_line,
+            "no triangles or quads: the file holds no surface to build a shell from",
+        ));
     }
     // keep only nodes that elements use (geometry points and volume nodes have no mass)
     let mut used = vec![false; pos.len()];
@@ -335,9 +369,16 @@ $EndElements
         let s = read_msh(SMALL).expect("valid");
         assert_eq!(s.mesh.tris.len(), 2);
         assert_eq!(s.mesh.quads.len(), 1);
-        assert_eq!(s.mesh.nodes.len(), 6, "node 100 is used by no surface element");
+        assert_eq!(
+            s.mesh.nodes.len(),
+            6,
+            "node 100 is used by no surface element"
+        );
         assert_eq!(s.node_tags, vec![1, 2, 3, 4, 5, 6]);
-        assert_eq!(s.element_tags.iter().map(|e| e.0).collect::<Vec<_>>(), vec![10, 11, 12]);
+        assert_eq!(
+            s.element_tags.iter().map(|e| e.0).collect::<Vec<_>>(),
+            vec![10, 11, 12]
+        );
         // element 12 is written on line 35
         assert_eq!(s.element_tags[2].1, 35);
         // parametric coordinates skipped: node 5 is at (2, 0, 0)

@@ -186,4 +186,36 @@ mod tests {
         let d = point_triangle_distance(Vec3::new(0.5, -0.3, 0.4), a, b, c);
         assert!((d - 0.5).abs() < 1e-15);
     }
+
+    fn plate_at(id: u32, z: f64, t: f64) -> Body {
+        use crash_core::shapes::{plate, ElementKind};
+        use crash_core::{Material, Section, Stabilization};
+        let mut m = plate(1.0, 1.0, 4, 4, ElementKind::Quad);
+        m.transform(&nalgebra::Matrix3::identity(), Vec3::new(0.0, 0.0, z));
+        let mat = Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid");
+        let mut b =
+            Body::new(id, "p", &m, Section::new(mat, t), Stabilization::default()).expect("valid");
+        b.contact = true;
+        b
+    }
+
+    #[test]
+    fn parallel_plates_closer_than_their_half_thicknesses_interpenetrate() {
+        let cfg = ContactConfig::default();
+        // half thicknesses 0.01 + 0.02 = 0.03 m
+        let close = [plate_at(0, 0.0, 0.02), plate_at(1, 0.025, 0.04)];
+        let p = check_initial_overlap(&close, &cfg).expect("penetration");
+        assert!((p.distance - 0.025).abs() < 1e-12 && (p.required - 0.03).abs() < 1e-15);
+        assert_eq!((p.a, p.b), (0, 1));
+        let apart = [plate_at(0, 0.0, 0.02), plate_at(1, 0.031, 0.04)];
+        assert_eq!(check_initial_overlap(&apart, &cfg), None);
+        let off = ContactConfig {
+            enabled: false,
+            ..cfg
+        };
+        assert_eq!(check_initial_overlap(&close, &off), None);
+        let mut no_contact = close.clone();
+        no_contact[1].contact = false;
+        assert_eq!(check_initial_overlap(&no_contact, &cfg), None);
+    }
 }

@@ -16,10 +16,21 @@ const VALID_SELECT: &str = "valid: \"all\", \"x-\", \"x+\", \"y-\", \"y+\", \"z-
 /// The nodes a selector picks, sorted and unique; an empty selection is an error.
 /// `local` are the node positions in the body's own frame (before rotation and
 /// translation), `global` after.
-pub fn select(ctx: &Ctx, key: &str, v: &Value, local: &[Vec3], global: &[Vec3]) -> Result<Vec<usize>, SceneError> {
+pub fn select(
+    ctx: &Ctx,
+    key: &str,
+    v: &Value,
+    local: &[Vec3],
+    global: &[Vec3],
+) -> Result<Vec<usize>, SceneError> {
     let mut picked = vec![false; local.len()];
     pick(ctx, key, v, local, global, &mut picked)?;
-    let out: Vec<usize> = picked.iter().enumerate().filter(|p| *p.1).map(|p| p.0).collect();
+    let out: Vec<usize> = picked
+        .iter()
+        .enumerate()
+        .filter(|p| *p.1)
+        .map(|p| p.0)
+        .collect();
     if out.is_empty() {
         let (lo, hi) = bounds(global);
         return Err(ctx.invalid(
@@ -33,7 +44,14 @@ pub fn select(ctx: &Ctx, key: &str, v: &Value, local: &[Vec3], global: &[Vec3]) 
     Ok(out)
 }
 
-fn pick(ctx: &Ctx, key: &str, v: &Value, local: &[Vec3], global: &[Vec3], out: &mut [bool]) -> Result<(), SceneError> {
+fn pick(
+    ctx: &Ctx,
+    key: &str,
+    v: &Value,
+    local: &[Vec3],
+    global: &[Vec3],
+    out: &mut [bool],
+) -> Result<(), SceneError> {
     match v {
         Value::String(s) => {
             if s == "all" {
@@ -75,7 +93,10 @@ fn pick(ctx: &Ctx, key: &str, v: &Value, local: &[Vec3], global: &[Vec3], out: &
                 if lo[d] > hi[d] {
                     return Err(ctx.invalid(
                         &format!("{key}.max"),
-                        format!("max[{d}] = {} is below min[{d}] = {}: must be >= min", hi[d], lo[d]),
+                        format!(
+                            "max[{d}] = {} is below min[{d}] = {}: must be >= min",
+                            hi[d], lo[d]
+                        ),
                     ));
                 }
             }
@@ -90,21 +111,34 @@ fn pick(ctx: &Ctx, key: &str, v: &Value, local: &[Vec3], global: &[Vec3], out: &
         }
         Value::Array(items) => {
             if items.is_empty() {
-                return Err(ctx.invalid(key, format!("an empty list selects nothing; {VALID_SELECT}")));
+                return Err(ctx.invalid(
+                    key,
+                    format!("an empty list selects nothing; {VALID_SELECT}"),
+                ));
             }
             for (i, item) in items.iter().enumerate() {
                 pick(ctx, &format!("{key}[{i}]"), item, local, global, out)?;
             }
             Ok(())
         }
-        _ => Err(ctx.value_error(ErrorKind::WrongType, key, format!("wrong type: {VALID_SELECT}"))),
+        _ => Err(ctx.value_error(
+            ErrorKind::WrongType,
+            key,
+            format!("wrong type: {VALID_SELECT}"),
+        )),
     }
 }
 
 /// A 3-vector of numbers (integers accepted) under `key`.
 pub fn vector(ctx: &Ctx, key: &str, v: Option<&Value>) -> Result<Vec3, SceneError> {
     let v = v.ok_or_else(|| ctx.missing(key, "give [x, y, z] in m"))?;
-    let bad = || ctx.value_error(ErrorKind::WrongType, key, "wrong type: must be an array of 3 numbers [x, y, z]");
+    let bad = || {
+        ctx.value_error(
+            ErrorKind::WrongType,
+            key,
+            "wrong type: must be an array of 3 numbers [x, y, z]",
+        )
+    };
     let a = v.as_array().filter(|a| a.len() == 3).ok_or_else(bad)?;
     let mut out = Vec3::zeros();
     for (d, x) in a.iter().enumerate() {
@@ -140,18 +174,29 @@ pub fn dofs(ctx: &Ctx, key: &str, v: Option<&Value>) -> Result<u8, SceneError> {
     };
     match v {
         None => Ok(dof::ALL),
-        Some(Value::String(s)) => one(s).ok_or_else(|| ctx.invalid(key, format!("unknown DOF set; {VALID_DOFS}"))),
+        Some(Value::String(s)) => {
+            one(s).ok_or_else(|| ctx.invalid(key, format!("unknown DOF set; {VALID_DOFS}")))
+        }
         Some(Value::Array(items)) if !items.is_empty() => {
             let mut mask = 0;
             for (i, item) in items.iter().enumerate() {
                 let k = format!("{key}[{i}]");
-                let s = item
-                    .as_str()
-                    .ok_or_else(|| ctx.value_error(ErrorKind::WrongType, &k, format!("wrong type: {VALID_DOFS}")))?;
-                mask |= one(s).ok_or_else(|| ctx.invalid(&k, format!("unknown DOF; {VALID_DOFS}")))?;
+                let s = item.as_str().ok_or_else(|| {
+                    ctx.value_error(
+                        ErrorKind::WrongType,
+                        &k,
+                        format!("wrong type: {VALID_DOFS}"),
+                    )
+                })?;
+                mask |=
+                    one(s).ok_or_else(|| ctx.invalid(&k, format!("unknown DOF; {VALID_DOFS}")))?;
             }
             Ok(mask)
         }
-        Some(_) => Err(ctx.value_error(ErrorKind::WrongType, key, format!("wrong type: {VALID_DOFS}"))),
+        Some(_) => Err(ctx.value_error(
+            ErrorKind::WrongType,
+            key,
+            format!("wrong type: {VALID_DOFS}"),
+        )),
     }
 }

@@ -58,7 +58,11 @@ fn cells_for(length: f64, size: f64, min: usize) -> usize {
     ((length / size - 1e-9).ceil().max(min as f64)).min(1e12) as usize
 }
 
-fn element_kind(ctx: &Ctx, key: &str, v: &Option<String>) -> Result<Option<ElementKind>, SceneError> {
+fn element_kind(
+    ctx: &Ctx,
+    key: &str,
+    v: &Option<String>,
+) -> Result<Option<ElementKind>, SceneError> {
     match v.as_deref() {
         None => Ok(None),
         Some("tri") => Ok(Some(ElementKind::Tri)),
@@ -107,7 +111,13 @@ fn one_of<'a, C>(
 }
 
 /// Build the surface of body `i` in its own frame; imported files are fed to `hash`.
-pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> Result<Shape, SceneError> {
+pub fn shape(
+    ctx: &Ctx,
+    dir: &Path,
+    i: usize,
+    b: &BodySpec,
+    hash: &mut Fnv,
+) -> Result<Shape, SceneError> {
     let base = format!("bodies[{i}]");
     let given: Vec<&str> = [
         ("plate", b.plate.is_some()),
@@ -124,7 +134,10 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
         return Err(ctx.key_error(
             ErrorKind::Invalid,
             &format!("{base}.{}", given[1]),
-            format!("body \"{}\" has two shapes ({} and {}): give exactly one", b.name, given[0], given[1]),
+            format!(
+                "body \"{}\" has two shapes ({} and {}): give exactly one",
+                b.name, given[0], given[1]
+            ),
         ));
     }
     let ekey = format!("{base}.element");
@@ -150,17 +163,24 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
         let key = format!("{base}.sphere");
         let r = positive(ctx, &format!("{key}.radius"), s.radius, "m")?;
         if kind == Some(ElementKind::Quad) {
-            return Err(ctx.invalid(&ekey, "a sphere is meshed with triangles (icosphere): use \"tri\" or omit element"));
+            return Err(ctx.invalid(
+                &ekey,
+                "a sphere is meshed with triangles (icosphere): use \"tri\" or omit element",
+            ));
         }
         let level = match one_of(ctx, &key, &s.level, s.element_size, "level")? {
             Ok(&l) => {
                 if !(0..=MAX_LEVEL).contains(&l) {
-                    return Err(ctx.invalid(&format!("{key}.level"), format!("must be an integer in [0, {MAX_LEVEL}] (20 * 4^level triangles)")));
+                    return Err(ctx.invalid(
+                        &format!("{key}.level"),
+                        format!("must be an integer in [0, {MAX_LEVEL}] (20 * 4^level triangles)"),
+                    ));
                 }
                 l as u32
             }
             Err(h) => {
-                let l = (0..=MAX_LEVEL as u32).find(|&l| r * ICOSAHEDRON_EDGE / f64::from(1u32 << l) <= h);
+                let l = (0..=MAX_LEVEL as u32)
+                    .find(|&l| r * ICOSAHEDRON_EDGE / f64::from(1u32 << l) <= h);
                 l.ok_or_else(|| {
                     ctx.invalid(
                         &format!("{key}.element_size"),
@@ -169,7 +189,10 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
                 })?
             }
         };
-        let d = format!("sphere R {r} m, level {level} ({} tri)", 20usize << (2 * level));
+        let d = format!(
+            "sphere R {r} m, level {level} ({} tri)",
+            20usize << (2 * level)
+        );
         (key, shapes::icosphere(r, level), d)
     } else if let Some(c) = &b.cylinder {
         let key = format!("{base}.cylinder");
@@ -180,7 +203,10 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
                 count(ctx, &format!("{key}.cells[0]"), n[0], 3)?,
                 count(ctx, &format!("{key}.cells[1]"), n[1], 1)?,
             ),
-            Err(h) => (cells_for(std::f64::consts::TAU * r, h, 3), cells_for(len, h, 1)),
+            Err(h) => (
+                cells_for(std::f64::consts::TAU * r, h, 3),
+                cells_for(len, h, 1),
+            ),
         };
         let k = kind.unwrap_or(ElementKind::Quad);
         let per = if k == ElementKind::Tri { 2 } else { 1 };
@@ -200,10 +226,20 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
         };
         let k = kind.unwrap_or(ElementKind::Quad);
         let per = if k == ElementKind::Tri { 2 } else { 1 };
-        let faces = l.iter().map(|&s| ((s / longest * n as f64).round()).max(1.0)).collect::<Vec<_>>();
-        let total = 2.0 * (faces[0] * faces[1] + faces[1] * faces[2] + faces[2] * faces[0]) * per as f64;
+        let faces = l
+            .iter()
+            .map(|&s| ((s / longest * n as f64).round()).max(1.0))
+            .collect::<Vec<_>>();
+        let total =
+            2.0 * (faces[0] * faces[1] + faces[1] * faces[2] + faces[2] * faces[0]) * per as f64;
         cap(ctx, &key, total.min(1e15) as usize)?;
-        let d = format!("box {} x {} x {} m, {n} cells on the longest side, {}", l[0], l[1], l[2], kind_name(k));
+        let d = format!(
+            "box {} x {} x {} m, {n} cells on the longest side, {}",
+            l[0],
+            l[1],
+            l[2],
+            kind_name(k)
+        );
         (key, shapes::cuboid(l[0], l[1], l[2], n, k), d)
     } else if let Some(m) = &b.mesh {
         let key = format!("{base}.mesh");
@@ -211,14 +247,30 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
         let scale = positive(ctx, &format!("{key}.scale"), m.scale.unwrap_or(1.0), "-")?;
         let path = dir.join(&m.file);
         let bytes = std::fs::read(&path).map_err(|e| {
-            ctx.value_error(ErrorKind::Read, &fkey, format!("cannot read {}: {e}", path.display()))
+            ctx.value_error(
+                ErrorKind::Read,
+                &fkey,
+                format!("cannot read {}: {e}", path.display()),
+            )
         })?;
         hash.bytes(&bytes);
         let text = String::from_utf8(bytes).map_err(|_| {
-            ctx.value_error(ErrorKind::MeshFile, &fkey, format!("{}: not a text file (binary .msh files are not read: export as ASCII)", m.file))
+            ctx.value_error(
+                ErrorKind::MeshFile,
+                &fkey,
+                format!(
+                    "{}: not a text file (binary .msh files are not read: export as ASCII)",
+                    m.file
+                ),
+            )
         })?;
-        let surf = read_msh(&text)
-            .map_err(|e| ctx.value_error(ErrorKind::MeshFile, &fkey, format!("{}:{}: {}", m.file, e.line, e.message)))?;
+        let surf = read_msh(&text).map_err(|e| {
+            ctx.value_error(
+                ErrorKind::MeshFile,
+                &fkey,
+                format!("{}:{}: {}", m.file, e.line, e.message),
+            )
+        })?;
         let mut mesh = surf.mesh;
         let mut tags = surf.element_tags;
         for p in &mut mesh.nodes {
@@ -238,7 +290,12 @@ pub fn shape(ctx: &Ctx, dir: &Path, i: usize, b: &BodySpec, hash: &mut Fnv) -> R
             return Err(ctx.invalid(&ekey, format!("{} holds triangles, which cannot become quads: omit element (keep the file's elements) or use \"tri\"", m.file)));
         }
         cap(ctx, &key, mesh.element_count())?;
-        let d = format!("mesh {} ({} tri, {} quad)", m.file, mesh.tris.len(), mesh.quads.len());
+        let d = format!(
+            "mesh {} ({} tri, {} quad)",
+            m.file,
+            mesh.tris.len(),
+            mesh.quads.len()
+        );
         source = Some(MeshSource {
             display: m.file.clone(),
             element_tags: tags,

@@ -66,7 +66,11 @@ impl Built {
                 dt_estimate: dt_estimate(b),
             })
             .collect();
-        let dt = self.safety * bodies.iter().map(|b| b.dt_estimate).fold(f64::INFINITY, f64::min);
+        let dt = self.safety
+            * bodies
+                .iter()
+                .map(|b| b.dt_estimate)
+                .fold(f64::INFINITY, f64::min);
         Summary {
             name: self.name.clone(),
             nodes: bodies.iter().map(|b| b.nodes).sum(),
@@ -85,11 +89,27 @@ impl Built {
 
 impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "scene {}: {} bodies, {} nodes, {} elements", self.name, self.bodies.len(), self.nodes, self.elements)?;
+        writeln!(
+            f,
+            "scene {}: {} bodies, {} nodes, {} elements",
+            self.name,
+            self.bodies.len(),
+            self.nodes,
+            self.elements
+        )?;
         writeln!(
             f,
             "{:>3}  {:<16} {:<10} {:>9} {:>9} {:>9} {:>11} {:>7} {:>7} {:>7}  shape",
-            "id", "name", "material", "t [m]", "nodes", "elements", "mass [kg]", "fixed", "moved", "loaded"
+            "id",
+            "name",
+            "material",
+            "t [m]",
+            "nodes",
+            "elements",
+            "mass [kg]",
+            "fixed",
+            "moved",
+            "loaded"
         )?;
         for b in &self.bodies {
             writeln!(
@@ -117,7 +137,11 @@ impl fmt::Display for Summary {
             f,
             "contact margin {:.4e} m ({})",
             self.margin,
-            if self.margin_derived { "derived" } else { "given" }
+            if self.margin_derived {
+                "derived"
+            } else {
+                "given"
+            }
         )?;
         write!(
             f,

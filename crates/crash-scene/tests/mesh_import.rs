@@ -62,7 +62,7 @@ fn files(test: &str, scene: &str, msh: &str) -> PathBuf {
     p
 }
 
-fn load_error(p: &PathBuf) -> crash_scene::SceneError {
+fn load_error(p: &std::path::Path) -> crash_scene::SceneError {
     match crash_scene::load(p).and_then(|s| s.build()) {
         Ok(_) => panic!("accepted"),
         Err(e) => e,
@@ -72,9 +72,15 @@ fn load_error(p: &PathBuf) -> crash_scene::SceneError {
 #[test]
 fn imported_mesh_is_found_relative_to_the_scene_and_scaled() {
     let p = files("ok", SCENE, MSH);
-    let b = crash_scene::load(&p).expect("valid").build().expect("builds");
+    let b = crash_scene::load(&p)
+        .expect("valid")
+        .build()
+        .expect("builds");
     let body = &b.bodies[0];
-    assert_eq!((body.tris.len(), body.quads.len(), body.node_count()), (2, 1, 6));
+    assert_eq!(
+        (body.tris.len(), body.quads.len(), body.node_count()),
+        (2, 1, 6)
+    );
     // scale 0.5: the rectangle becomes 1 x 0.5 m, mass = rho t A
     assert!((body.total_mass() - 7800.0 * 0.01 * 0.5).abs() < 1e-9);
     assert_eq!(body.x0[4], Vec3::new(1.0, 0.0, 0.0));
@@ -82,31 +88,67 @@ fn imported_mesh_is_found_relative_to_the_scene_and_scaled() {
 
 #[test]
 fn element_tri_splits_imported_quads() {
-    let p = files("split", &SCENE.replace("thickness = 0.01", "thickness = 0.01\nelement = \"tri\""), MSH);
-    let b = crash_scene::load(&p).expect("valid").build().expect("builds");
+    let p = files(
+        "split",
+        &SCENE.replace("thickness = 0.01", "thickness = 0.01\nelement = \"tri\""),
+        MSH,
+    );
+    let b = crash_scene::load(&p)
+        .expect("valid")
+        .build()
+        .expect("builds");
     assert_eq!((b.bodies[0].tris.len(), b.bodies[0].quads.len()), (4, 0));
     assert!((b.bodies[0].total_mass() - 7800.0 * 0.01 * 0.5).abs() < 1e-9);
 }
 
 #[test]
 fn element_quad_with_imported_triangles_is_refused() {
-    let p = files("quad", &SCENE.replace("thickness = 0.01", "thickness = 0.01\nelement = \"quad\""), MSH);
+    let p = files(
+        "quad",
+        &SCENE.replace("thickness = 0.01", "thickness = 0.01\nelement = \"quad\""),
+        MSH,
+    );
     let e = load_error(&p);
-    check(&e, ErrorKind::Invalid, 12, 11, "bodies[0].element", &["cannot become quads"]);
+    check(
+        &e,
+        ErrorKind::Invalid,
+        12,
+        11,
+        "bodies[0].element",
+        &["cannot become quads"],
+    );
 }
 
 #[test]
 fn missing_mesh_file_is_a_read_error_at_the_file_key() {
-    let p = files("missing", &SCENE.replace("meshes/part.msh", "meshes/nothere.msh"), MSH);
+    let p = files(
+        "missing",
+        &SCENE.replace("meshes/part.msh", "meshes/nothere.msh"),
+        MSH,
+    );
     let e = load_error(&p);
-    check(&e, ErrorKind::Read, 12, 17, "bodies[0].mesh.file", &["nothere.msh", "cannot read"]);
+    check(
+        &e,
+        ErrorKind::Read,
+        12,
+        17,
+        "bodies[0].mesh.file",
+        &["nothere.msh", "cannot read"],
+    );
 }
 
 #[test]
 fn malformed_mesh_file_names_its_own_line() {
     let p = files("bad", SCENE, &MSH.replace("9 2 5 6 3", "9 2 5 6 42"));
     let e = load_error(&p);
-    check(&e, ErrorKind::MeshFile, 12, 17, "bodies[0].mesh.file", &["meshes/part.msh:26: element 9 refers to node 42", "node 42"]);
+    check(
+        &e,
+        ErrorKind::MeshFile,
+        12,
+        17,
+        "bodies[0].mesh.file",
+        &["meshes/part.msh:26: element 9 refers to node 42", "node 42"],
+    );
 }
 
 #[test]
@@ -114,22 +156,46 @@ fn degenerate_element_in_mesh_file_names_its_tag_and_line() {
     // element 8 becomes (1, 3, 3): zero area
     let p = files("degenerate", SCENE, &MSH.replace("8 1 3 4", "8 1 3 3"));
     let e = load_error(&p);
-    check(&e, ErrorKind::Geometry, 12, 17, "bodies[0].mesh.file", &["meshes/part.msh:24: element tag 8", "degenerate"]);
+    check(
+        &e,
+        ErrorKind::Geometry,
+        12,
+        17,
+        "bodies[0].mesh.file",
+        &["meshes/part.msh:24: element tag 8", "degenerate"],
+    );
 }
 
 #[test]
 fn warped_quad_in_mesh_file_is_refused_with_its_tag() {
     // lift node 6 (a corner of quad 9) out of the plane by 0.3 m
-    let p = files("warped", SCENE, &MSH.replace("2 1 0\n$EndNodes", "2 1 0.3\n$EndNodes"));
+    let p = files(
+        "warped",
+        SCENE,
+        &MSH.replace("2 1 0\n$EndNodes", "2 1 0.3\n$EndNodes"),
+    );
     let e = load_error(&p);
-    check(&e, ErrorKind::Geometry, 12, 17, "bodies[0].mesh.file", &["element tag 9", "warped", "split it into triangles"]);
+    check(
+        &e,
+        ErrorKind::Geometry,
+        12,
+        17,
+        "bodies[0].mesh.file",
+        &["element tag 9", "warped", "split it into triangles"],
+    );
 }
 
 #[test]
 fn scene_hash_covers_the_mesh_file() {
-    let a = crash_scene::load(&files("hash-a", SCENE, MSH)).expect("v").build().expect("b");
+    let a = crash_scene::load(&files("hash-a", SCENE, MSH))
+        .expect("v")
+        .build()
+        .expect("b");
     let moved = MSH.replace("2 1 0\n$EndNodes", "2 1.01 0\n$EndNodes");
-    let b = crash_scene::load(&files("hash-b", SCENE, &moved)).expect("v").build().expect("b");
+    let b = crash_scene::load(&files("hash-b", SCENE, &moved))
+        .expect("v")
+        .build()
+        .expect("b");
     assert_ne!(a.scene_hash, b.scene_hash);
     let mut h = crash_core::hash::Fnv::default();
     h.bytes(SCENE.as_bytes());

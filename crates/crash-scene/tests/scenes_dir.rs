@@ -14,7 +14,10 @@ fn every_scene_in_scenes_dir_parses_and_builds() {
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
     files.sort();
-    assert!(files.len() >= 8, "expected the showcase and verification scenes, found {files:?}");
+    assert!(
+        files.len() >= 8,
+        "expected the showcase and verification scenes, found {files:?}"
+    );
     for f in &files {
         let scene = crash_scene::load(f).unwrap_or_else(|e| panic!("{e}"));
         let built = scene.build().unwrap_or_else(|e| panic!("{e}"));

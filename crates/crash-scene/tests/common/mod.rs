@@ -46,12 +46,22 @@ pub fn error(text: &str) -> SceneError {
 }
 
 /// Assert kind, location and that the message says each of `parts`.
-pub fn check(e: &SceneError, kind: ErrorKind, line: usize, column: usize, key: &str, parts: &[&str]) {
+pub fn check(
+    e: &SceneError,
+    kind: ErrorKind,
+    line: usize,
+    column: usize,
+    key: &str,
+    parts: &[&str],
+) {
     let shown = e.to_string();
     assert_eq!(e.kind, kind, "{shown}");
     assert_eq!((e.line, e.column), (line, column), "{shown}");
     assert_eq!(e.key, key, "{shown}");
-    assert!(shown.starts_with(&format!("{}:{line}:{column}: ", e.file)), "{shown}");
+    assert!(
+        shown.starts_with(&format!("{}:{line}:{column}: ", e.file)),
+        "{shown}"
+    );
     for p in parts {
         assert!(shown.contains(p), "message lacks {p:?}: {shown}");
     }
