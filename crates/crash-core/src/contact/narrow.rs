@@ -32,6 +32,18 @@ pub fn reach_box(seg_body: &Body, node_body: &Body) -> (Vec3, Vec3) {
     (lo.add_scalar(-c), hi.add_scalar(c))
 }
 
+/// Distance from p to the axis-aligned box of the given nodes (0 inside).
+fn box_distance(p: &Vec3, nodes: &[u32], x: &[Vec3]) -> f64 {
+    let mut lo = x[nodes[0] as usize];
+    let mut hi = lo;
+    for &n in &nodes[1..] {
+        lo = lo.inf(&x[n as usize]);
+        hi = hi.sup(&x[n as usize]);
+    }
+    let d = (lo - p).sup(&Vec3::zeros()) + (p - hi).sup(&Vec3::zeros());
+    d.norm()
+}
+
 /// All nodes of `nb` penetrating the surface of `sb` (`surf` its search data, fresh).
 /// `self_pass`: nb and sb are the same body; segments holding the node or a neighbour,
 /// and segments already within contact distance in the reference configuration, are
@@ -58,7 +70,14 @@ pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit>
                         if self_pass && surf.near_in_topology(i, j) {
                             continue;
                         }
-                        let pr = project(p, &surf.segments[j as usize], &sb.x);
+                        let seg = &surf.segments[j as usize];
+                        // cheap lower bound: distance to the segment's node box; skipping
+                        // only strictly worse candidates keeps the (dist, index) choice
+                        let lb = box_distance(p, seg.nodes(), &sb.x);
+                        if lb >= c || best.as_ref().is_some_and(|(b, _)| lb > b.dist) {
+                            continue;
+                        }
+                        let pr = project(p, seg, &sb.x);
                         let better = match &best {
                             None => true,
                             Some((b, bj)) => pr.dist < b.dist || (pr.dist == b.dist && j < *bj),
