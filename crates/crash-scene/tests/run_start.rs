@@ -50,10 +50,11 @@ fn spinning_free_plate_starts_as_a_rigid_body() {
     }
     let body = &run.group.bodies[0];
     assert!((body.linear_momentum() - p0).norm() < 1e-9 * p0.norm());
-    // node rotation rates equal to the body's spin: no bending or drilling is excited,
-    // so almost no energy becomes strain energy (centrifugal stretch only)
+    // node rotation rates equal to the body's spin excite no bending or drilling: only
+    // the centrifugal stretch, strain ~ rho w^2 r^2 / E ~ 5e-6, stores energy (observed
+    // 4e-6 of the kinetic energy; with the node rotation rates left at zero it is 6e-4)
     assert!(
-        body.energy.internal < 1e-6 * e0,
+        body.energy.internal < 5e-5 * e0,
         "{} vs {e0}",
         body.energy.internal
     );
