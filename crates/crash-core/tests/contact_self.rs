@@ -71,8 +71,8 @@ fn self_contact_between_two_sheets_of_one_body_matches_two_bodies() {
     let one = |self_contact: bool| {
         let mut body = shell(0, &m, T);
         body.self_contact = self_contact;
-        for i in 0..body.x.len() {
-            body.v[i] = Vec3::new(0.0, 0.0, if i < n as usize { V } else { -V });
+        for (i, v) in body.v.iter_mut().enumerate() {
+            *v = Vec3::new(0.0, 0.0, if i < n as usize { V } else { -V });
         }
         run(vec![body], |r| {
             (
