@@ -5,6 +5,7 @@
 
 use crate::atomic::write_atomic;
 use crate::error::{AtPath, IoError};
+use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
@@ -33,6 +34,20 @@ pub struct ContactRow {
     pub b: u32,
     pub force: f64,
     pub penetration: f64,
+}
+
+impl ContactRow {
+    /// The row of one contact pair as the contact stage reports it
+    /// (`Group::contact_stats`).
+    pub fn from_stats(time: f64, s: &PairStats) -> Self {
+        Self {
+            time,
+            a: s.a,
+            b: s.b,
+            force: s.normal_force,
+            penetration: s.max_penetration,
+        }
+    }
 }
 
 #[derive(Debug)]

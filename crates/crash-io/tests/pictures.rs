@@ -266,3 +266,35 @@ fn explicit_camera_is_used_as_given() {
         "twice the view, half the size: {ratio}"
     );
 }
+
+#[test]
+fn fine_mesh_picture_is_not_darkened_by_edges() {
+    // A level-5 sphere (20480 triangles) is too fine for edge lines: its pixels keep the
+    // shaded body colour (mean brightness near that of the edge-free picture).
+    let m = icosphere(0.1, 5);
+    let b = Body::new(
+        0,
+        "ball",
+        &m,
+        common::steel(0.001),
+        Stabilization::default(),
+    )
+    .expect("ball");
+    let f = Frame::capture(0.0, 0, &[&b]);
+    let o = RenderOptions {
+        width: 400,
+        height: 300,
+        ..RenderOptions::default()
+    };
+    let with = render_frame(&f, &o);
+    let without = render_frame(&f, &RenderOptions { edges: false, ..o });
+    with.save_png(test_dir("pictures_fine").join("fine.png"))
+        .expect("save");
+    let mean = |img: &Image| img.rgb.iter().map(|&v| v as f64).sum::<f64>() / img.rgb.len() as f64;
+    assert!(
+        (mean(&with) - mean(&without)).abs() < 0.5,
+        "{} vs {}",
+        mean(&with),
+        mean(&without)
+    );
+}
