@@ -267,18 +267,22 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
         contact.margin = default_margin(&bodies, g.gravity, g.end_time, g.safety);
     }
     if let Some(p) = check_initial_overlap(&bodies, &contact) {
-        let (a, b) = (&bodies[p.a as usize], &bodies[p.b as usize]);
-        let later = p.a.max(p.b) as usize;
+        let (a, b) = (
+            &bodies[p.node_body as usize],
+            &bodies[p.segment_body as usize],
+        );
+        let later = p.node_body.max(p.segment_body) as usize;
         let key = match scene.spec.bodies[later].position {
             Some(_) => format!("bodies[{later}].position"),
             None => format!("bodies[{later}]"),
         };
+        let gap = 0.5 * (a.section.thickness + b.section.thickness);
         return Err(ctx.key_error(
             ErrorKind::Geometry,
             &key,
             format!(
-                "bodies \"{}\" and \"{}\" interpenetrate at t = 0: node {} of \"{}\" is {:.4e} m from element {} of \"{}\", closer than the half-thickness sum {:.4e} m; move them apart",
-                a.name, b.name, p.node, a.name, p.distance, p.element, b.name, p.required
+                "bodies \"{}\" and \"{}\" interpenetrate at t = 0: {} node(s) of \"{}\" lie closer to \"{}\" than the half-thickness sum {:.4e} m (node {} by {:.4e} m, at element {}); move them apart",
+                a.name, b.name, p.nodes, a.name, b.name, gap, p.node, p.depth, p.segment
             ),
         ));
     }
