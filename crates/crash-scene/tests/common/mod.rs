@@ -67,9 +67,11 @@ pub fn check(
     }
 }
 
-/// A fresh directory for files a test writes (scene + mesh).
+/// A fresh directory for files a test writes (scene + mesh), in cargo's scratch space
+/// for integration tests.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("crash-scene-{name}-{}", std::process::id()));
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("crash-scene-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&d).expect("temp dir");
     d
 }
