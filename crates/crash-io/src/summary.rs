@@ -15,25 +15,39 @@ pub const CONTACT_LIMIT: f64 = 0.10;
 pub const BALANCE_LIMIT: f64 = 0.01;
 pub const PENETRATION_LIMIT: f64 = 0.5;
 
+/// serde_json writes non-finite floats as null; read null back as NaN.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
 /// Run-time error indicators, updated as the run goes (serde: keep it in a checkpoint
 /// so a restarted run continues its peaks).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Indicators {
     /// Energy-balance error (relative to the largest energy) at the end.
+    #[serde(deserialize_with = "nan_if_null")]
     pub final_balance_error: f64,
     /// Largest |energy-balance error| seen.
+    #[serde(deserialize_with = "nan_if_null")]
     pub peak_balance_error: f64,
     /// Peak hourglass energy / peak internal energy.
+    #[serde(deserialize_with = "nan_if_null")]
     pub hourglass_internal_ratio: f64,
     /// Largest |contact energy| / peak internal energy.
+    #[serde(deserialize_with = "nan_if_null")]
     pub contact_internal_ratio: f64,
     /// Largest penetration / thickness of the thinner body seen in any contact.
+    #[serde(deserialize_with = "nan_if_null")]
     pub max_penetration_ratio: f64,
     /// Most negative contact energy seen [J] (clearly negative means contact did work).
+    #[serde(deserialize_with = "nan_if_null")]
     pub min_contact_energy: f64,
     /// Peak internal, hourglass and |contact| energies [J] (the ratios' bases).
+    #[serde(deserialize_with = "nan_if_null")]
     pub peak_internal: f64,
+    #[serde(deserialize_with = "nan_if_null")]
     pub peak_hourglass: f64,
+    #[serde(deserialize_with = "nan_if_null")]
     pub peak_contact: f64,
 }
 
@@ -111,14 +125,19 @@ pub struct Summary {
     pub elements: usize,
     pub steps: u64,
     /// Simulated time reached [s].
+    #[serde(deserialize_with = "nan_if_null")]
     pub end_time: f64,
+    #[serde(deserialize_with = "nan_if_null")]
     pub dt_min: f64,
+    #[serde(deserialize_with = "nan_if_null")]
     pub dt_max: f64,
     /// Wall-clock time of the run [s].
+    #[serde(deserialize_with = "nan_if_null")]
     pub wall_time_s: f64,
     /// Cost per element per step of each pipeline stage (and "total") [ns].
     pub ns_per_element_cycle: BTreeMap<String, f64>,
     /// Largest |energy-balance error| (relative).
+    #[serde(deserialize_with = "nan_if_null")]
     pub max_energy_balance_error: f64,
     pub indicators: Indicators,
     pub warnings: Vec<String>,

@@ -97,3 +97,21 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
         assert!(v.get(k).is_some(), "field {k}");
     }
 }
+
+#[test]
+fn non_finite_numbers_are_written_as_null_and_read_back_as_nan() {
+    let dir = test_dir("summary_null");
+    let path = dir.join("summary.json");
+    let s = Summary {
+        dt_min: f64::INFINITY,
+        fault: Some("step 3: non-finite velocity".into()),
+        ..Summary::default()
+    };
+    write_summary(&path, &s).expect("write");
+    let text = std::fs::read_to_string(&path).expect("text");
+    assert!(text.contains("\"dt_min\": null"), "{text}");
+    let back = read_summary(&path).expect("read");
+    assert!(back.dt_min.is_nan());
+    assert_eq!(back.dt_max, 0.0);
+    assert_eq!(back.fault, s.fault);
+}
