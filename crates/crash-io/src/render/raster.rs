@@ -8,9 +8,9 @@ pub struct Raster {
     depth: Vec<f64>,
 }
 
-/// Edge lines are drawn only on triangles whose smallest height exceeds this (pixels),
-/// so fine meshes do not turn dark.
-const EDGE_MIN_HEIGHT: f64 = 10.0;
+/// Triangles seen almost edge-on (smallest height below this, pixels) get no outline,
+/// so silhouettes do not turn into dark bands.
+const EDGE_MIN_HEIGHT: f64 = 2.0;
 
 impl Raster {
     pub fn new(image: Image) -> Self {

@@ -56,6 +56,9 @@ impl Default for RenderOptions {
 /// Supersampling factor of the 3D part (anti-aliasing).
 const SUPERSAMPLE: u32 = 2;
 const LEGEND_WIDTH: u32 = 120;
+/// Element outlines are drawn for bodies whose elements average at least this many
+/// (final) pixels on screen.
+const EDGE_MIN_PX: f64 = 9.0;
 /// Height of the band above the picture kept free for the time label [px].
 const LABEL_BAND: u32 = 30;
 
@@ -97,6 +100,17 @@ fn light_intensity(n: &Vec3, light: &Vec3) -> f64 {
     0.32 + 0.68 * n.dot(light).abs()
 }
 
+/// Mean on-screen length of the first edge of each element [px].
+fn mean_edge_px(pts: &[(f64, f64, f64)], b: &crate::frame::FrameBody) -> f64 {
+    let len = |a: u32, c: u32| {
+        let (p, q) = (pts[a as usize], pts[c as usize]);
+        ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt()
+    };
+    let sum: f64 = b.tris.iter().map(|t| len(t[0], t[1])).sum::<f64>()
+        + b.quads.iter().map(|q| len(q[0], q[1])).sum::<f64>();
+    sum / b.element_count().max(1) as f64
+}
+
 /// Render one frame.
 pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
     let legend = matches!(opts.colour, Colouring::ByVonMises { .. });
@@ -134,6 +148,9 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
         let edge_w = 0.6 * ss as f64;
         for b in &frame.bodies {
             let pts: Vec<_> = b.x.iter().map(|p| proj.project(p)).collect();
+            // Outline the elements of a body only if they are large on screen on average:
+            // deciding per body keeps a mesh uniformly outlined or not at all.
+            let outline = opts.edges && mean_edge_px(&pts, b) > EDGE_MIN_PX * ss as f64;
             let base = body_colour(b.id);
             let colour_of = |e: usize| -> Rgb {
                 match opts.colour {
@@ -151,7 +168,7 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
                 };
                 let c = shade(c, k);
                 let edge = (shade(c, 0.72), edge_w);
-                let mask = if opts.edges { mask } else { 0 };
+                let mask = if outline { mask } else { 0 };
                 raster.triangle(nodes.map(|n| pts[n as usize]), c, mask, edge);
             };
             for (e, t) in b.tris.iter().enumerate() {
