@@ -2,9 +2,12 @@
 //! elements into per-element slots (no shared accumulation: thread-count independent).
 
 use crate::body::Body;
-use crate::element::quad::quad_forces;
-use crate::element::tri::tri_forces;
-use crate::element::{ElemEnergy, ElemFailure, Slot};
+use crate::element::plate::{Consts, ShellL};
+use crate::element::quad::{quad_kernel, HgL, QuadElem, QuadIn};
+use crate::element::real::{Lanes, Real, F4, V3};
+use crate::element::tri::{tri_kernel, TriElem, TriIn};
+use crate::element::{ElemEnergy, ElemFailure, HourglassState, ShellState, Slot, COLLAPSE_RATIO};
+use crate::material::Section;
 use crate::error::Fault;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -91,9 +94,174 @@ fn to_fault(body: u32, step: u64, e: usize, f: ElemFailure) -> Fault {
     }
 }
 
+/// Build a kernel scalar from W per-lane values.
 #[inline(always)]
-fn pick<const N: usize>(a: &[Vec3], nodes: &[u32; N]) -> [Vec3; N] {
-    nodes.map(|n| a[n as usize])
+fn lanes<S: Lanes>(f: impl Fn(usize) -> f64) -> S {
+    let mut s = S::splat(0.0);
+    for k in 0..S::W {
+        s.set_lane(k, f(k));
+    }
+    s
+}
+
+/// Gather x, v and w of one element node for every lane (one bounds check per lane).
+#[inline(always)]
+fn node_vecs<S: Lanes>((x, v, w): (&[Vec3], &[Vec3], &[Vec3]), node: impl Fn(usize) -> u32) -> [V3<S>; 3] {
+    let z = S::splat(0.0);
+    let mut out = [V3::new(z, z, z); 3];
+    for k in 0..S::W {
+        let i = node(k) as usize;
+        for (o, a) in out.iter_mut().zip([x, v, w]) {
+            let p = &a[i];
+            o.x.set_lane(k, p.x);
+            o.y.set_lane(k, p.y);
+            o.z.set_lane(k, p.z);
+        }
+    }
+    out
+}
+
+#[inline(always)]
+fn shell_in<S: Lanes>(st: &[ShellState]) -> ShellL<S> {
+    ShellL {
+        m: std::array::from_fn(|c| lanes(|k| st[k].m[c])),
+        q: std::array::from_fn(|c| lanes(|k| st[k].q[c])),
+        drill: lanes(|k| st[k].drill),
+    }
+}
+
+#[inline(always)]
+fn shell_out<S: Lanes>(l: &ShellL<S>, st: &mut [ShellState]) {
+    for (k, s) in st.iter_mut().enumerate().take(S::W) {
+        s.m = l.m.map(|c| c.lane(k));
+        s.q = l.q.map(|c| c.lane(k));
+        s.drill = l.drill.lane(k);
+    }
+}
+
+#[inline(always)]
+fn slots_out<S: Lanes, const N: usize>(out: &[[S; 6]; N], slots: &mut [Slot]) {
+    for k in 0..S::W {
+        for i in 0..N {
+            slots[k * N + i] = out[i].map(|c| c.lane(k));
+        }
+    }
+}
+
+/// Triangles `els` (exactly S::W of them) starting at element index `e0`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn tri_batch<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    els: &[TriElem],
+    e0: usize,
+    nodes: (&[Vec3], &[Vec3], &[Vec3]),
+    h: S,
+    sts: &mut [ShellState],
+    slots: &mut [Slot],
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
+    let g: [[V3<S>; 3]; 3] = std::array::from_fn(|i| node_vecs(nodes, |l| els[l].nodes[i]));
+    let input = TriIn {
+        x: std::array::from_fn(|i| g[i][0]),
+        v: std::array::from_fn(|i| g[i][1]),
+        w: std::array::from_fn(|i| g[i][2]),
+        bx0: std::array::from_fn(|i| lanes(|l| els[l].bx0[i])),
+        by0: std::array::from_fn(|i| lanes(|l| els[l].by0[i])),
+        area0: lanes(|l| els[l].area0),
+    };
+    let mut st = shell_in::<S>(sts);
+    let mut out = [[S::splat(0.0); 6]; 3];
+    let r = tri_kernel(k, &input, h, &mut st, &mut out);
+    for l in 0..S::W {
+        let ratio = r.ratio.lane(l);
+        if !(ratio >= COLLAPSE_RATIO) {
+            return Err((e0 + l, ElemFailure::Collapsed { ratio }));
+        }
+    }
+    shell_out(&st, sts);
+    slots_out(&out, slots);
+    let c = sec.wave_speed;
+    for l in 0..S::W {
+        let en = ElemEnergy {
+            internal: r.internal.lane(l),
+            hourglass: 0.0,
+            damping: r.damping.lane(l),
+        };
+        let len = r.length.lane(l);
+        sums.add(e0 + l, &en, els[l].area0, len / c * sec.damping_factor(len));
+    }
+    Ok(())
+}
+
+/// Quads `els` (exactly S::W of them) starting at element index `e0`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn quad_batch<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    els: &[QuadElem],
+    e0: usize,
+    nodes: (&[Vec3], &[Vec3], &[Vec3]),
+    h: S,
+    sts: &mut [ShellState],
+    hgs: &mut [HourglassState],
+    slots: &mut [Slot],
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
+    let inv = |kk: f64| if kk > 0.0 { 0.5 / kk } else { 0.0 };
+    let g: [[V3<S>; 3]; 4] = std::array::from_fn(|i| node_vecs(nodes, |l| els[l].nodes[i]));
+    let input = QuadIn {
+        x: std::array::from_fn(|i| g[i][0]),
+        v: std::array::from_fn(|i| g[i][1]),
+        w: std::array::from_fn(|i| g[i][2]),
+        bx0: std::array::from_fn(|i| lanes(|l| els[l].bx0[i])),
+        by0: std::array::from_fn(|i| lanes(|l| els[l].by0[i])),
+        gamma: std::array::from_fn(|i| lanes(|l| els[l].gamma[i])),
+        area0: lanes(|l| els[l].area0),
+        e0: std::array::from_fn(|i| lanes(|l| els[l].e0[i])),
+        k_m: lanes(|l| els[l].k_m),
+        k_w: lanes(|l| els[l].k_w),
+        k_th: lanes(|l| els[l].k_th),
+        hinv_w: lanes(|l| inv(els[l].k_w)),
+        hinv_th: lanes(|l| inv(els[l].k_th)),
+    };
+    let mut st = shell_in::<S>(sts);
+    let mut hg = HgL {
+        w: lanes(|l| hgs[l].w),
+        th: std::array::from_fn(|c| lanes(|l| hgs[l].th[c])),
+    };
+    let mut out = [[S::splat(0.0); 6]; 4];
+    let (r, extra) = quad_kernel(k, &input, h, &mut st, &mut hg, &mut out);
+    for l in 0..S::W {
+        let ratio = r.ratio.lane(l);
+        if !(ratio >= COLLAPSE_RATIO) {
+            return Err((e0 + l, ElemFailure::Collapsed { ratio }));
+        }
+        for (corner, c) in extra.corners.iter().enumerate() {
+            if !(c.lane(l) > 0.0) {
+                return Err((e0 + l, ElemFailure::Inverted { corner }));
+            }
+        }
+    }
+    shell_out(&st, sts);
+    for (l, s) in hgs.iter_mut().enumerate().take(S::W) {
+        s.w = hg.w.lane(l);
+        s.th = hg.th.map(|c| c.lane(l));
+    }
+    slots_out(&out, slots);
+    let c = sec.wave_speed;
+    for l in 0..S::W {
+        let en = ElemEnergy {
+            internal: r.internal.lane(l),
+            hourglass: extra.hourglass.lane(l),
+            damping: r.damping.lane(l),
+        };
+        let len = r.length.lane(l);
+        sums.add(e0 + l, &en, els[l].area0, len / c * sec.damping_factor(len));
+    }
+    Ok(())
 }
 
 impl Body {
@@ -107,9 +275,9 @@ impl Body {
             return Ok(ForceSums::default());
         }
         let sec = self.section;
-        let stab = self.stab;
-        let c = sec.wave_speed;
-        let (x, v, w) = (&self.x, &self.v, &self.w);
+        let k4 = Consts::<F4>::new(&sec, &self.stab);
+        let k1 = Consts::<f64>::new(&sec, &self.stab);
+        let nodes = (&self.x[..], &self.v[..], &self.w[..]);
         let nt = self.tris.len();
         let (tri_slots, quad_slots) = self.slots.split_at_mut(3 * nt);
         let (tri_state, quad_state) = self.shell.split_at_mut(nt);
@@ -122,26 +290,16 @@ impl Body {
             .enumerate()
             .map(|(ci, ((els, sts), slots))| {
                 let mut sums = ForceSums::default();
-                for (k, el) in els.iter().enumerate() {
-                    let e = ci * CHUNK + k;
-                    let mut en = ElemEnergy::default();
-                    let out: &mut [Slot; 3] = (&mut slots[3 * k..3 * k + 3])
-                        .try_into()
-                        .map_err(|_| (e, ElemFailure::Collapsed { ratio: f64::NAN }))?;
-                    let len = tri_forces(
-                        &sec,
-                        &stab,
-                        el,
-                        &pick(x, &el.nodes),
-                        &pick(v, &el.nodes),
-                        &pick(w, &el.nodes),
-                        h,
-                        &mut sts[k],
-                        out,
-                        &mut en,
-                    )
-                    .map_err(|f| (e, f))?;
-                    sums.add(e, &en, el.area0, len / c * sec.damping_factor(len));
+                let base = ci * CHUNK;
+                let mut j = 0;
+                // four elements per SIMD batch, the remainder one by one (same arithmetic)
+                while j + 4 <= els.len() {
+                    tri_batch(&k4, &sec, &els[j..j + 4], base + j, nodes, F4::splat(h), &mut sts[j..j + 4], &mut slots[3 * j..3 * j + 12], &mut sums)?;
+                    j += 4;
+                }
+                while j < els.len() {
+                    tri_batch(&k1, &sec, &els[j..j + 1], base + j, nodes, h, &mut sts[j..j + 1], &mut slots[3 * j..3 * j + 3], &mut sums)?;
+                    j += 1;
                 }
                 Ok(sums)
             })
@@ -156,27 +314,15 @@ impl Body {
             .enumerate()
             .map(|(ci, (((els, sts), hgs), slots))| {
                 let mut sums = ForceSums::default();
-                for (k, el) in els.iter().enumerate() {
-                    let e = nt + ci * CHUNK + k;
-                    let mut en = ElemEnergy::default();
-                    let out: &mut [Slot; 4] = (&mut slots[4 * k..4 * k + 4])
-                        .try_into()
-                        .map_err(|_| (e, ElemFailure::Collapsed { ratio: f64::NAN }))?;
-                    let len = quad_forces(
-                        &sec,
-                        &stab,
-                        el,
-                        &pick(x, &el.nodes),
-                        &pick(v, &el.nodes),
-                        &pick(w, &el.nodes),
-                        h,
-                        &mut sts[k],
-                        &mut hgs[k],
-                        out,
-                        &mut en,
-                    )
-                    .map_err(|f| (e, f))?;
-                    sums.add(e, &en, el.area0, len / c * sec.damping_factor(len));
+                let base = nt + ci * CHUNK;
+                let mut j = 0;
+                while j + 4 <= els.len() {
+                    quad_batch(&k4, &sec, &els[j..j + 4], base + j, nodes, F4::splat(h), &mut sts[j..j + 4], &mut hgs[j..j + 4], &mut slots[4 * j..4 * j + 16], &mut sums)?;
+                    j += 4;
+                }
+                while j < els.len() {
+                    quad_batch(&k1, &sec, &els[j..j + 1], base + j, nodes, h, &mut sts[j..j + 1], &mut hgs[j..j + 1], &mut slots[4 * j..4 * j + 4], &mut sums)?;
+                    j += 1;
                 }
                 Ok(sums)
             })

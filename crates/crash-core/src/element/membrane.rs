@@ -5,22 +5,60 @@
 //! energy A0 t S:E/2 is exact), and F S F^T is symmetric, so the membrane forces conserve
 //! angular momentum to round-off.
 
-use super::ElemEnergy;
-use crate::material::Section;
+use super::real::{Real, V3};
 use crate::Vec3;
+
+/// Plane-stress constants in kernel form.
+#[derive(Debug, Clone, Copy)]
+pub struct Plane<S> {
+    /// Stiffness scale (t E/(1-nu^2) for membrane, D for bending).
+    pub k: S,
+    pub nu: S,
+    /// (1 - nu) / 2.
+    pub half_1mnu: S,
+}
+
+impl<S: Real> Plane<S> {
+    pub fn new(k: f64, nu: f64) -> Self {
+        Self {
+            k: S::splat(k),
+            nu: S::splat(nu),
+            half_1mnu: S::splat(0.5 * (1.0 - nu)),
+        }
+    }
+
+    /// C e for engineering strain (xx, yy, 2xy), scaled by k.
+    #[inline(always)]
+    pub fn apply(&self, e: [S; 3]) -> [S; 3] {
+        [
+            self.k * (e[0] + self.nu * e[1]),
+            self.k * (self.nu * e[0] + e[1]),
+            self.k * self.half_1mnu * e[2],
+        ]
+    }
+
+    /// Same with an extra factor (Kelvin damping alpha).
+    #[inline(always)]
+    pub fn apply_scaled(&self, f: S, e: [S; 3]) -> [S; 3] {
+        let s = self.apply(e);
+        [f * s[0], f * s[1], f * s[2]]
+    }
+}
 
 /// Green strain (xx, yy, 2xy) of the deformation gradient columns f1, f2.
 #[inline(always)]
+pub fn green_s<S: Real>(f1: V3<S>, f2: V3<S>) -> [S; 3] {
+    let half = S::splat(0.5);
+    let one = S::splat(1.0);
+    [half * (f1.dot(f1) - one), half * (f2.dot(f2) - one), f1.dot(f2)]
+}
+
+/// Green strain for nalgebra vectors (setup and output).
 pub fn green(f1: &Vec3, f2: &Vec3) -> [f64; 3] {
-    [
-        0.5 * (f1.dot(f1) - 1.0),
-        0.5 * (f2.dot(f2) - 1.0),
-        f1.dot(f2),
-    ]
+    green_s(V3::new(f1.x, f1.y, f1.z), V3::new(f2.x, f2.y, f2.z))
 }
 
 /// Deformation gradient columns from nodal positions and reference gradients.
-#[inline(always)]
 pub fn gradient<const N: usize>(x: &[Vec3; N], bx: &[f64; N], by: &[f64; N]) -> (Vec3, Vec3) {
     let mut f1 = Vec3::zeros();
     let mut f2 = Vec3::zeros();
@@ -31,39 +69,52 @@ pub fn gradient<const N: usize>(x: &[Vec3; N], bx: &[f64; N], by: &[f64; N]) -> 
     (f1, f2)
 }
 
-/// Membrane forces (global) written into `f`; adds energy and damping dissipation.
+#[inline(always)]
+fn gradient_s<S: Real, const N: usize>(x: &[V3<S>; N], bx: &[S; N], by: &[S; N]) -> (V3<S>, V3<S>) {
+    let mut f1 = V3::zero();
+    let mut f2 = V3::zero();
+    for i in 0..N {
+        f1 = f1.add(x[i].scale(bx[i]));
+        f2 = f2.add(x[i].scale(by[i]));
+    }
+    (f1, f2)
+}
+
+/// Membrane forces (global) written into `f`; returns (stored energy, Kelvin
+/// dissipation over h).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn membrane_forces<const N: usize>(
-    sec: &Section,
-    bx: &[f64; N],
-    by: &[f64; N],
-    area0: f64,
-    e0: &[f64; 3],
-    x: &[Vec3; N],
-    v: &[Vec3; N],
-    h: f64,
-    f: &mut [Vec3; N],
-    en: &mut ElemEnergy,
-) {
-    let (f1, f2) = gradient(x, bx, by);
-    let g = green(&f1, &f2);
+pub fn membrane_forces<S: Real, const N: usize>(
+    c: &Plane<S>,
+    alpha: f64,
+    bx: &[S; N],
+    by: &[S; N],
+    area0: S,
+    e0: &[S; 3],
+    x: &[V3<S>; N],
+    v: &[V3<S>; N],
+    h: S,
+    f: &mut [V3<S>; N],
+) -> (S, S) {
+    let (f1, f2) = gradient_s(x, bx, by);
+    let g = green_s(f1, f2);
     let e = [g[0] - e0[0], g[1] - e0[1], g[2] - e0[2]];
-    let mut s = sec.plane(sec.membrane, e);
-    en.internal += 0.5 * area0 * (s[0] * e[0] + s[1] * e[1] + s[2] * e[2]);
-    let alpha = sec.material.kelvin;
+    let mut s = c.apply(e);
+    let energy = S::splat(0.5) * area0 * (s[0] * e[0] + s[1] * e[1] + s[2] * e[2]);
+    let mut diss = S::splat(0.0);
     if alpha > 0.0 {
-        let (d1, d2) = gradient(v, bx, by);
-        let ed = [f1.dot(&d1), f2.dot(&d2), f1.dot(&d2) + d1.dot(&f2)];
-        let sd = sec.plane(alpha * sec.membrane, ed);
-        en.damping += h * area0 * (sd[0] * ed[0] + sd[1] * ed[1] + sd[2] * ed[2]);
+        let (d1, d2) = gradient_s(v, bx, by);
+        let ed = [f1.dot(d1), f2.dot(d2), f1.dot(d2) + d1.dot(f2)];
+        let sd = c.apply_scaled(S::splat(alpha), ed);
+        diss = h * area0 * (sd[0] * ed[0] + sd[1] * ed[1] + sd[2] * ed[2]);
         s[0] += sd[0];
         s[1] += sd[1];
         s[2] += sd[2];
     }
-    let p1 = (f1 * s[0] + f2 * s[2]) * area0;
-    let p2 = (f1 * s[2] + f2 * s[1]) * area0;
+    let p1 = f1.scale(s[0]).add(f2.scale(s[2])).scale(area0);
+    let p2 = f1.scale(s[2]).add(f2.scale(s[1])).scale(area0);
     for i in 0..N {
-        f[i] = p1 * bx[i] + p2 * by[i];
+        f[i] = p1.scale(bx[i]).add(p2.scale(by[i]));
     }
+    (energy, diss)
 }

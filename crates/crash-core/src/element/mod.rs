@@ -9,6 +9,7 @@
 pub mod membrane;
 pub mod plate;
 pub mod quad;
+pub mod real;
 pub mod reference;
 pub mod tri;
 

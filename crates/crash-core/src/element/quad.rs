@@ -8,11 +8,11 @@
 //! (`mesh::WARP_LIMIT`); no warping correction is applied.
 
 use super::membrane::{gradient, green, membrane_forces};
-use super::plate::{plate_forces, LocalRates, PlateKin};
+use super::plate::{plate_forces, Consts, LocalRates, PlateKin, ShellL};
+use super::real::{Real, V3};
 use super::reference::{quad_gradients, Frame};
-use super::{
-    ElemEnergy, ElemFailure, HourglassState, ShellState, Slot, Stabilization, COLLAPSE_RATIO,
-};
+use super::tri::KernelOut;
+use super::Stabilization;
 use crate::material::Section;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
@@ -63,106 +63,134 @@ impl QuadElem {
     }
 }
 
-/// Internal forces of one quad. Writes its four slots; returns the characteristic
-/// length L_e = A / longest diagonal of the current configuration.
-#[allow(clippy::too_many_arguments)]
+/// Rate-form hourglass resultants in kernel form.
+#[derive(Debug, Clone, Copy)]
+pub struct HgL<S> {
+    pub w: S,
+    pub th: [S; 2],
+}
+
+/// Inputs of the quad kernel (one element, or four in lanes).
+#[derive(Debug, Clone, Copy)]
+pub struct QuadIn<S> {
+    pub x: [V3<S>; 4],
+    pub v: [V3<S>; 4],
+    pub w: [V3<S>; 4],
+    pub bx0: [S; 4],
+    pub by0: [S; 4],
+    pub gamma: [S; 4],
+    pub area0: S,
+    pub e0: [S; 3],
+    pub k_m: S,
+    pub k_w: S,
+    pub k_th: S,
+    /// 1/(2 k_w), 1/(2 k_theta) (0 when the stiffness is 0).
+    pub hinv_w: S,
+    pub hinv_th: S,
+}
+
+/// Extra outputs of the quad kernel.
+#[derive(Debug, Clone, Copy)]
+pub struct QuadExtra<S> {
+    pub hourglass: S,
+    /// Corner orientation (positive when the corner is convex and not inverted).
+    pub corners: [S; 4],
+}
+
+/// Internal forces of a quad: writes its four slots (global force, moment).
 #[inline(always)]
-pub fn quad_forces(
-    sec: &Section,
-    stab: &Stabilization,
-    el: &QuadElem,
-    x: &[Vec3; 4],
-    v: &[Vec3; 4],
-    w: &[Vec3; 4],
-    h: f64,
-    st: &mut ShellState,
-    hg: &mut HourglassState,
-    out: &mut [Slot; 4],
-    en: &mut ElemEnergy,
-) -> Result<f64, ElemFailure> {
-    let (fr, c) = Frame::quad(x);
-    let xl = x.map(|p| (p - c).dot(&fr.e1));
-    let yl = x.map(|p| (p - c).dot(&fr.e2));
+pub fn quad_kernel<S: Real>(
+    k: &Consts<S>,
+    e: &QuadIn<S>,
+    h: S,
+    st: &mut ShellL<S>,
+    hg: &mut HgL<S>,
+    out: &mut [[S; 6]; 4],
+) -> (KernelOut<S>, QuadExtra<S>) {
+    let zero = S::splat(0.0);
+    let one = S::splat(1.0);
+    let quarter = S::splat(0.25);
+    let x = &e.x;
+    let n = x[2].sub(x[0]).cross(x[3].sub(x[1]));
+    let e3 = n.scale(one / n.norm_squared().sqrt());
+    let r = x[1].sub(x[0]);
+    let r = r.sub(e3.scale(r.dot(e3)));
+    let e1 = r.scale(one / r.norm_squared().sqrt());
+    let e2 = e3.cross(e1);
+    let c = x[0].add(x[1]).add(x[2]).add(x[3]).scale(quarter);
+    let xl: [S; 4] = std::array::from_fn(|i| x[i].sub(c).dot(e1));
+    let yl: [S; 4] = std::array::from_fn(|i| x[i].sub(c).dot(e2));
     let (bx, by, area) = quad_gradients(xl, yl);
-    let ratio = area / el.area0;
-    if !(ratio >= COLLAPSE_RATIO) {
-        return Err(ElemFailure::Collapsed { ratio });
-    }
-    for k in 0..4 {
-        let (n, p) = ((k + 1) % 4, (k + 3) % 4);
-        let cross = (xl[n] - xl[k]) * (yl[p] - yl[k]) - (yl[n] - yl[k]) * (xl[p] - xl[k]);
-        if cross <= 0.0 {
-            return Err(ElemFailure::Inverted { corner: k });
-        }
-    }
-    let mut fm = [Vec3::zeros(); 4];
-    membrane_forces(sec, &el.bx0, &el.by0, el.area0, &el.e0, x, v, h, &mut fm, en);
+    let corners = std::array::from_fn(|i| {
+        let (nx, p) = ((i + 1) % 4, (i + 3) % 4);
+        (xl[nx] - xl[i]) * (yl[p] - yl[i]) - (yl[nx] - yl[i]) * (xl[p] - xl[i])
+    });
+
+    let mut fm = [V3::zero(); 4];
+    let (e_mem, d_mem) = membrane_forces(&k.membrane, k.alpha, &e.bx0, &e.by0, e.area0, &e.e0, x, &e.v, h, &mut fm);
 
     // in-plane hourglass, total form
-    let g = &el.gamma;
-    let mut q = Vec3::zeros();
+    let g = &e.gamma;
+    let mut q = V3::zero();
     for i in 0..4 {
-        q += x[i] * g[i];
+        q = q.add(x[i].scale(g[i]));
     }
-    let qt = (q - fr.e3 * q.dot(&fr.e3)) * el.k_m;
-    if el.k_m > 0.0 {
-        en.hourglass += 0.5 * qt.norm_squared() / el.k_m;
-    }
+    let qt = q.sub(e3.scale(q.dot(e3)));
+    let fq = qt.scale(e.k_m);
+    let mut e_hg = S::splat(0.5) * e.k_m * qt.norm_squared();
 
+    let loc = |p: V3<S>| [p.dot(e1), p.dot(e2), p.dot(e3)];
     let rates = LocalRates {
-        v: [
-            fr.local(&v[0]),
-            fr.local(&v[1]),
-            fr.local(&v[2]),
-            fr.local(&v[3]),
-        ],
-        w: [
-            fr.local(&w[0]),
-            fr.local(&w[1]),
-            fr.local(&w[2]),
-            fr.local(&w[3]),
-        ],
+        v: [loc(e.v[0]), loc(e.v[1]), loc(e.v[2]), loc(e.v[3])],
+        w: [loc(e.w[0]), loc(e.w[1]), loc(e.w[2]), loc(e.w[3])],
     };
     // out-of-plane and rotational hourglass, rate form
-    let mut qw = 0.0;
-    let mut qth = [0.0; 2];
+    let mut qw = zero;
+    let mut qth = [zero; 2];
     for i in 0..4 {
         qw += g[i] * rates.v[i][2];
         qth[0] += g[i] * rates.w[i][0];
         qth[1] += g[i] * rates.w[i][1];
     }
-    hg.w += h * el.k_w * qw;
-    hg.th[0] += h * el.k_th * qth[0];
-    hg.th[1] += h * el.k_th * qth[1];
-    if el.k_w > 0.0 {
-        en.hourglass += 0.5 * hg.w * hg.w / el.k_w;
-    }
-    if el.k_th > 0.0 {
-        en.hourglass += 0.5 * (hg.th[0] * hg.th[0] + hg.th[1] * hg.th[1]) / el.k_th;
-    }
+    hg.w += h * e.k_w * qw;
+    hg.th[0] += h * e.k_th * qth[0];
+    hg.th[1] += h * e.k_th * qth[1];
+    e_hg += hg.w * hg.w * e.hinv_w + (hg.th[0] * hg.th[0] + hg.th[1] * hg.th[1]) * e.hinv_th;
 
+    let q4 = S::splat(0.25);
     let kin = PlateKin {
         bx,
         by,
         area,
         cw: std::array::from_fn(|i| [bx[i], by[i]]),
-        cx: [[0.0, -0.25]; 4],
-        cy: [[0.25, 0.0]; 4],
+        cx: [[zero, -q4]; 4],
+        cy: [[q4, zero]; 4],
     };
-    let mut loc = [[0.0; 6]; 4];
-    let drill_k = stab.drilling * sec.material.shear_modulus() * sec.thickness;
-    plate_forces(sec, drill_k, &kin, &rates, h, st, &mut loc, en);
+    let mut lo = [[zero; 6]; 4];
+    let (e_pl, d_pl) = plate_forces(k, &kin, &rates, h, st, &mut lo);
     for i in 0..4 {
-        loc[i][2] += g[i] * hg.w;
-        loc[i][3] += g[i] * hg.th[0];
-        loc[i][4] += g[i] * hg.th[1];
-        let f = fm[i] + qt * g[i] + fr.global([loc[i][0], loc[i][1], loc[i][2]]);
-        let m = fr.global([loc[i][3], loc[i][4], loc[i][5]]);
+        lo[i][2] += g[i] * hg.w;
+        lo[i][3] += g[i] * hg.th[0];
+        lo[i][4] += g[i] * hg.th[1];
+        let f = fm[i]
+            .add(fq.scale(g[i]))
+            .add(e1.scale(lo[i][0]))
+            .add(e2.scale(lo[i][1]))
+            .add(e3.scale(lo[i][2]));
+        let m = e1.scale(lo[i][3]).add(e2.scale(lo[i][4])).add(e3.scale(lo[i][5]));
         out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
     }
-    let diag = (x[2] - x[0])
-        .norm_squared()
-        .max((x[3] - x[1]).norm_squared())
-        .sqrt();
-    Ok(area / diag)
+    let diag = x[2].sub(x[0]).norm_squared().max(x[3].sub(x[1]).norm_squared()).sqrt();
+    (
+        KernelOut {
+            internal: e_mem + e_pl,
+            damping: d_mem + d_pl,
+            length: area / diag,
+            ratio: area / e.area0,
+        },
+        QuadExtra {
+            hourglass: e_hg,
+            corners,
+        },
+    )
 }

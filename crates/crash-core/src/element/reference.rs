@@ -1,5 +1,6 @@
 //! Reference (initial) geometry of elements: co-rotational frames and gradients.
 
+use super::real::Real;
 use crate::Vec3;
 
 /// An orthonormal element frame: e1, e2 in the element plane, e3 its normal.
@@ -55,24 +56,28 @@ impl Frame {
 /// Gradients of the linear triangle's shape functions from local coordinates of nodes
 /// 2 = (a, 0) and 3 = (c, d), node 1 at the origin: returns (bx, by).
 #[inline(always)]
-pub fn tri_gradients(a: f64, c: f64, d: f64) -> ([f64; 3], [f64; 3]) {
-    let inv = 1.0 / (a * d); // 1 / (2A)
-    ([-d * inv, d * inv, 0.0], [(c - a) * inv, -c * inv, a * inv])
+pub fn tri_gradients<S: Real>(a: S, c: S, d: S) -> ([S; 3], [S; 3]) {
+    let inv = S::splat(1.0) / (a * d); // 1 / (2A)
+    (
+        [-(d * inv), d * inv, S::splat(0.0)],
+        [(c - a) * inv, -(c * inv), a * inv],
+    )
 }
 
 /// Centroid gradients of the bilinear quad from local nodal coordinates
 /// (Belytschko–Lin–Tsay B matrix), with the area: returns (bx, by, area).
 #[inline(always)]
-pub fn quad_gradients(xl: [f64; 4], yl: [f64; 4]) -> ([f64; 4], [f64; 4], f64) {
+pub fn quad_gradients<S: Real>(xl: [S; 4], yl: [S; 4]) -> ([S; 4], [S; 4], S) {
     let x31 = xl[2] - xl[0];
     let x42 = xl[3] - xl[1];
     let y31 = yl[2] - yl[0];
     let y42 = yl[3] - yl[1];
-    let area = 0.5 * (x31 * y42 - x42 * y31);
-    let inv = 0.5 / area;
+    let half = S::splat(0.5);
+    let area = half * (x31 * y42 - x42 * y31);
+    let inv = half / area;
     (
-        [-y42 * inv, y31 * inv, y42 * inv, -y31 * inv],
-        [x42 * inv, -x31 * inv, -x42 * inv, x31 * inv],
+        [-(y42 * inv), y31 * inv, y42 * inv, -(y31 * inv)],
+        [x42 * inv, -(x31 * inv), -(x42 * inv), x31 * inv],
         area,
     )
 }

@@ -6,12 +6,12 @@
 //! C0 triangle (Belytschko–Stolarski–Carpenter 1984, identical to MITC3): tangential
 //! shear strains tied at the edge midpoints, field a + c (-(y-yc), x-xc), evaluated at
 //! the centroid; this removes the shear locking of the plain one-point triangle.
+//! The kernel is generic over `Real` so that four elements run in SIMD lanes.
 
 use super::membrane::membrane_forces;
-use super::plate::{plate_forces, LocalRates, PlateKin};
+use super::plate::{plate_forces, Consts, LocalRates, PlateKin, ShellL};
+use super::real::{Real, V3};
 use super::reference::{tri_gradients, Frame};
-use super::{ElemEnergy, ElemFailure, ShellState, Slot, Stabilization, COLLAPSE_RATIO};
-use crate::material::Section;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -45,26 +45,30 @@ impl TriElem {
 /// 3 = (c, d): coefficients of w, theta_x and theta_y in the centroid shear strain.
 #[allow(clippy::type_complexity)]
 #[inline(always)]
-pub fn tri_shear_operator(a: f64, c: f64, d: f64) -> ([[f64; 2]; 3], [[f64; 2]; 3], [[f64; 2]; 3]) {
+pub fn tri_shear_operator<S: Real>(a: S, c: S, d: S) -> ([[S; 2]; 3], [[S; 2]; 3], [[S; 2]; 3]) {
     // edge e runs from node i to node j with vector E; u_e = l_e * (tangential shear)
     const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
-    let ev = [[a, 0.0], [c - a, d], [-c, -d]];
-    let third = 1.0 / 3.0;
-    let ca = c / a;
+    let zero = S::splat(0.0);
+    let ev = [[a, zero], [c - a, d], [-c, -d]];
+    let third = S::splat(1.0 / 3.0);
+    let two_third = S::splat(2.0 / 3.0);
+    let (ia, id) = (S::splat(1.0) / a, S::splat(1.0) / d);
+    let ca = c * ia;
     let k = [
-        [2.0 * third / a, -(-third + 2.0 * third * ca) / d],
-        [-third / a, -(-third - third * ca) / d],
-        [-third / a, -(2.0 * third - third * ca) / d],
+        [two_third * ia, -(two_third * ca - third) * id],
+        [-(third * ia), (third + third * ca) * id],
+        [-(third * ia), -(two_third - third * ca) * id],
     ];
-    let mut cw = [[0.0; 2]; 3];
-    let mut cx = [[0.0; 2]; 3];
-    let mut cy = [[0.0; 2]; 3];
+    let half = S::splat(0.5);
+    let mut cw = [[zero; 2]; 3];
+    let mut cx = [[zero; 2]; 3];
+    let mut cy = [[zero; 2]; 3];
     for (e, &(i, j)) in EDGES.iter().enumerate() {
         for s in 0..2 {
             cw[i][s] -= k[e][s];
             cw[j][s] += k[e][s];
-            let hx = 0.5 * k[e][s] * ev[e][0];
-            let hy = 0.5 * k[e][s] * ev[e][1];
+            let hx = half * k[e][s] * ev[e][0];
+            let hy = half * k[e][s] * ev[e][1];
             cy[i][s] += hx;
             cy[j][s] += hx;
             cx[i][s] -= hy;
@@ -74,63 +78,88 @@ pub fn tri_shear_operator(a: f64, c: f64, d: f64) -> ([[f64; 2]; 3], [[f64; 2]; 
     (cw, cx, cy)
 }
 
-/// Internal forces of one triangle. Writes its three slots; returns the characteristic
-/// length L_e = 2 A / longest edge of the current configuration.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub fn tri_forces(
-    sec: &Section,
-    stab: &Stabilization,
-    el: &TriElem,
-    x: &[Vec3; 3],
-    v: &[Vec3; 3],
-    w: &[Vec3; 3],
-    h: f64,
-    st: &mut ShellState,
-    out: &mut [Slot; 3],
-    en: &mut ElemEnergy,
-) -> Result<f64, ElemFailure> {
-    let (fr, two_area) = Frame::triangle(x);
-    let ratio = 0.5 * two_area / el.area0;
-    if !(ratio >= COLLAPSE_RATIO) {
-        return Err(ElemFailure::Collapsed { ratio });
-    }
-    let mut fm = [Vec3::zeros(); 3];
-    membrane_forces(sec, &el.bx0, &el.by0, el.area0, &[0.0; 3], x, v, h, &mut fm, en);
+/// Inputs of the triangle kernel (one element, or four in lanes).
+#[derive(Debug, Clone, Copy)]
+pub struct TriIn<S> {
+    pub x: [V3<S>; 3],
+    pub v: [V3<S>; 3],
+    pub w: [V3<S>; 3],
+    pub bx0: [S; 3],
+    pub by0: [S; 3],
+    pub area0: S,
+}
 
-    let r2 = x[1] - x[0];
-    let r3 = x[2] - x[0];
-    let a = r2.dot(&fr.e1);
-    let c = r3.dot(&fr.e1);
-    let d = r3.dot(&fr.e2);
+/// What the kernel returns besides forces and state.
+#[derive(Debug, Clone, Copy)]
+pub struct KernelOut<S> {
+    pub internal: S,
+    pub damping: S,
+    /// Characteristic length L_e of the current configuration.
+    pub length: S,
+    /// Current area / initial area (collapse check by the caller).
+    pub ratio: S,
+}
+
+/// Internal forces of a triangle: writes its three slots (global force, moment).
+#[inline(always)]
+pub fn tri_kernel<S: Real>(
+    k: &Consts<S>,
+    e: &TriIn<S>,
+    h: S,
+    st: &mut ShellL<S>,
+    out: &mut [[S; 6]; 3],
+) -> KernelOut<S> {
+    let half = S::splat(0.5);
+    let one = S::splat(1.0);
+    let r2 = e.x[1].sub(e.x[0]);
+    let r3 = e.x[2].sub(e.x[0]);
+    let r23 = e.x[2].sub(e.x[1]);
+    let n = r2.cross(r3);
+    let two_area = n.norm_squared().sqrt();
+    let e3 = n.scale(one / two_area);
+    let l2sq = r2.norm_squared();
+    let a = l2sq.sqrt();
+    let e1 = r2.scale(one / a);
+    let e2 = e3.cross(e1);
+    let c = r3.dot(e1);
+    let d = r3.dot(e2);
+
+    let mut fm = [V3::zero(); 3];
+    let zero3 = [S::splat(0.0); 3];
+    let (e_mem, d_mem) = membrane_forces(&k.membrane, k.alpha, &e.bx0, &e.by0, e.area0, &zero3, &e.x, &e.v, h, &mut fm);
+
     let (bx, by) = tri_gradients(a, c, d);
     let (cw, cx, cy) = tri_shear_operator(a, c, d);
     let kin = PlateKin {
         bx,
         by,
-        area: 0.5 * two_area,
+        area: half * two_area,
         cw,
         cx,
         cy,
     };
+    let loc = |p: V3<S>| [p.dot(e1), p.dot(e2), p.dot(e3)];
     let rates = LocalRates {
-        v: [fr.local(&v[0]), fr.local(&v[1]), fr.local(&v[2])],
-        w: [fr.local(&w[0]), fr.local(&w[1]), fr.local(&w[2])],
+        v: [loc(e.v[0]), loc(e.v[1]), loc(e.v[2])],
+        w: [loc(e.w[0]), loc(e.w[1]), loc(e.w[2])],
     };
-    let mut loc = [[0.0; 6]; 3];
-    let drill_k = stab.drilling * sec.material.shear_modulus() * sec.thickness;
-    plate_forces(sec, drill_k, &kin, &rates, h, st, &mut loc, en);
+    let mut lo = [[S::splat(0.0); 6]; 3];
+    let (e_pl, d_pl) = plate_forces(k, &kin, &rates, h, st, &mut lo);
     for i in 0..3 {
-        let f = fm[i] + fr.global([loc[i][0], loc[i][1], loc[i][2]]);
-        let m = fr.global([loc[i][3], loc[i][4], loc[i][5]]);
+        let f = fm[i]
+            .add(e1.scale(lo[i][0]))
+            .add(e2.scale(lo[i][1]))
+            .add(e3.scale(lo[i][2]));
+        let m = e1.scale(lo[i][3]).add(e2.scale(lo[i][4])).add(e3.scale(lo[i][5]));
         out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
     }
-    let longest = r2
-        .norm_squared()
-        .max(r3.norm_squared())
-        .max((x[2] - x[1]).norm_squared())
-        .sqrt();
-    Ok(two_area / longest)
+    let longest = l2sq.max(r3.norm_squared()).max(r23.norm_squared()).sqrt();
+    KernelOut {
+        internal: e_mem + e_pl,
+        damping: d_mem + d_pl,
+        length: two_area / longest,
+        ratio: half * two_area / e.area0,
+    }
 }
 
 #[cfg(test)]
@@ -154,8 +183,8 @@ mod tests {
     }
 
     #[test]
-    fn assumed_shear_vanishes_for_kirchhoff_linear_rotation() {
-        // w = x^2/2 with theta_y = -x (so that w_y + dw/dx = 0 along every edge midpoint)
+    fn assumed_shear_vanishes_for_kirchhoff_quadratic_deflection() {
+        // w quadratic with rotations w_y = -dw/dx, w_x = dw/dy (zero shear everywhere)
         let (a, c, d) = (1.0, 0.3, 0.8);
         let (cw, cx, cy) = tri_shear_operator(a, c, d);
         let p = [[0.0, 0.0], [a, 0.0], [c, d]];
@@ -163,8 +192,8 @@ mod tests {
         for i in 0..3 {
             let (x, y) = (p[i][0], p[i][1]);
             let w = 0.5 * x * x + 0.3 * y * y + 0.2 * x * y;
-            let wy = -(x + 0.2 * y); // w_y = -dw/dx
-            let wx = 0.6 * y + 0.2 * x; // w_x = dw/dy
+            let wy = -(x + 0.2 * y);
+            let wx = 0.6 * y + 0.2 * x;
             for s in 0..2 {
                 g[s] += cw[i][s] * w + cx[i][s] * wx + cy[i][s] * wy;
             }
