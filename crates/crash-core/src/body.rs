@@ -102,7 +102,8 @@ pub struct Body {
     pub program: Vec<u16>,
     pub programs: Vec<VelocityProgram>,
     pub loads: Vec<NodalLoad>,
-    /// Index into `loads` per node (u32::MAX: none); several loads on one node are merged.
+    /// Index of the first load of each node in `loads` (sorted by node; u32::MAX: none).
+    /// A node may carry several loads, each with its own ramp.
     pub load_of: Vec<u32>,
     /// Mass-proportional (global) damping coefficient c [1/s]: f = -c m v.
     pub mass_damping: f64,
@@ -288,10 +289,14 @@ impl Body {
         self.refresh_kinematic();
     }
 
+    /// Add a nodal load (several loads on one node add up).
     pub fn add_load(&mut self, load: NodalLoad) {
-        let n = load.node as usize;
-        self.load_of[n] = self.loads.len() as u32;
         self.loads.push(load);
+        self.loads.sort_by_key(|l| l.node);
+        self.load_of.iter_mut().for_each(|l| *l = u32::MAX);
+        for (k, l) in self.loads.iter().enumerate().rev() {
+            self.load_of[l.node as usize] = k as u32;
+        }
     }
 
     fn refresh_kinematic(&mut self) {
@@ -324,8 +329,9 @@ impl Body {
     pub fn kinetic_energy_now(&self) -> f64 {
         let mut e = 0.0;
         for i in 0..self.x.len() {
-            e += 0.5 * (self.mass[i] * self.v[i].norm_squared()
-                + self.inertia[i] * self.w[i].norm_squared());
+            e += 0.5
+                * (self.mass[i] * self.v[i].norm_squared()
+                    + self.inertia[i] * self.w[i].norm_squared());
         }
         e
     }
@@ -348,5 +354,44 @@ impl Body {
             l += self.x[i].cross(&self.v[i]) * self.mass[i] + self.w[i] * self.inertia[i];
         }
         l
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+    use crate::shapes::{plate, ElementKind};
+
+    #[test]
+    fn loads_on_one_node_add_up() {
+        let m = plate(1.0, 1.0, 1, 1, ElementKind::Quad);
+        let sec = Section::new(Material::new(1000.0, 1e9, 0.3, 0.0).expect("valid"), 0.01);
+        let mut b = Body::new(0, "p", &m, sec, Stabilization::default()).expect("valid");
+        let load = |node: u32, fz: f64| NodalLoad {
+            node,
+            force: Vec3::new(0.0, 0.0, fz),
+            moment: Vec3::zeros(),
+            t0: 0.0,
+            t1: 0.0,
+        };
+        b.add_load(load(2, 1.0));
+        b.add_load(load(0, 5.0));
+        b.add_load(load(2, 2.0));
+        let clock = crate::integrate::StepClock {
+            t: 0.0,
+            h_prev: 0.0,
+            h: 1e-6,
+            step: 0,
+        };
+        let before = b.v.clone();
+        b.integrate(&clock, Vec3::zeros()).expect("finite");
+        // node 2 got 3 N, node 0 got 5 N, over hbar = h/2
+        let a2 = (b.v[2].z - before[2].z) / 0.5e-6 * b.mass[2];
+        let a0 = (b.v[0].z - before[0].z) / 0.5e-6 * b.mass[0];
+        assert!(
+            (a2 - 3.0).abs() < 1e-9 && (a0 - 5.0).abs() < 1e-9,
+            "{a2} {a0}"
+        );
     }
 }

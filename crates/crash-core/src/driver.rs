@@ -86,7 +86,8 @@ impl Run {
             Some(dt) => dt,
             None => self.cfg.safety * crit,
         };
-        if self.dt0 > 0.0 && dt < self.cfg.dt_floor_ratio * self.dt0 || !(dt > 0.0) {
+        let collapsed = self.dt0 > 0.0 && dt < self.cfg.dt_floor_ratio * self.dt0;
+        if collapsed || dt.is_nan() || dt <= 0.0 {
             return Err(Fault::DtCollapse {
                 step: self.group.step,
                 dt,
@@ -127,10 +128,13 @@ impl Run {
             self.ledger.over_limit += 1;
         }
         if self.ledger.over_limit > RUNAWAY_PERSIST || self.energy.balance_error.is_nan() {
-            let hot = self
-                .reports
-                .iter()
-                .fold(&self.reports[0], |a, b| if b.hot_density > a.hot_density { b } else { a });
+            let hot = self.reports.iter().fold(&self.reports[0], |a, b| {
+                if b.hot_density > a.hot_density {
+                    b
+                } else {
+                    a
+                }
+            });
             return Err(Fault::EnergyRunaway {
                 step: self.group.step,
                 error: self.energy.balance_error,

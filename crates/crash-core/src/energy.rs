@@ -34,8 +34,7 @@ impl EnergyTotals {
 
     /// E_kin + E_int + E_hg + E_c + E_d - W.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.internal + self.hourglass + self.contact + self.damping
-            - self.external
+        self.kinetic + self.internal + self.hourglass + self.contact + self.damping - self.external
     }
 }
 

@@ -13,7 +13,9 @@ pub enum CoreError {
     },
     #[error("body '{body}': thickness = {value} is invalid: must be finite and > 0")]
     Thickness { body: String, value: f64 },
-    #[error("body '{body}': element {element} refers to node {node}, but the body has {nodes} nodes")]
+    #[error(
+        "body '{body}': element {element} refers to node {node}, but the body has {nodes} nodes"
+    )]
     NodeIndex {
         body: String,
         element: usize,

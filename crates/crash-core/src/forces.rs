@@ -7,8 +7,8 @@ use crate::element::quad::{quad_kernel, HgL, QuadElem, QuadIn};
 use crate::element::real::{Lanes, Real, F4, V3};
 use crate::element::tri::{tri_kernel, TriElem, TriIn};
 use crate::element::{ElemEnergy, ElemFailure, HourglassState, ShellState, Slot, COLLAPSE_RATIO};
-use crate::material::Section;
 use crate::error::Fault;
+use crate::material::Section;
 use crate::Vec3;
 use rayon::prelude::*;
 
@@ -106,7 +106,10 @@ fn lanes<S: Lanes>(f: impl Fn(usize) -> f64) -> S {
 
 /// Gather x, v and w of one element node for every lane (one bounds check per lane).
 #[inline(always)]
-fn node_vecs<S: Lanes>((x, v, w): (&[Vec3], &[Vec3], &[Vec3]), node: impl Fn(usize) -> u32) -> [V3<S>; 3] {
+fn node_vecs<S: Lanes>(
+    (x, v, w): (&[Vec3], &[Vec3], &[Vec3]),
+    node: impl Fn(usize) -> u32,
+) -> [V3<S>; 3] {
     let z = S::splat(0.0);
     let mut out = [V3::new(z, z, z); 3];
     for k in 0..S::W {
@@ -176,21 +179,21 @@ fn tri_batch<S: Lanes>(
     let r = tri_kernel(k, &input, h, &mut st, &mut out);
     for l in 0..S::W {
         let ratio = r.ratio.lane(l);
-        if !(ratio >= COLLAPSE_RATIO) {
+        if ratio.is_nan() || ratio < COLLAPSE_RATIO {
             return Err((e0 + l, ElemFailure::Collapsed { ratio }));
         }
     }
     shell_out(&st, sts);
     slots_out(&out, slots);
     let c = sec.wave_speed;
-    for l in 0..S::W {
+    for (l, el) in els.iter().enumerate().take(S::W) {
         let en = ElemEnergy {
             internal: r.internal.lane(l),
             hourglass: 0.0,
             damping: r.damping.lane(l),
         };
         let len = r.length.lane(l);
-        sums.add(e0 + l, &en, els[l].area0, len / c * sec.damping_factor(len));
+        sums.add(e0 + l, &en, el.area0, len / c * sec.damping_factor(len));
     }
     Ok(())
 }
@@ -236,11 +239,11 @@ fn quad_batch<S: Lanes>(
     let (r, extra) = quad_kernel(k, &input, h, &mut st, &mut hg, &mut out);
     for l in 0..S::W {
         let ratio = r.ratio.lane(l);
-        if !(ratio >= COLLAPSE_RATIO) {
+        if ratio.is_nan() || ratio < COLLAPSE_RATIO {
             return Err((e0 + l, ElemFailure::Collapsed { ratio }));
         }
         for (corner, c) in extra.corners.iter().enumerate() {
-            if !(c.lane(l) > 0.0) {
+            if c.lane(l).is_nan() || c.lane(l) <= 0.0 {
                 return Err((e0 + l, ElemFailure::Inverted { corner }));
             }
         }
@@ -252,14 +255,14 @@ fn quad_batch<S: Lanes>(
     }
     slots_out(&out, slots);
     let c = sec.wave_speed;
-    for l in 0..S::W {
+    for (l, el) in els.iter().enumerate().take(S::W) {
         let en = ElemEnergy {
             internal: r.internal.lane(l),
             hourglass: extra.hourglass.lane(l),
             damping: r.damping.lane(l),
         };
         let len = r.length.lane(l);
-        sums.add(e0 + l, &en, els[l].area0, len / c * sec.damping_factor(len));
+        sums.add(e0 + l, &en, el.area0, len / c * sec.damping_factor(len));
     }
     Ok(())
 }
@@ -294,11 +297,31 @@ impl Body {
                 let mut j = 0;
                 // four elements per SIMD batch, the remainder one by one (same arithmetic)
                 while j + 4 <= els.len() {
-                    tri_batch(&k4, &sec, &els[j..j + 4], base + j, nodes, F4::splat(h), &mut sts[j..j + 4], &mut slots[3 * j..3 * j + 12], &mut sums)?;
+                    tri_batch(
+                        &k4,
+                        &sec,
+                        &els[j..j + 4],
+                        base + j,
+                        nodes,
+                        F4::splat(h),
+                        &mut sts[j..j + 4],
+                        &mut slots[3 * j..3 * j + 12],
+                        &mut sums,
+                    )?;
                     j += 4;
                 }
                 while j < els.len() {
-                    tri_batch(&k1, &sec, &els[j..j + 1], base + j, nodes, h, &mut sts[j..j + 1], &mut slots[3 * j..3 * j + 3], &mut sums)?;
+                    tri_batch(
+                        &k1,
+                        &sec,
+                        &els[j..j + 1],
+                        base + j,
+                        nodes,
+                        h,
+                        &mut sts[j..j + 1],
+                        &mut slots[3 * j..3 * j + 3],
+                        &mut sums,
+                    )?;
                     j += 1;
                 }
                 Ok(sums)
@@ -317,11 +340,33 @@ impl Body {
                 let base = nt + ci * CHUNK;
                 let mut j = 0;
                 while j + 4 <= els.len() {
-                    quad_batch(&k4, &sec, &els[j..j + 4], base + j, nodes, F4::splat(h), &mut sts[j..j + 4], &mut hgs[j..j + 4], &mut slots[4 * j..4 * j + 16], &mut sums)?;
+                    quad_batch(
+                        &k4,
+                        &sec,
+                        &els[j..j + 4],
+                        base + j,
+                        nodes,
+                        F4::splat(h),
+                        &mut sts[j..j + 4],
+                        &mut hgs[j..j + 4],
+                        &mut slots[4 * j..4 * j + 16],
+                        &mut sums,
+                    )?;
                     j += 4;
                 }
                 while j < els.len() {
-                    quad_batch(&k1, &sec, &els[j..j + 1], base + j, nodes, h, &mut sts[j..j + 1], &mut hgs[j..j + 1], &mut slots[4 * j..4 * j + 4], &mut sums)?;
+                    quad_batch(
+                        &k1,
+                        &sec,
+                        &els[j..j + 1],
+                        base + j,
+                        nodes,
+                        h,
+                        &mut sts[j..j + 1],
+                        &mut hgs[j..j + 1],
+                        &mut slots[4 * j..4 * j + 4],
+                        &mut sums,
+                    )?;
                     j += 1;
                 }
                 Ok(sums)

@@ -104,7 +104,8 @@ impl Body {
         let loads = &self.loads;
         let load_of = &self.load_of;
         let programs = &self.programs;
-        let (mass, inertia, fixed, program) = (&self.mass, &self.inertia, &self.fixed, &self.program);
+        let (mass, inertia, fixed, program) =
+            (&self.mass, &self.inertia, &self.fixed, &self.program);
         let t = clock.t;
 
         let parts: Vec<NodeSums> = self
@@ -122,12 +123,16 @@ impl Body {
                     // forces: external (gravity, loads), contact, minus internal
                     let mut f = gravity * m;
                     let mut mom = Vec3::zeros();
-                    let li = load_of[i];
-                    if li != u32::MAX {
-                        let l = &loads[li as usize];
-                        let sc = ramp_factor(t, l.t0, l.t1);
-                        f += l.force * sc;
-                        mom += l.moment * sc;
+                    let first = load_of[i];
+                    if first != u32::MAX {
+                        for l in loads[first as usize..]
+                            .iter()
+                            .take_while(|l| l.node as usize == i)
+                        {
+                            let sc = ramp_factor(t, l.t0, l.t1);
+                            f += l.force * sc;
+                            mom += l.moment * sc;
+                        }
                     }
                     let (fe, me) = (f, mom);
                     let mut fcon = Vec3::zeros();
@@ -185,7 +190,14 @@ impl Body {
                     let dx = v_new * h;
                     let xn = xs[k] + dx;
                     let mv = dx.norm();
-                    if !(mv.is_finite() && xn.x.is_finite() && xn.y.is_finite() && xn.z.is_finite() && w_new.x.is_finite() && w_new.y.is_finite() && w_new.z.is_finite()) {
+                    if !(mv.is_finite()
+                        && xn.x.is_finite()
+                        && xn.y.is_finite()
+                        && xn.z.is_finite()
+                        && w_new.x.is_finite()
+                        && w_new.y.is_finite()
+                        && w_new.z.is_finite())
+                    {
                         if s.bad_node.is_none() {
                             s.bad_node = Some(i);
                         }
@@ -204,9 +216,7 @@ impl Body {
                 s
             })
             .collect();
-        let total = parts
-            .iter()
-            .fold(NodeSums::default(), |a, b| a.merge(b));
+        let total = parts.iter().fold(NodeSums::default(), |a, b| a.merge(b));
         if let Some(n) = total.bad_node {
             return Err(Fault::NonFinite {
                 step: clock.step,

@@ -4,6 +4,9 @@
 //! one-point Reissner–Mindlin shells (3-node triangle, 4-node Belytschko–Lin–Tsay quad)
 //! with Kelvin viscoelastic damping. No networking here: master and workers build on it.
 
+// Index loops over the nodes of an element mirror the formulas in docs/theory.md.
+#![allow(clippy::needless_range_loop)]
+
 pub mod body;
 pub mod contact;
 pub mod driver;

@@ -71,7 +71,7 @@ impl Mesh {
             check(e, t)?;
             let p = t.map(|n| self.nodes[n as usize]);
             let area = 0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
-            if !(area > 1e-12 * scale * scale) {
+            if area.is_nan() || area <= 1e-12 * scale * scale {
                 return Err(CoreError::Degenerate {
                     body: body.into(),
                     element: e,
@@ -86,7 +86,7 @@ impl Mesh {
             let p = quad.map(|n| self.nodes[n as usize]);
             let normal = (p[2] - p[0]).cross(&(p[3] - p[1]));
             let area = 0.5 * normal.norm();
-            if !(area > 1e-12 * scale * scale) {
+            if area.is_nan() || area <= 1e-12 * scale * scale {
                 return Err(CoreError::Degenerate {
                     body: body.into(),
                     element: e,
@@ -193,6 +193,9 @@ mod tests {
     fn bad_index_is_refused() {
         let mut m = square();
         m.quads[0][3] = 9;
-        assert!(matches!(m.validate("b"), Err(CoreError::NodeIndex { node: 9, .. })));
+        assert!(matches!(
+            m.validate("b"),
+            Err(CoreError::NodeIndex { node: 9, .. })
+        ));
     }
 }

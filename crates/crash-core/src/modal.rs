@@ -63,7 +63,15 @@ pub fn max_frequency(body: &Body, iterations: usize) -> f64 {
     let free = |i: usize, d: usize| body.fixed[i] & (1 << d) == 0;
     // deterministic start vector with high-frequency content
     let mut z: Vec<[f64; 6]> = (0..n)
-        .map(|i| std::array::from_fn(|d| if free(i, d) { (((i * 7 + d * 13) % 17) as f64 - 8.0) / 8.0 } else { 0.0 }))
+        .map(|i| {
+            std::array::from_fn(|d| {
+                if free(i, d) {
+                    (((i * 7 + d * 13) % 17) as f64 - 8.0) / 8.0
+                } else {
+                    0.0
+                }
+            })
+        })
         .collect();
     let mut lambda = 0.0;
     for _ in 0..iterations {
@@ -76,7 +84,15 @@ pub fn max_frequency(body: &Body, iterations: usize) -> f64 {
             .collect();
         let ku = stiffness_action(body, &u, eps);
         let y: Vec<[f64; 6]> = (0..n)
-            .map(|i| std::array::from_fn(|d| if free(i, d) { ku[i][d] * minv[i][d] } else { 0.0 }))
+            .map(|i| {
+                std::array::from_fn(|d| {
+                    if free(i, d) {
+                        ku[i][d] * minv[i][d]
+                    } else {
+                        0.0
+                    }
+                })
+            })
             .collect();
         lambda = (0..n)
             .map(|i| (0..6).map(|d| y[i][d] * z[i][d] / norm).sum::<f64>())

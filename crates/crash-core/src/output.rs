@@ -17,7 +17,8 @@ impl Resultants {
     /// sigma = N/t -/+ 6 M / t^2 (sign: M positive compresses the top fibre).
     pub fn von_mises(&self, t: f64) -> (f64, f64) {
         let vm = |s: [f64; 3]| (s[0] * s[0] - s[0] * s[1] + s[1] * s[1] + 3.0 * s[2] * s[2]).sqrt();
-        let f = |sign: f64| std::array::from_fn(|c| self.n[c] / t + sign * 6.0 * self.m[c] / (t * t));
+        let f =
+            |sign: f64| std::array::from_fn(|c| self.n[c] / t + sign * 6.0 * self.m[c] / (t * t));
         (vm(f(1.0)), vm(f(-1.0)))
     }
 }
@@ -42,7 +43,10 @@ impl Body {
             let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
             let g = green(&f1, &f2);
             out.push(Resultants {
-                n: sec.plane(sec.membrane, [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]]),
+                n: sec.plane(
+                    sec.membrane,
+                    [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]],
+                ),
                 m: self.shell[nt + k].m,
             });
         }

@@ -117,13 +117,20 @@ pub fn icosphere(radius: f64, level: u32) -> Mesh {
 }
 
 /// Open cylinder (tube) along z: n_around x n_along cells, centred at the origin.
-pub fn cylinder(radius: f64, length: f64, n_around: usize, n_along: usize, kind: ElementKind) -> Mesh {
+pub fn cylinder(
+    radius: f64,
+    length: f64,
+    n_around: usize,
+    n_along: usize,
+    kind: ElementKind,
+) -> Mesh {
     let mut m = Mesh::default();
     for j in 0..=n_along {
         let z = length * (j as f64 / n_along as f64 - 0.5);
         for i in 0..n_around {
             let a = std::f64::consts::TAU * i as f64 / n_around as f64;
-            m.nodes.push(Vec3::new(radius * a.cos(), radius * a.sin(), z));
+            m.nodes
+                .push(Vec3::new(radius * a.cos(), radius * a.sin(), z));
         }
     }
     let id = |i: usize, j: usize| (j * n_around + i % n_around) as u32;
@@ -152,14 +159,16 @@ pub fn cuboid(lx: f64, ly: f64, lz: f64, n: usize, kind: ElementKind) -> Mesh {
     let mut m = Mesh::default();
     // integer lattice keys make shared edges between faces share nodes exactly
     let mut node = |i: usize, j: usize, k: usize, m: &mut Mesh| -> u32 {
-        *index.entry((i as i64, j as i64, k as i64)).or_insert_with(|| {
-            m.nodes.push(Vec3::new(
-                lx * (i as f64 / nx as f64 - 0.5),
-                ly * (j as f64 / ny as f64 - 0.5),
-                lz * (k as f64 / nz as f64 - 0.5),
-            ));
-            (m.nodes.len() - 1) as u32
-        })
+        *index
+            .entry((i as i64, j as i64, k as i64))
+            .or_insert_with(|| {
+                m.nodes.push(Vec3::new(
+                    lx * (i as f64 / nx as f64 - 0.5),
+                    ly * (j as f64 / ny as f64 - 0.5),
+                    lz * (k as f64 / nz as f64 - 0.5),
+                ));
+                (m.nodes.len() - 1) as u32
+            })
     };
     // each face: (fixed axis, fixed value index, u axis count, v axis count, outward sign)
     let dims = [nx, ny, nz];
@@ -223,7 +232,10 @@ mod tests {
 
     #[test]
     fn closed_surfaces_have_outward_normals() {
-        for m in [icosphere(1.0, 2), cuboid(1.0, 2.0, 3.0, 6, ElementKind::Quad)] {
+        for m in [
+            icosphere(1.0, 2),
+            cuboid(1.0, 2.0, 3.0, 6, ElementKind::Quad),
+        ] {
             // divergence theorem: volume = sum over faces of (x . n) A / 3 > 0
             let mut vol = 0.0;
             for t in &m.tris {

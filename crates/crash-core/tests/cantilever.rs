@@ -40,8 +40,14 @@ fn tip_loads(b: &mut crash_core::Body, force: Vec3, moment: Vec3, ramp: f64) {
 }
 
 fn run(b: crash_core::Body, end: f64) -> crash_core::Body {
-    let mut run = Run::new(Group::new(vec![b], Vec3::zeros()), RunConfig { end_time: end, ..Default::default() })
-        .expect("start");
+    let mut run = Run::new(
+        Group::new(vec![b], Vec3::zeros()),
+        RunConfig {
+            end_time: end,
+            ..Default::default()
+        },
+    )
+    .expect("start");
     run.run(|_| {}).expect("run");
     run.group.bodies.remove(0)
 }
@@ -66,7 +72,10 @@ fn cantilever_tip_deflection_matches_beam_theory_without_shear_locking() {
         let b = run(b, 0.25);
         let w = -mean_tip(&b).z;
         let err = (w - exact) / exact;
-        println!("{kind:?}: tip deflection {w:.6e} m, beam theory {exact:.6e} m, error {:.3}%", 100.0 * err);
+        println!(
+            "{kind:?}: tip deflection {w:.6e} m, beam theory {exact:.6e} m, error {:.3}%",
+            100.0 * err
+        );
         assert!(err.abs() < 0.02, "{kind:?}: error {err}");
     }
 }
@@ -89,7 +98,10 @@ fn cantilever_rolls_into_a_full_circle_under_end_moment() {
         };
         let root = Vec3::new(0.0, B / 2.0, 0.0);
         let gap = (tip - root).norm();
-        println!("{kind:?}: tip at {tip:?}, distance to the clamped end {gap:.4} m ({:.2}% of L)", 100.0 * gap / L);
+        println!(
+            "{kind:?}: tip at {tip:?}, distance to the clamped end {gap:.4} m ({:.2}% of L)",
+            100.0 * gap / L
+        );
         assert!(gap < 0.05 * L, "{kind:?}: tip {gap} m from the root");
     }
 }

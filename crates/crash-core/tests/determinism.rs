@@ -11,9 +11,17 @@ fn scene() -> Vec<Body> {
     // several chunks per body, both element kinds, Kelvin damping on one of them
     let mut out = Vec::new();
     for (id, kind) in [(0u32, ElementKind::Tri), (1, ElementKind::Quad)] {
-        let mat = Material::new(7800.0, 200e9, 0.3, if id == 0 { 1e-7 } else { 0.0 }).expect("valid");
+        let mat =
+            Material::new(7800.0, 200e9, 0.3, if id == 0 { 1e-7 } else { 0.0 }).expect("valid");
         let m = plate(0.4, 0.3, 40, 30, kind);
-        let mut b = Body::new(id, "p", &m, Section::new(mat, 0.002), Stabilization::default()).expect("valid");
+        let mut b = Body::new(
+            id,
+            "p",
+            &m,
+            Section::new(mat, 0.002),
+            Stabilization::default(),
+        )
+        .expect("valid");
         for i in 0..b.x.len() {
             let p = b.x0[i];
             b.v[i] = Vec3::new(0.3 * p.y, 0.0, 2.0 * (9.0 * p.x).sin() * (7.0 * p.y).cos());
@@ -24,10 +32,19 @@ fn scene() -> Vec<Body> {
 }
 
 fn final_hash(threads: usize) -> u64 {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
     pool.install(|| {
-        let mut run = Run::new(Group::new(scene(), Vec3::new(0.0, 0.0, -9.81)), RunConfig { end_time: f64::INFINITY, ..Default::default() })
-            .expect("start");
+        let mut run = Run::new(
+            Group::new(scene(), Vec3::new(0.0, 0.0, -9.81)),
+            RunConfig {
+                end_time: f64::INFINITY,
+                ..Default::default()
+            },
+        )
+        .expect("start");
         for _ in 0..300 {
             run.step().expect("stable");
         }

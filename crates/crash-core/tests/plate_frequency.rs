@@ -16,7 +16,15 @@ use std::time::Instant;
 /// along each edge fixed, in-plane translations of the edges fixed), excited in its
 /// (1,1) shape; returns the frequency from the zero crossings of the centre deflection,
 /// the element count and the step count.
-fn first_frequency(kind: ElementKind, n: usize, a: f64, t: f64, mat: Material, periods: f64, f_guess: f64) -> (f64, usize, u64) {
+fn first_frequency(
+    kind: ElementKind,
+    n: usize,
+    a: f64,
+    t: f64,
+    mat: Material,
+    periods: f64,
+    f_guess: f64,
+) -> (f64, usize, u64) {
     let mut b = corner_plate(a, a, n, n, kind, mat, t);
     let tol = 1e-9 * a;
     for i in 0..b.x.len() {
@@ -37,8 +45,14 @@ fn first_frequency(kind: ElementKind, n: usize, a: f64, t: f64, mat: Material, p
         })
         .expect("nodes");
     let elements = b.element_count();
-    let mut run = Run::new(Group::new(vec![b], Vec3::zeros()), RunConfig { end_time: periods / f_guess, ..Default::default() })
-        .expect("start");
+    let mut run = Run::new(
+        Group::new(vec![b], Vec3::zeros()),
+        RunConfig {
+            end_time: periods / f_guess,
+            ..Default::default()
+        },
+    )
+    .expect("start");
     let mut crossings = Vec::new();
     let mut prev = (0.0, 0.0);
     run.run(|r| {
@@ -55,19 +69,37 @@ fn first_frequency(kind: ElementKind, n: usize, a: f64, t: f64, mat: Material, p
     (f, elements, run.group.step)
 }
 
-fn ladder(name: &str, kind: ElementKind, a: f64, t: f64, mat: Material, reference: f64, ns: &[usize]) -> Vec<(f64, f64)> {
+fn ladder(
+    name: &str,
+    kind: ElementKind,
+    a: f64,
+    t: f64,
+    mat: Material,
+    reference: f64,
+    ns: &[usize],
+) -> Vec<(f64, f64)> {
     let mut out = Vec::new();
     println!("{name} {kind:?}: reference {reference:.4} Hz");
-    println!("  {:>6} {:>8} {:>8} {:>10} {:>10} {:>9}", "n", "elements", "steps", "wall [s]", "f [Hz]", "error");
+    println!(
+        "  {:>6} {:>8} {:>8} {:>10} {:>10} {:>9}",
+        "n", "elements", "steps", "wall [s]", "f [Hz]", "error"
+    );
     for &n in ns {
         let start = Instant::now();
         let (f, elements, steps) = first_frequency(kind, n, a, t, mat, 4.0, reference);
         let err = (f - reference) / reference;
-        println!("  {n:>6} {elements:>8} {steps:>8} {:>10.3} {f:>10.4} {:>8.3}%", start.elapsed().as_secs_f64(), 100.0 * err);
+        println!(
+            "  {n:>6} {elements:>8} {steps:>8} {:>10.3} {f:>10.4} {:>8.3}%",
+            start.elapsed().as_secs_f64(),
+            100.0 * err
+        );
         out.push((a / n as f64, err.abs()));
     }
     let orders = orders(&out);
-    println!("  observed orders of convergence: {:?}", orders.iter().map(|o| format!("{o:.2}")).collect::<Vec<_>>());
+    println!(
+        "  observed orders of convergence: {:?}",
+        orders.iter().map(|o| format!("{o:.2}")).collect::<Vec<_>>()
+    );
     out
 }
 

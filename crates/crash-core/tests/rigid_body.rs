@@ -18,7 +18,10 @@ use crash_core::{Group, Run, RunConfig, Vec3};
 fn spinning_plate_has_no_spurious_strain_and_conserves_angular_momentum() {
     for kind in kinds() {
         let mut m = plate(0.1, 0.1, 2, 2, kind);
-        let tilt = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(Vec3::new(1.0, -2.0, 0.5)), 0.7);
+        let tilt = nalgebra::Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(Vec3::new(1.0, -2.0, 0.5)),
+            0.7,
+        );
         m.transform(tilt.matrix(), Vec3::new(0.3, -0.2, 1.0));
         let centre = Vec3::new(0.3, -0.2, 1.0);
         let mut b = body(&m, steel(), 0.002);
@@ -28,8 +31,14 @@ fn spinning_plate_has_no_spurious_strain_and_conserves_angular_momentum() {
         b.set_rigid_velocity(Vec3::new(0.1, -0.05, 0.2), omega, centre);
         let l0 = b.angular_momentum();
         let end = 10.0 * std::f64::consts::TAU / omega.norm();
-        let mut run = Run::new(Group::new(vec![b], Vec3::zeros()), RunConfig { end_time: end, ..Default::default() })
-            .expect("start");
+        let mut run = Run::new(
+            Group::new(vec![b], Vec3::zeros()),
+            RunConfig {
+                end_time: end,
+                ..Default::default()
+            },
+        )
+        .expect("start");
         let mut worst = 0.0f64;
         run.run(|r| {
             let e = r.group.bodies[0].energy;
@@ -42,7 +51,10 @@ fn spinning_plate_has_no_spurious_strain_and_conserves_angular_momentum() {
             "{kind:?}: {} steps, max (E_int + E_hg) / E_kin = {worst:.3e}, |dL|/|L| = {dl:.3e}",
             run.group.step
         );
-        assert!(worst < 1e-9, "{kind:?}: spurious strain energy ratio {worst}");
+        assert!(
+            worst < 1e-9,
+            "{kind:?}: spurious strain energy ratio {worst}"
+        );
         assert!(dl < 1e-6, "{kind:?}: angular momentum drift {dl}");
     }
 }

@@ -23,14 +23,26 @@ fn free_plate(kind: ElementKind, nx: usize, ny: usize) -> crash_core::Body {
     let mut b = body(&m, steel(), 0.002);
     for i in 0..b.x.len() {
         let p = b.x0[i];
-        b.v[i] = Vec3::new(0.0, 0.0, 0.5 * (std::f64::consts::PI * p.x / 0.2).cos() * (p.y / 0.1));
+        b.v[i] = Vec3::new(
+            0.0,
+            0.0,
+            0.5 * (std::f64::consts::PI * p.x / 0.2).cos() * (p.y / 0.1),
+        );
     }
     b
 }
 
 fn critical_dt(b: &crash_core::Body) -> f64 {
     let g = Group::new(vec![b.clone()], Vec3::zeros());
-    let run = Run::new(g, RunConfig { end_time: 1.0, safety: 1.0, ..Default::default() }).expect("start");
+    let run = Run::new(
+        g,
+        RunConfig {
+            end_time: 1.0,
+            safety: 1.0,
+            ..Default::default()
+        },
+    )
+    .expect("start");
     run.next_dt
 }
 
@@ -42,8 +54,15 @@ fn element_time_step_estimate_is_below_the_true_stability_limit() {
         let dt_est = critical_dt(&b);
         let ratio = omega * dt_est / 2.0;
         println!("{kind:?}: omega_max = {omega:.4e} rad/s, dt_estimate = {dt_est:.4e} s, dt_estimate / (2/omega_max) = {ratio:.3}");
-        assert!(ratio <= 1.0, "{kind:?}: estimate {dt_est} exceeds the limit {}", 2.0 / omega);
-        assert!(ratio > 0.5, "{kind:?}: estimate needlessly conservative ({ratio})");
+        assert!(
+            ratio <= 1.0,
+            "{kind:?}: estimate {dt_est} exceeds the limit {}",
+            2.0 / omega
+        );
+        assert!(
+            ratio > 0.5,
+            "{kind:?}: estimate needlessly conservative ({ratio})"
+        );
     }
 }
 
@@ -51,13 +70,22 @@ fn element_time_step_estimate_is_below_the_true_stability_limit() {
 fn undamped_free_vibration_keeps_energy_balance_for_20000_steps() {
     for kind in kinds() {
         let b = free_plate(kind, 20, 10);
-        let mut run = Run::new(Group::new(vec![b], Vec3::zeros()), RunConfig { end_time: f64::INFINITY, ..Default::default() })
-            .expect("start");
+        let mut run = Run::new(
+            Group::new(vec![b], Vec3::zeros()),
+            RunConfig {
+                end_time: f64::INFINITY,
+                ..Default::default()
+            },
+        )
+        .expect("start");
         for _ in 0..20_000 {
             run.step().expect("stable");
         }
         let err = run.ledger.max_error();
-        println!("{kind:?}: max energy-balance error over 20000 steps {:.3e}", err);
+        println!(
+            "{kind:?}: max energy-balance error over 20000 steps {:.3e}",
+            err
+        );
         assert!(err < 0.005, "{kind:?}: {err}");
     }
 }
@@ -67,14 +95,24 @@ fn hundred_thousand_steps_at_own_time_step_stay_bounded() {
     for kind in kinds() {
         let b = free_plate(kind, 8, 4);
         let e0 = b.kinetic_energy_now();
-        let mut run = Run::new(Group::new(vec![b], Vec3::zeros()), RunConfig { end_time: f64::INFINITY, ..Default::default() })
-            .expect("start");
+        let mut run = Run::new(
+            Group::new(vec![b], Vec3::zeros()),
+            RunConfig {
+                end_time: f64::INFINITY,
+                ..Default::default()
+            },
+        )
+        .expect("start");
         for _ in 0..100_000 {
             run.step().expect("stable");
         }
         let e = run.energy;
         let mech = e.kinetic + e.internal + e.hourglass;
-        println!("{kind:?}: after 100000 steps E_mech / E_0 = {:.6}, max balance error {:.3e}", mech / e0, run.ledger.max_error());
+        println!(
+            "{kind:?}: after 100000 steps E_mech / E_0 = {:.6}, max balance error {:.3e}",
+            mech / e0,
+            run.ledger.max_error()
+        );
         assert!((mech / e0 - 1.0).abs() < 0.01);
         assert!(run.ledger.max_error() < 0.01);
     }
@@ -88,7 +126,11 @@ fn time_step_above_the_critical_one_is_stopped_with_a_diagnostic() {
         let dt = 1.2 * 2.0 / omega;
         let mut run = Run::new(
             Group::new(vec![b], Vec3::zeros()),
-            RunConfig { end_time: 1.0, fixed_dt: Some(dt), ..Default::default() },
+            RunConfig {
+                end_time: 1.0,
+                fixed_dt: Some(dt),
+                ..Default::default()
+            },
         )
         .expect("start");
         let mut steps = 0;
@@ -104,9 +146,18 @@ fn time_step_above_the_critical_one_is_stopped_with_a_diagnostic() {
         let fault = res.expect("an unstable run must be stopped");
         let msg = fault.to_string();
         println!("{kind:?}: stopped after {steps} steps: {msg}");
-        assert!(matches!(fault, Fault::EnergyRunaway { .. } | Fault::NonFinite { .. } | Fault::Collapsed { .. } | Fault::Inverted { .. }));
+        assert!(matches!(
+            fault,
+            Fault::EnergyRunaway { .. }
+                | Fault::NonFinite { .. }
+                | Fault::Collapsed { .. }
+                | Fault::Inverted { .. }
+        ));
         assert!(msg.contains("step") && msg.contains("body"), "{msg}");
         // nothing non-finite was written into the state
-        assert!(run.group.bodies[0].x.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        assert!(run.group.bodies[0]
+            .x
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite())));
     }
 }

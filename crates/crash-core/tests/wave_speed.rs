@@ -10,9 +10,10 @@ use crash_core::{Group, Run, RunConfig, Vec3, VelocityProgram};
 /// Time at which the x-velocity of the nodes at `x` first exceeds half the imposed one
 /// (linear interpolation between steps).
 fn arrival(history: &[(f64, f64)], level: f64) -> Option<f64> {
-    history.windows(2).find(|w| w[0].1 < level && w[1].1 >= level).map(|w| {
-        w[0].0 + (level - w[0].1) / (w[1].1 - w[0].1) * (w[1].0 - w[0].0)
-    })
+    history
+        .windows(2)
+        .find(|w| w[0].1 < level && w[1].1 >= level)
+        .map(|w| w[0].0 + (level - w[0].1) / (w[1].1 - w[0].1) * (w[1].0 - w[0].0))
 }
 
 #[test]
@@ -26,12 +27,25 @@ fn membrane_wave_speed_matches_plate_theory() {
             b.fix(i, dof::Y | dof::Z | dof::ROTATIONS);
         }
         let end: Vec<usize> = nodes_at(&b, 0, 0.0, 1e-9);
-        b.prescribe(&end, VelocityProgram { velocity: Vec3::new(1.0, 0.0, 0.0), angular: Vec3::zeros(), ramp: 0.0 });
+        b.prescribe(
+            &end,
+            VelocityProgram {
+                velocity: Vec3::new(1.0, 0.0, 0.0),
+                angular: Vec3::zeros(),
+                ramp: 0.0,
+            },
+        );
         let probes = [0.3, 0.7];
         let sets: Vec<Vec<usize>> = probes.iter().map(|&x| nodes_at(&b, 0, x, 1e-6)).collect();
         let mut hist = vec![Vec::new(); 2];
-        let mut run = Run::new(Group::new(vec![b], Vec3::zeros()), RunConfig { end_time: 0.9 / exact, ..Default::default() })
-            .expect("start");
+        let mut run = Run::new(
+            Group::new(vec![b], Vec3::zeros()),
+            RunConfig {
+                end_time: 0.9 / exact,
+                ..Default::default()
+            },
+        )
+        .expect("start");
         run.run(|r| {
             let b = &r.group.bodies[0];
             for (h, set) in hist.iter_mut().zip(&sets) {
@@ -44,7 +58,10 @@ fn membrane_wave_speed_matches_plate_theory() {
         let t2 = arrival(&hist[1], 0.5).expect("front reached x = 0.7");
         let c = (probes[1] - probes[0]) / (t2 - t1);
         let err = (c - exact) / exact;
-        println!("{kind:?}: measured {c:.1} m/s, theory {exact:.1} m/s, error {:.2}%", 100.0 * err);
+        println!(
+            "{kind:?}: measured {c:.1} m/s, theory {exact:.1} m/s, error {:.2}%",
+            100.0 * err
+        );
         assert!(err.abs() < 0.02, "{kind:?}: {err}");
     }
 }

@@ -50,7 +50,11 @@ impl<S: Real> Plane<S> {
 pub fn green_s<S: Real>(f1: V3<S>, f2: V3<S>) -> [S; 3] {
     let half = S::splat(0.5);
     let one = S::splat(1.0);
-    [half * (f1.dot(f1) - one), half * (f2.dot(f2) - one), f1.dot(f2)]
+    [
+        half * (f1.dot(f1) - one),
+        half * (f2.dot(f2) - one),
+        f1.dot(f2),
+    ]
 }
 
 /// Green strain for nalgebra vectors (setup and output).
@@ -74,8 +78,8 @@ fn gradient_s<S: Real, const N: usize>(x: &[V3<S>; N], bx: &[S; N], by: &[S; N])
     let mut f1 = V3::zero();
     let mut f2 = V3::zero();
     for i in 0..N {
-        f1 = f1.add(x[i].scale(bx[i]));
-        f2 = f2.add(x[i].scale(by[i]));
+        f1 = f1.plus(x[i].scale(bx[i]));
+        f2 = f2.plus(x[i].scale(by[i]));
     }
     (f1, f2)
 }
@@ -111,10 +115,10 @@ pub fn membrane_forces<S: Real, const N: usize>(
         s[1] += sd[1];
         s[2] += sd[2];
     }
-    let p1 = f1.scale(s[0]).add(f2.scale(s[2])).scale(area0);
-    let p2 = f1.scale(s[2]).add(f2.scale(s[1])).scale(area0);
+    let p1 = f1.scale(s[0]).plus(f2.scale(s[2])).scale(area0);
+    let p2 = f1.scale(s[2]).plus(f2.scale(s[1])).scale(area0);
     for i in 0..N {
-        f[i] = p1.scale(bx[i]).add(p2.scale(by[i]));
+        f[i] = p1.scale(bx[i]).plus(p2.scale(by[i]));
     }
     (energy, diss)
 }

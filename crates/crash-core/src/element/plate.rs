@@ -114,8 +114,8 @@ pub fn plate_forces<S: Real, const N: usize>(
     let drill_rate = wz * inv_n - half * spin;
 
     let dm = k.bending.apply(kr);
-    for c in 0..3 {
-        st.m[c] += h * dm[c];
+    for (m, d) in st.m.iter_mut().zip(dm) {
+        *m += h * d;
     }
     st.q[0] += h * k.shear * g[0];
     st.q[1] += h * k.shear * g[1];
@@ -138,8 +138,8 @@ pub fn plate_forces<S: Real, const N: usize>(
         diss = h
             * kin.area
             * (md[0] * kr[0] + md[1] * kr[1] + md[2] * kr[2] + qd[0] * g[0] + qd[1] * g[1]);
-        for c in 0..3 {
-            m[c] += md[c];
+        for (mc, d) in m.iter_mut().zip(md) {
+            *mc += d;
         }
         q[0] += qd[0];
         q[1] += qd[1];

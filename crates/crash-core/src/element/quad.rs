@@ -111,15 +111,15 @@ pub fn quad_kernel<S: Real>(
     let one = S::splat(1.0);
     let quarter = S::splat(0.25);
     let x = &e.x;
-    let n = x[2].sub(x[0]).cross(x[3].sub(x[1]));
+    let n = x[2].minus(x[0]).cross(x[3].minus(x[1]));
     let e3 = n.scale(one / n.norm_squared().sqrt());
-    let r = x[1].sub(x[0]);
-    let r = r.sub(e3.scale(r.dot(e3)));
+    let r = x[1].minus(x[0]);
+    let r = r.minus(e3.scale(r.dot(e3)));
     let e1 = r.scale(one / r.norm_squared().sqrt());
     let e2 = e3.cross(e1);
-    let c = x[0].add(x[1]).add(x[2]).add(x[3]).scale(quarter);
-    let xl: [S; 4] = std::array::from_fn(|i| x[i].sub(c).dot(e1));
-    let yl: [S; 4] = std::array::from_fn(|i| x[i].sub(c).dot(e2));
+    let c = x[0].plus(x[1]).plus(x[2]).plus(x[3]).scale(quarter);
+    let xl: [S; 4] = std::array::from_fn(|i| x[i].minus(c).dot(e1));
+    let yl: [S; 4] = std::array::from_fn(|i| x[i].minus(c).dot(e2));
     let (bx, by, area) = quad_gradients(xl, yl);
     let corners = std::array::from_fn(|i| {
         let (nx, p) = ((i + 1) % 4, (i + 3) % 4);
@@ -127,15 +127,26 @@ pub fn quad_kernel<S: Real>(
     });
 
     let mut fm = [V3::zero(); 4];
-    let (e_mem, d_mem) = membrane_forces(&k.membrane, k.alpha, &e.bx0, &e.by0, e.area0, &e.e0, x, &e.v, h, &mut fm);
+    let (e_mem, d_mem) = membrane_forces(
+        &k.membrane,
+        k.alpha,
+        &e.bx0,
+        &e.by0,
+        e.area0,
+        &e.e0,
+        x,
+        &e.v,
+        h,
+        &mut fm,
+    );
 
     // in-plane hourglass, total form
     let g = &e.gamma;
     let mut q = V3::zero();
-    for i in 0..4 {
-        q = q.add(x[i].scale(g[i]));
+    for (xi, gi) in x.iter().zip(g) {
+        q = q.plus(xi.scale(*gi));
     }
-    let qt = q.sub(e3.scale(q.dot(e3)));
+    let qt = q.minus(e3.scale(q.dot(e3)));
     let fq = qt.scale(e.k_m);
     let mut e_hg = S::splat(0.5) * e.k_m * qt.norm_squared();
 
@@ -173,14 +184,21 @@ pub fn quad_kernel<S: Real>(
         lo[i][3] += g[i] * hg.th[0];
         lo[i][4] += g[i] * hg.th[1];
         let f = fm[i]
-            .add(fq.scale(g[i]))
-            .add(e1.scale(lo[i][0]))
-            .add(e2.scale(lo[i][1]))
-            .add(e3.scale(lo[i][2]));
-        let m = e1.scale(lo[i][3]).add(e2.scale(lo[i][4])).add(e3.scale(lo[i][5]));
+            .plus(fq.scale(g[i]))
+            .plus(e1.scale(lo[i][0]))
+            .plus(e2.scale(lo[i][1]))
+            .plus(e3.scale(lo[i][2]));
+        let m = e1
+            .scale(lo[i][3])
+            .plus(e2.scale(lo[i][4]))
+            .plus(e3.scale(lo[i][5]));
         out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
     }
-    let diag = x[2].sub(x[0]).norm_squared().max(x[3].sub(x[1]).norm_squared()).sqrt();
+    let diag = x[2]
+        .minus(x[0])
+        .norm_squared()
+        .max(x[3].minus(x[1]).norm_squared())
+        .sqrt();
     (
         KernelOut {
             internal: e_mem + e_pl,

@@ -117,11 +117,11 @@ impl<S: Real> V3<S> {
         Self { x: z, y: z, z }
     }
     #[inline(always)]
-    pub fn add(self, o: Self) -> Self {
+    pub fn plus(self, o: Self) -> Self {
         Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
     }
     #[inline(always)]
-    pub fn sub(self, o: Self) -> Self {
+    pub fn minus(self, o: Self) -> Self {
         Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
     }
     #[inline(always)]

@@ -111,9 +111,9 @@ pub fn tri_kernel<S: Real>(
 ) -> KernelOut<S> {
     let half = S::splat(0.5);
     let one = S::splat(1.0);
-    let r2 = e.x[1].sub(e.x[0]);
-    let r3 = e.x[2].sub(e.x[0]);
-    let r23 = e.x[2].sub(e.x[1]);
+    let r2 = e.x[1].minus(e.x[0]);
+    let r3 = e.x[2].minus(e.x[0]);
+    let r23 = e.x[2].minus(e.x[1]);
     let n = r2.cross(r3);
     let two_area = n.norm_squared().sqrt();
     let e3 = n.scale(one / two_area);
@@ -126,7 +126,18 @@ pub fn tri_kernel<S: Real>(
 
     let mut fm = [V3::zero(); 3];
     let zero3 = [S::splat(0.0); 3];
-    let (e_mem, d_mem) = membrane_forces(&k.membrane, k.alpha, &e.bx0, &e.by0, e.area0, &zero3, &e.x, &e.v, h, &mut fm);
+    let (e_mem, d_mem) = membrane_forces(
+        &k.membrane,
+        k.alpha,
+        &e.bx0,
+        &e.by0,
+        e.area0,
+        &zero3,
+        &e.x,
+        &e.v,
+        h,
+        &mut fm,
+    );
 
     let (bx, by) = tri_gradients(a, c, d);
     let (cw, cx, cy) = tri_shear_operator(a, c, d);
@@ -147,10 +158,13 @@ pub fn tri_kernel<S: Real>(
     let (e_pl, d_pl) = plate_forces(k, &kin, &rates, h, st, &mut lo);
     for i in 0..3 {
         let f = fm[i]
-            .add(e1.scale(lo[i][0]))
-            .add(e2.scale(lo[i][1]))
-            .add(e3.scale(lo[i][2]));
-        let m = e1.scale(lo[i][3]).add(e2.scale(lo[i][4])).add(e3.scale(lo[i][5]));
+            .plus(e1.scale(lo[i][0]))
+            .plus(e2.scale(lo[i][1]))
+            .plus(e3.scale(lo[i][2]));
+        let m = e1
+            .scale(lo[i][3])
+            .plus(e2.scale(lo[i][4]))
+            .plus(e3.scale(lo[i][5]));
         out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
     }
     let longest = l2sq.max(r3.norm_squared()).max(r23.norm_squared()).sqrt();
@@ -179,7 +193,10 @@ mod tests {
             g[0] += cw[i][0] * w;
             g[1] += cw[i][1] * w;
         }
-        assert!((g[0] - gx).abs() < 1e-14 && (g[1] - gy).abs() < 1e-14, "{g:?}");
+        assert!(
+            (g[0] - gx).abs() < 1e-14 && (g[1] - gy).abs() < 1e-14,
+            "{g:?}"
+        );
     }
 
     #[test]

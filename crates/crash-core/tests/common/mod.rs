@@ -13,15 +13,28 @@ pub fn body(mesh: &crash_core::Mesh, mat: Material, t: f64) -> Body {
 }
 
 /// Plate lx x ly with its corner at the origin (x in [0, lx], y in [0, ly]).
-pub fn corner_plate(lx: f64, ly: f64, nx: usize, ny: usize, kind: ElementKind, mat: Material, t: f64) -> Body {
+pub fn corner_plate(
+    lx: f64,
+    ly: f64,
+    nx: usize,
+    ny: usize,
+    kind: ElementKind,
+    mat: Material,
+    t: f64,
+) -> Body {
     let mut m = plate(lx, ly, nx, ny, kind);
-    m.transform(&nalgebra::Matrix3::identity(), Vec3::new(lx / 2.0, ly / 2.0, 0.0));
+    m.transform(
+        &nalgebra::Matrix3::identity(),
+        Vec3::new(lx / 2.0, ly / 2.0, 0.0),
+    );
     body(&m, mat, t)
 }
 
 /// Nodes whose coordinate `axis` is within tol of `value`.
 pub fn nodes_at(b: &Body, axis: usize, value: f64, tol: f64) -> Vec<usize> {
-    (0..b.x.len()).filter(|&i| (b.x0[i][axis] - value).abs() < tol).collect()
+    (0..b.x.len())
+        .filter(|&i| (b.x0[i][axis] - value).abs() < tol)
+        .collect()
 }
 
 pub fn kinds() -> [ElementKind; 2] {
