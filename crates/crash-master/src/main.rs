@@ -1,4 +1,107 @@
-fn main() {
-    eprintln!("not built yet");
-    std::process::exit(2);
+//! crash-master: serve a scene to N crash-worker processes and run it.
+
+use anyhow::Context;
+use clap::Parser;
+use crash_master::{run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput, RunOptions};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "crash-master",
+    version,
+    about = "Run a crash scene on N crash-worker processes over gRPC"
+)]
+struct Args {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// Address to listen on for workers (port 0: any free port, printed at start).
+    #[arg(long, default_value = "0.0.0.0:50051")]
+    listen: SocketAddr,
+    /// Number of workers to wait for.
+    #[arg(long)]
+    workers: usize,
+    /// Run directory (energy.csv, frames, summary.json).
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace the scene's end time [s].
+    #[arg(long)]
+    end_time: Option<f64>,
+    /// Wait this long for all workers to attach [s].
+    #[arg(long, default_value_t = 300.0)]
+    accept_timeout: f64,
+    /// A worker that does not answer a command within this time ends the run [s].
+    #[arg(long, default_value_t = 60.0)]
+    reply_timeout: f64,
+    /// MEIM boxes are inflated by this multiple of the contact margin (>= 1).
+    #[arg(long, default_value_t = 2.0)]
+    margin_factor: f64,
+    /// Balance with estimated costs (elements + contact nodes) instead of measured
+    /// times: placement is then reproducible.
+    #[arg(long)]
+    estimated_costs: bool,
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("crash-master: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    let scene = crash_scene::load(&args.scene)?.with_overrides(crash_scene::Overrides {
+        end_time: args.end_time,
+        output_interval: None,
+    })?;
+    let input = RunInput::from_built(scene.build()?);
+    let mut sink = FileSink::create(&args.out, &input.name, input.scene_hash, &input.bodies)
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("cannot create the run directory {}", args.out.display()))?;
+    let mut cluster = Cluster::bind(
+        args.listen,
+        args.workers,
+        RemoteOptions {
+            accept_timeout: Duration::from_secs_f64(args.accept_timeout.max(0.0)),
+            reply_timeout: Duration::from_secs_f64(args.reply_timeout.max(0.001)),
+        },
+    )?;
+    // Tests and scripts read this line to learn the port.
+    eprintln!("crash-master: listening on {}", cluster.local_addr());
+    cluster.accept()?;
+    eprintln!(
+        "crash-master: {} workers attached, running '{}'",
+        args.workers, input.name
+    );
+    let opts = RunOptions {
+        margin_factor: args.margin_factor,
+        cost: if args.estimated_costs {
+            CostModel::Estimated
+        } else {
+            CostModel::Measured
+        },
+        ..RunOptions::default()
+    };
+    let stats = run_remote(input, &mut cluster, &mut sink, &opts)?;
+    eprintln!(
+        "crash-master: done: {} steps to t = {:.6e} s in {:.2} s, {} migrations, final state hash {:016x}",
+        stats.steps,
+        stats.time,
+        stats.wall_s,
+        stats.migrations.len(),
+        stats.final_hash
+    );
+    Ok(())
 }

@@ -1,0 +1,55 @@
+//! crash-worker: integrate groups of bodies for a crash-master over gRPC.
+
+use clap::Parser;
+use std::process::ExitCode;
+use std::time::Duration;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "crash-worker",
+    version,
+    about = "A crash worker: dials a crash-master and integrates the groups it is given"
+)]
+struct Args {
+    /// The master's URL, e.g. http://10.0.0.5:50051 (retried with backoff until it answers).
+    #[arg(long)]
+    master: String,
+    /// Compute threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Give up when the master cannot be reached for this long [s].
+    #[arg(long, default_value_t = 60.0)]
+    connect_timeout: f64,
+    /// Announce this protocol version instead of the built-in one (tests of refusal).
+    #[arg(long, hide = true)]
+    protocol_version: Option<u32>,
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let args = Args::parse();
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let mut opts = crash_worker::WorkerOptions::new(&args.master, threads);
+    opts.connect_timeout = Duration::from_secs_f64(args.connect_timeout.max(0.0));
+    if let Some(v) = args.protocol_version {
+        opts.protocol_version = v;
+    }
+    match crash_worker::run(&opts) {
+        Ok(reason) => {
+            eprintln!("crash-worker: done ({reason})");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("crash-worker: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,73 @@
+//! Where results go: the master hands every energy row, MEIM change and frame to a
+//! `Sink` (crash-io writers in the binaries, memory in tests).
+
+use crate::error::MasterError;
+use crate::stats::RunStats;
+use crash_core::{Body, EnergyTotals};
+
+pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Receives the results of a run, in time order.
+pub trait Sink {
+    /// Scene energy totals after the start (step 0) and after every step.
+    fn energy(&mut self, step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError>;
+    /// The MEIM edges (possible contacts, body id pairs a < b) whenever they change.
+    fn contacts(&mut self, _step: u64, _time: f64, _pairs: &[(u32, u32)]) -> Result<(), SinkError> {
+        Ok(())
+    }
+    /// All bodies (sorted by id, gathered from every worker) at an output time.
+    fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError>;
+    /// The run ended: normally (`error` None, the final frame was written) or not (the
+    /// frames written so far are the last complete ones).
+    fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError>;
+}
+
+/// One energy row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnergyRecord {
+    pub step: u64,
+    pub time: f64,
+    pub totals: EnergyTotals,
+}
+
+/// Keeps energy rows, frame times, MEIM changes and the final state hash in memory.
+#[derive(Debug, Default)]
+pub struct RecordSink {
+    pub energy: Vec<EnergyRecord>,
+    pub frames: Vec<(u64, f64, u64)>,
+    pub contacts: Vec<(u64, Vec<(u32, u32)>)>,
+    /// Hash of the last frame (the final state after a normal end).
+    pub last_hash: Option<u64>,
+    pub finished: Option<Result<RunStats, String>>,
+}
+
+impl Sink for RecordSink {
+    fn energy(&mut self, step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError> {
+        self.energy.push(EnergyRecord {
+            step,
+            time,
+            totals: *totals,
+        });
+        Ok(())
+    }
+
+    fn contacts(&mut self, step: u64, _time: f64, pairs: &[(u32, u32)]) -> Result<(), SinkError> {
+        self.contacts.push((step, pairs.to_vec()));
+        Ok(())
+    }
+
+    fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError> {
+        let h = crash_core::hash::state_hash(bodies);
+        self.frames.push((step, time, h));
+        self.last_hash = Some(h);
+        Ok(())
+    }
+
+    fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
+        self.finished = Some(match error {
+            None => Ok(stats.clone()),
+            Some(e) => Err(e.to_string()),
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,244 @@
+//! The worker process side of a session: dial the master (retrying with backoff, so
+//! workers may start first), say Hello, then answer commands one by one.
+//!
+//! Threads: one current-thread tokio runtime does all communication; every command
+//! runs as one job on the rayon compute pool (the engine moves into the job and back),
+//! so the runtime stays free while groups are integrated.
+
+use crate::engine::Engine;
+use crash_proto::msg::{command_from_pb, reply_to_pb};
+use crash_proto::pb::coordinator_client::CoordinatorClient;
+use crash_proto::pb::master_message::Command as PbCommand;
+use crash_proto::pb::{self, worker_message};
+use crash_proto::{Command, Reply, PROTOCOL_VERSION};
+use std::time::{Duration, Instant};
+use thiserror::Error;
+use tokio::sync::{mpsc, oneshot};
+use tokio_stream::wrappers::UnboundedReceiverStream;
+use tonic::transport::{Channel, Endpoint};
+use tonic::Code;
+
+/// Largest message accepted (a Load of big bodies can be hundreds of MB).
+pub const MAX_MESSAGE: usize = 1 << 31;
+
+#[derive(Debug, Clone)]
+pub struct WorkerOptions {
+    /// The master's URL, e.g. `http://127.0.0.1:50051`.
+    pub master: String,
+    /// Threads of the compute pool.
+    pub threads: usize,
+    /// How long to keep retrying the first connection.
+    pub connect_timeout: Duration,
+    /// Protocol version announced in Hello (tests of the refusal path set another).
+    pub protocol_version: u32,
+}
+
+impl WorkerOptions {
+    pub fn new(master: &str, threads: usize) -> Self {
+        Self {
+            master: master.to_string(),
+            threads,
+            connect_timeout: Duration::from_secs(60),
+            protocol_version: PROTOCOL_VERSION,
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum WorkerError {
+    #[error("invalid master URL '{url}': {reason}")]
+    Url { url: String, reason: String },
+    #[error("could not reach the master at {url} within {secs:.0} s: {reason}")]
+    Connect {
+        url: String,
+        secs: f64,
+        reason: String,
+    },
+    #[error("the master at {url} refused this worker: {reason}")]
+    Refused { url: String, reason: String },
+    #[error("lost the master at {url}: {reason}")]
+    Lost { url: String, reason: String },
+    #[error("protocol error with the master at {url}: {reason}")]
+    Protocol { url: String, reason: String },
+    #[error("cannot start the worker: {0}")]
+    Start(String),
+}
+
+/// Run one worker session to its end. Returns the master's shutdown reason.
+pub fn run(opts: &WorkerOptions) -> Result<String, WorkerError> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| WorkerError::Start(format!("tokio runtime: {e}")))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads.max(1))
+        .thread_name(|i| format!("crash-compute-{i}"))
+        .build()
+        .map_err(|e| WorkerError::Start(format!("compute pool: {e}")))?;
+    rt.block_on(session(opts, pool))
+}
+
+fn endpoint(url: &str) -> Result<Endpoint, WorkerError> {
+    let bad = |reason: String| WorkerError::Url {
+        url: url.into(),
+        reason,
+    };
+    Ok(Endpoint::from_shared(url.to_string())
+        .map_err(|e| bad(e.to_string()))?
+        .connect_timeout(Duration::from_secs(5))
+        .tcp_nodelay(true)
+        // Kernel keepalive notices a vanished master host even while the master
+        // process is busy (it answers no HTTP/2 ping while writing output).
+        .tcp_keepalive(Some(Duration::from_secs(10)))
+        .tcp_keepalive_interval(Some(Duration::from_secs(5)))
+        .tcp_keepalive_retries(Some(3))
+        .initial_stream_window_size(8 << 20)
+        .initial_connection_window_size(16 << 20))
+}
+
+/// Connect, retrying with exponential backoff (0.1 s doubling to 2 s).
+async fn connect(url: &str, timeout: Duration) -> Result<Channel, WorkerError> {
+    let ep = endpoint(url)?;
+    let t0 = Instant::now();
+    let mut wait = Duration::from_millis(100);
+    loop {
+        match ep.connect().await {
+            Ok(ch) => return Ok(ch),
+            Err(e) => {
+                if t0.elapsed() + wait > timeout {
+                    return Err(WorkerError::Connect {
+                        url: url.into(),
+                        secs: timeout.as_secs_f64(),
+                        reason: error_chain(&e),
+                    });
+                }
+                tracing::debug!("master at {url} not reachable yet ({e}); retrying");
+                tokio::time::sleep(wait).await;
+                wait = (wait * 2).min(Duration::from_secs(2));
+            }
+        }
+    }
+}
+
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut src = e.source();
+    while let Some(c) = src {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        src = c.source();
+    }
+    s
+}
+
+fn hello(opts: &WorkerOptions) -> pb::WorkerMessage {
+    pb::WorkerMessage {
+        reply: Some(worker_message::Reply::Hello(pb::Hello {
+            protocol_version: opts.protocol_version,
+            threads: opts.threads as u32,
+            host: std::env::var("HOSTNAME").unwrap_or_default(),
+            pid: std::process::id(),
+        })),
+    }
+}
+
+async fn session(opts: &WorkerOptions, pool: rayon::ThreadPool) -> Result<String, WorkerError> {
+    let url = opts.master.as_str();
+    let lost = |reason: String| WorkerError::Lost {
+        url: url.into(),
+        reason,
+    };
+    let protocol = |reason: String| WorkerError::Protocol {
+        url: url.into(),
+        reason,
+    };
+    let channel = connect(url, opts.connect_timeout).await?;
+    let mut client = CoordinatorClient::new(channel)
+        .max_decoding_message_size(MAX_MESSAGE)
+        .max_encoding_message_size(MAX_MESSAGE);
+    let (tx, rx) = mpsc::unbounded_channel();
+    tx.send(hello(opts))
+        .map_err(|_| WorkerError::Start("outbound stream closed".into()))?;
+    let mut inbound = match client.attach(UnboundedReceiverStream::new(rx)).await {
+        Ok(r) => r.into_inner(),
+        Err(s) if s.code() == Code::FailedPrecondition || s.code() == Code::Unavailable => {
+            return Err(WorkerError::Refused {
+                url: url.into(),
+                reason: s.message().to_string(),
+            })
+        }
+        Err(s) => return Err(lost(format!("{}: {}", s.code(), s.message()))),
+    };
+    // Handshake: the master's Welcome must name our protocol version.
+    match inbound.message().await {
+        Ok(Some(pb::MasterMessage {
+            command: Some(PbCommand::Welcome(w)),
+        })) => {
+            if w.protocol_version != opts.protocol_version {
+                return Err(WorkerError::Refused {
+                    url: url.into(),
+                    reason: format!(
+                        "protocol version mismatch: the master speaks crash protocol v{}, this worker speaks v{}; run matching versions of crash-master and crash-worker",
+                        w.protocol_version, opts.protocol_version
+                    ),
+                });
+            }
+            tracing::info!(
+                "attached to {url} as worker {} of {}",
+                w.worker_index,
+                w.workers
+            );
+        }
+        Ok(Some(_)) => return Err(protocol("the first message was not Welcome".into())),
+        Ok(None) => return Err(lost("the master closed the session before Welcome".into())),
+        Err(s) => return Err(lost(format!("{}: {}", s.code(), s.message()))),
+    }
+
+    let mut engine = Some(Engine::new());
+    loop {
+        let msg = match inbound.message().await {
+            Ok(Some(m)) => m,
+            Ok(None) => {
+                return Err(lost(
+                    "the master ended the session without a shutdown".into(),
+                ))
+            }
+            Err(s) => return Err(lost(format!("{}: {}", s.code(), s.message()))),
+        };
+        let (reply, shutdown) = match command_from_pb(&msg) {
+            Ok(cmd) => {
+                let shutdown = match &cmd {
+                    Command::Shutdown(r) => Some(r.clone()),
+                    _ => None,
+                };
+                let eng = engine
+                    .take()
+                    .ok_or_else(|| WorkerError::Start("engine lost".into()))?;
+                let (done_tx, done_rx) = oneshot::channel();
+                pool.spawn(move || {
+                    let mut eng = eng;
+                    let reply = reply_to_pb(&eng.handle(cmd));
+                    let _ = done_tx.send((eng, reply));
+                });
+                let (eng, reply) = done_rx
+                    .await
+                    .map_err(|_| WorkerError::Start("a compute job panicked".into()))?;
+                engine = Some(eng);
+                (reply, shutdown)
+            }
+            Err(e) => (reply_to_pb(&Reply::Error(e.to_string())), None),
+        };
+        if tx.send(reply).is_err() {
+            return Err(lost("the outbound stream closed".into()));
+        }
+        if let Some(reason) = shutdown {
+            // Close our side and let the master close its own, so the Ack is flushed.
+            drop(tx);
+            let _ = tokio::time::timeout(Duration::from_secs(5), async {
+                while let Ok(Some(_)) = inbound.message().await {}
+            })
+            .await;
+            return Ok(reason);
+        }
+    }
+}
