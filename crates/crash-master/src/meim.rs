@@ -179,6 +179,6 @@ mod tests {
         assert_eq!(m.interaction(5, 1).map(|i| i.since), Some(1));
         assert_eq!(m.pairs(), vec![(1, 5), (5, 7)]);
         // unknown ids are ignored
-        assert!(!m.update(6, &[(1, 5), (2, 9)]));
+        assert!(!m.update(6, &[(1, 5), (5, 7), (2, 9)]));
     }
 }
