@@ -303,9 +303,11 @@ impl RemoteWorker {
     }
 
     fn recv_within(&mut self, timeout: Duration) -> Result<Reply, LinkError> {
+        // the timer must be created inside the runtime
+        let inbound = &mut self.inbound;
         let msg = match self
             .rt
-            .block_on(tokio::time::timeout(timeout, self.inbound.message()))
+            .block_on(async { tokio::time::timeout(timeout, inbound.message()).await })
         {
             Err(_) => {
                 return Err(LinkError::Timeout(format!(
@@ -389,10 +391,12 @@ impl WorkerLink for RemoteWorker {
         }
         // ending the response stream lets the worker exit
         self.tx = None;
-        let _ = self
-            .rt
-            .block_on(tokio::time::timeout(Duration::from_millis(500), async {
-                while let Ok(Some(_)) = self.inbound.message().await {}
-            }));
+        let inbound = &mut self.inbound;
+        self.rt.block_on(async {
+            let _ = tokio::time::timeout(Duration::from_millis(500), async {
+                while let Ok(Some(_)) = inbound.message().await {}
+            })
+            .await;
+        });
     }
 }

@@ -1,6 +1,8 @@
 //! Shared helpers of the cluster tests.
 #![allow(dead_code, clippy::unwrap_used)]
 
+pub mod procs;
+
 use crash_core::driver::Run;
 use crash_core::{EnergyTotals, Group};
 use crash_master::{RecordSink, RunInput};

@@ -1,0 +1,175 @@
+//! crash-master + crash-worker processes over gRPC on loopback: the same bits as the
+//! local run; refusal of a protocol mismatch; a lost or silent worker ends the run
+//! with a clear message (bounded waits everywhere, children killed on drop).
+#![allow(clippy::unwrap_used)] // a test panics on failure
+
+mod common;
+
+use common::procs::{master, out_dir, worker};
+use common::{bits, input, rows, scene_path};
+use crash_master::{run_local, CostModel, RecordSink, RunOptions};
+use std::path::Path;
+use std::time::Duration;
+
+const RUN_TIMEOUT: Duration = Duration::from_secs(180);
+
+fn local(scene: &str) -> (Vec<[u64; 8]>, u64) {
+    let opts = RunOptions {
+        cost: CostModel::Estimated,
+        ..RunOptions::default()
+    };
+    let mut sink = RecordSink::default();
+    let stats = run_local(input(scene), 1, &mut sink, &opts).unwrap();
+    (rows(&sink), stats.final_hash)
+}
+
+/// energy.csv rows and the final hash of a finished run directory.
+fn read_run(dir: &Path) -> (Vec<[u64; 8]>, u64, crash_io::Summary) {
+    let rows = crash_io::read_energy_csv(dir.join(crash_io::ENERGY_CSV))
+        .unwrap()
+        .iter()
+        .map(|r| bits(r.time, &r.energy))
+        .collect();
+    let s = crash_io::read_summary(dir.join(crash_io::SUMMARY_JSON)).unwrap();
+    let h = u64::from_str_radix(&s.final_state_hash, 16).unwrap();
+    (rows, h, s)
+}
+
+/// Run `scene` on a master and two worker processes with `threads` each.
+fn remote(scene: &str, threads: usize, tag: &str) -> (Vec<[u64; 8]>, u64, crash_io::Summary) {
+    let out = out_dir(tag);
+    let (mut m, url) = master(&scene_path(scene), 2, &out, &["--estimated-costs"]);
+    let mut w1 = worker(&url, threads, &[]);
+    let mut w2 = worker(&url, threads, &[]);
+    let status = m.wait(RUN_TIMEOUT);
+    assert!(status.success(), "master failed:\n{}", m.log());
+    for w in [&mut w1, &mut w2] {
+        let s = w.wait(Duration::from_secs(30));
+        assert!(s.success(), "worker failed:\n{}", w.log());
+        assert!(
+            w.log().contains("done (the run is complete)"),
+            "{}",
+            w.log()
+        );
+    }
+    let r = read_run(&out);
+    let _ = std::fs::remove_dir_all(&out);
+    r
+}
+
+#[test]
+fn two_worker_processes_match_the_local_run_bit_for_bit_with_1_and_2_threads() {
+    let scene = "ten-spheres-tiny.toml";
+    let (ref_rows, ref_hash) = local(scene);
+    for threads in [1, 2] {
+        let (rows, hash, summary) = remote(scene, threads, &format!("ten-{threads}"));
+        assert_eq!(rows.len(), ref_rows.len(), "{threads} threads: energy rows");
+        assert!(
+            rows == ref_rows,
+            "{threads} threads: energy rows differ from the local run"
+        );
+        assert_eq!(hash, ref_hash, "{threads} threads: final state hash");
+        assert!(summary.fault.is_none());
+    }
+}
+
+/// The CI smoke test: two workers, a small scene whose bodies migrate over the wire
+/// (merge onto one worker, then spread again), same hash as the local run.
+#[test]
+fn two_worker_smoke_with_migration_over_the_wire() {
+    let scene = "two-spheres-tiny.toml";
+    let (ref_rows, ref_hash) = local(scene);
+    let (rows, hash, _) = remote(scene, 1, "smoke");
+    assert!(rows == ref_rows, "energy rows differ from the local run");
+    assert_eq!(hash, ref_hash);
+}
+
+#[test]
+fn protocol_version_mismatch_is_refused_clearly_on_both_sides() {
+    let out = out_dir("version");
+    let (mut m, url) = master(&scene_path("two-spheres-tiny.toml"), 1, &out, &[]);
+    let mut w = worker(&url, 1, &["--protocol-version", "999"]);
+    let status = w.wait(Duration::from_secs(60));
+    assert!(!status.success());
+    let wlog = w.log();
+    assert!(
+        wlog.contains("refused this worker: protocol version mismatch")
+            && wlog.contains("v999")
+            && wlog.contains(&format!("v{}", crash_proto::PROTOCOL_VERSION)),
+        "worker said:\n{wlog}"
+    );
+    m.expect_line("protocol version mismatch", Duration::from_secs(10));
+    assert!(
+        m.log().contains("refused worker"),
+        "master said:\n{}",
+        m.log()
+    );
+    m.kill();
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Start a long run on two workers and wait until it is stepping.
+fn long_run(
+    tag: &str,
+    extra: &[&str],
+) -> (
+    common::procs::Proc,
+    common::procs::Proc,
+    common::procs::Proc,
+    std::path::PathBuf,
+) {
+    let out = out_dir(tag);
+    let mut args = vec!["--end-time", "1.0"];
+    args.extend_from_slice(extra);
+    let (m, url) = master(&scene_path("ten-spheres-tiny.toml"), 2, &out, &args);
+    let w1 = worker(&url, 1, &[]);
+    let w2 = worker(&url, 1, &[]);
+    m.expect_line("workers attached", Duration::from_secs(60));
+    // let it write a few frames
+    std::thread::sleep(Duration::from_millis(1500));
+    (m, w1, w2, out)
+}
+
+fn frames_listed(out: &Path) -> usize {
+    crash_io::read_pvd(&out.join(crash_io::PVD_FILE)).map_or(0, |v| v.len())
+}
+
+#[test]
+fn a_killed_worker_ends_the_run_with_a_clear_message() {
+    let (mut m, mut w1, mut w2, out) = long_run("killed", &[]);
+    w2.kill();
+    let status = m.wait(Duration::from_secs(60));
+    assert!(!status.success());
+    let log = m.log();
+    assert!(
+        log.contains("worker") && log.contains("disconnected"),
+        "master said:\n{log}"
+    );
+    // the surviving worker is told to stop
+    let s = w1.wait(Duration::from_secs(30));
+    assert!(s.success(), "{}", w1.log());
+    assert!(w1.log().contains("the run stopped"), "{}", w1.log());
+    // the frames written before are kept, the summary names the cause
+    assert!(frames_listed(&out) >= 1);
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    assert!(s.fault.unwrap().contains("disconnected"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn a_silent_worker_ends_the_run_after_the_reply_timeout() {
+    let (mut m, mut w1, w2, out) = long_run("silent", &["--reply-timeout", "2"]);
+    w2.signal("STOP");
+    let status = m.wait(Duration::from_secs(60));
+    assert!(!status.success());
+    let log = m.log();
+    assert!(
+        log.contains("stopped answering: no reply within 2.0 s"),
+        "master said:\n{log}"
+    );
+    let s = w1.wait(Duration::from_secs(30));
+    assert!(s.success(), "{}", w1.log());
+    assert!(frames_listed(&out) >= 1);
+    drop(w2);
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,0 +1,159 @@
+//! Child processes of the cluster tests: killed on drop, stderr collected, every wait
+//! bounded.
+#![allow(dead_code, clippy::unwrap_used)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+pub const MASTER: &str = env!("CARGO_BIN_EXE_crash-master");
+pub const WORKER: &str = env!("CARGO_BIN_EXE_crash-worker");
+
+/// A child process whose stderr is collected line by line.
+pub struct Proc {
+    pub name: String,
+    child: Child,
+    lines: mpsc::Receiver<String>,
+    pub log: Arc<Mutex<String>>,
+}
+
+impl Proc {
+    pub fn spawn(name: &str, exe: &str, args: &[&str]) -> Proc {
+        let mut child = Command::new(exe)
+            .args(args)
+            .env("RUST_LOG", "info")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let err = child.stderr.take().unwrap();
+        let (tx, lines) = mpsc::channel();
+        let log = Arc::new(Mutex::new(String::new()));
+        let l2 = log.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(err).lines().map_while(Result::ok) {
+                l2.lock().unwrap().push_str(&line);
+                l2.lock().unwrap().push('\n');
+                let _ = tx.send(line);
+            }
+        });
+        Proc {
+            name: name.into(),
+            child,
+            lines,
+            log,
+        }
+    }
+
+    /// Wait (bounded) for a stderr line containing `pat`; returns it.
+    pub fn expect_line(&self, pat: &str, timeout: Duration) -> String {
+        let end = Instant::now() + timeout;
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(l) if l.contains(pat) => return l,
+                Ok(_) => {}
+                Err(_) => panic!(
+                    "{}: no line with '{pat}' within {timeout:?}; stderr:\n{}",
+                    self.name,
+                    self.log()
+                ),
+            }
+        }
+    }
+
+    /// Wait (bounded) for the process to exit.
+    pub fn wait(&mut self, timeout: Duration) -> ExitStatus {
+        let end = Instant::now() + timeout;
+        loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                // let the reader thread take the last lines
+                std::thread::sleep(Duration::from_millis(50));
+                return s;
+            }
+            if Instant::now() > end {
+                panic!(
+                    "{}: still running after {timeout:?}; stderr:\n{}",
+                    self.name,
+                    self.log()
+                );
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    pub fn log(&self) -> String {
+        self.log.lock().unwrap().clone()
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
+    /// Send a signal by name (STOP, CONT) with kill(1).
+    pub fn signal(&self, sig: &str) {
+        let ok = Command::new("kill")
+            .args([&format!("-{sig}"), &self.pid().to_string()])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "kill -{sig} failed");
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        // a stopped process must be continued to die promptly
+        let _ = Command::new("kill")
+            .args(["-CONT", &self.pid().to_string()])
+            .stderr(Stdio::null())
+            .status();
+        self.kill();
+    }
+}
+
+/// A fresh directory under the target's test tmp dir.
+pub fn out_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("cluster-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Start a master on a free loopback port; returns it and the workers' URL.
+pub fn master(scene: &Path, workers: usize, out: &Path, extra: &[&str]) -> (Proc, String) {
+    let w = workers.to_string();
+    let mut args = vec![
+        scene.to_str().unwrap(),
+        "--listen",
+        "127.0.0.1:0",
+        "--workers",
+        &w,
+        "--out",
+        out.to_str().unwrap(),
+        "--accept-timeout",
+        "60",
+    ];
+    args.extend_from_slice(extra);
+    let m = Proc::spawn("crash-master", MASTER, &args);
+    let line = m.expect_line("listening on", Duration::from_secs(60));
+    let addr = line.rsplit(' ').next().unwrap().trim().to_string();
+    (m, format!("http://{addr}"))
+}
+
+pub fn worker(url: &str, threads: usize, extra: &[&str]) -> Proc {
+    let t = threads.to_string();
+    let mut args = vec!["--master", url, "--threads", &t, "--connect-timeout", "30"];
+    args.extend_from_slice(extra);
+    Proc::spawn("crash-worker", WORKER, &args)
+}
