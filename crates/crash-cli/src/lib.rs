@@ -1,1 +1,6 @@
-//! crash-cli: The crash command: run, check, render, study, bench.
+//! crash-cli: the `crash` command. `crash run` is the local (embedded) mode of the
+//! master loop: in-process workers, no network, no serialization.
+
+pub mod check;
+pub mod progress;
+pub mod run;

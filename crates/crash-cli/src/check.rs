@@ -1,0 +1,31 @@
+//! `crash check SCENE`: validate and print what a run would do, without running.
+
+use anyhow::Context;
+use std::path::Path;
+
+/// Rough cost of one element-cycle of the whole step on one core [ns] (measured: see
+/// docs/performance.md); used only for the run-time estimate.
+const NS_PER_ELEMENT_CYCLE: f64 = 250.0;
+
+pub fn check(path: &Path) -> anyhow::Result<()> {
+    let scene = crash_scene::load(path)?;
+    let built = scene.build()?;
+    if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
+        anyhow::bail!("{}", crate::run::penetration_message(&built, &p));
+    }
+    let summary = built.summary();
+    println!("{summary}");
+    let cycles = summary.elements as f64 * summary.steps_estimate as f64;
+    println!(
+        "estimated run time on one core: {:.0} s ({:.2e} element-cycles at ~{NS_PER_ELEMENT_CYCLE:.0} ns)",
+        cycles * NS_PER_ELEMENT_CYCLE * 1e-9,
+        cycles
+    );
+    built
+        .critical_dt()
+        .map(|(dt, body, element)| {
+            println!("critical element: body {body}, element {element} (dt {dt:.4e} s)")
+        })
+        .context("the first force pass failed")?;
+    Ok(())
+}

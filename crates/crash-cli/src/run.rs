@@ -1,0 +1,167 @@
+//! `crash run SCENE`: the whole run in this process, through the master loop with
+//! in-process workers, writing the run directory with crash-io.
+
+use crate::progress::Progress;
+use anyhow::Context;
+use crash_core::{Body, EnergyTotals};
+use crash_master::{
+    run_local, FileSink, MasterError, RunInput, RunOptions, RunStats, Sink, SinkError,
+};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Run directory [default: out/<scene name>].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// In-process workers (results are bit-identical for any number).
+    #[arg(long, default_value_t = 1)]
+    pub workers: usize,
+    /// Threads for the element and node loops [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Replace the scene's end time [s].
+    #[arg(long)]
+    pub end_time: Option<f64>,
+    /// Plain log lines instead of a progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Do not render pictures at the end.
+    #[arg(long)]
+    pub no_pictures: bool,
+}
+
+/// Exit code of a finished run whose energy-balance error exceeded the scene's limit.
+pub const EXIT_ENERGY: u8 = 3;
+/// Exit code of a run stopped by a fault (instability, tunnelling, collapse...).
+pub const EXIT_FAULT: u8 = 1;
+
+/// The file sink plus the progress display.
+struct CliSink {
+    files: FileSink,
+    progress: Progress,
+    last_time: f64,
+}
+
+impl Sink for CliSink {
+    fn energy(&mut self, step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError> {
+        let dt = time - self.last_time;
+        self.last_time = time;
+        self.progress.update(step, time, dt, totals.balance_error);
+        self.files.energy(step, time, totals)
+    }
+
+    fn contacts(&mut self, step: u64, time: f64, pairs: &[(u32, u32)]) -> Result<(), SinkError> {
+        self.files.contacts(step, time, pairs)
+    }
+
+    fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError> {
+        self.files.frame(step, time, bodies)
+    }
+
+    fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
+        self.progress.finish();
+        self.files.finish(stats, error)
+    }
+}
+
+/// One-line description of a penetration found at t = 0.
+pub fn penetration_message(built: &crash_scene::Built, p: &crash_scene::Penetration) -> String {
+    let name = |id: u32| {
+        built
+            .bodies
+            .iter()
+            .find(|b| b.id == id)
+            .map_or_else(|| format!("#{id}"), |b| format!("'{}'", b.name))
+    };
+    format!(
+        "bodies {} and {} interpenetrate at t = 0: node {} of {} is {:.3e} m inside {} ({} nodes penetrate); move them apart",
+        name(p.node_body),
+        name(p.segment_body),
+        p.node,
+        name(p.node_body),
+        p.depth,
+        name(p.segment_body),
+        p.nodes
+    )
+}
+
+pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
+    let scene = crash_scene::load(&args.scene)?.with_overrides(crash_scene::Overrides {
+        end_time: args.end_time,
+        output_interval: None,
+    })?;
+    let built = scene.build()?;
+    if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
+        anyhow::bail!("{}", penetration_message(&built, &p));
+    }
+    let energy_limit = built.energy_limit;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&built.name));
+    let input = RunInput::from_built(built);
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = args.threads {
+        pool = pool.num_threads(t.max(1));
+    }
+    let pool = pool.build().context("cannot start the thread pool")?;
+    let files = FileSink::create(&out, &input.name, input.scene_hash, &input.bodies)
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("cannot create the run directory {}", out.display()))?;
+    let mut sink = CliSink {
+        files,
+        progress: Progress::new(input.config.end_time, args.quiet),
+        last_time: 0.0,
+    };
+    eprintln!(
+        "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {} worker(s), writing {}",
+        input.name,
+        input.bodies.len(),
+        input.bodies.iter().map(Body::element_count).sum::<usize>(),
+        input.config.end_time,
+        args.workers.max(1),
+        out.display()
+    );
+    let result = pool.install(|| {
+        run_local(
+            input,
+            args.workers.max(1),
+            &mut sink,
+            &RunOptions::default(),
+        )
+    });
+    let stats = match result {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("crash: run stopped: {e}");
+            eprintln!("crash: the frames written so far are in {}", out.display());
+            return Ok(ExitCode::from(EXIT_FAULT));
+        }
+    };
+    eprintln!(
+        "crash: done: {} steps, dt {:.3e}..{:.3e} s, {:.2} s wall, largest energy-balance error {:.3e}, final state hash {:016x}",
+        stats.steps, stats.dt_min, stats.dt_max, stats.wall_s, stats.max_energy_error, stats.final_hash
+    );
+    if !args.no_pictures {
+        match crash_io::render_run(&out) {
+            Ok(files) => eprintln!(
+                "crash: {} pictures in {}",
+                files.len(),
+                out.join("pictures").display()
+            ),
+            Err(e) => eprintln!("crash: warning: pictures failed: {e}"),
+        }
+    }
+    if stats.max_energy_error > energy_limit {
+        eprintln!(
+            "crash: warning: energy-balance error {:.3e} exceeds the scene's limit {energy_limit:.3e} (energy_limit)",
+            stats.max_energy_error
+        );
+        return Ok(ExitCode::from(EXIT_ENERGY));
+    }
+    Ok(ExitCode::SUCCESS)
+}
