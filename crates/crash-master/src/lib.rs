@@ -17,6 +17,7 @@ pub mod input;
 pub mod link;
 mod master;
 pub mod meim;
+pub mod pairs;
 pub mod remote;
 pub mod sink;
 pub mod stats;

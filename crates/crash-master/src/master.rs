@@ -7,7 +7,8 @@ use crate::assign::assign;
 use crate::error::MasterError;
 use crate::input::{CostModel, RunInput, RunOptions};
 use crate::link::{LinkError, WorkerLink};
-use crate::meim::{box_pairs, Meim};
+use crate::meim::Meim;
+use crate::pairs::PairSearch;
 use crate::sink::Sink;
 use crate::stats::{Migration, RunStats};
 use crash_core::contact::{BodyBox, ContactConfig};
@@ -45,6 +46,7 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     worker_of: Vec<Option<usize>>,
     layout: Vec<Vec<Vec<u32>>>,
     meim: Meim,
+    search: PairSearch,
     time: f64,
     step: u64,
     next_dt: f64,
@@ -111,6 +113,12 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             })
             .collect();
         let n = info.len();
+        // Verlet skin of the level-i search: the MEIM margin of the widest body
+        let skin = sorted
+            .iter()
+            .filter(|b| c.enabled && b.contact)
+            .map(|b| opts.margin_factor * c.margin_for(b))
+            .fold(0.0, f64::max);
         Ok(Self {
             links,
             opts,
@@ -122,6 +130,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             worker_of: vec![None; n],
             layout: Vec::new(),
             meim: Meim::new(&ids, opts.split_after),
+            search: PairSearch::new(c.margin, skin),
             info,
             time: 0.0,
             step: 0,
@@ -210,7 +219,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             .map(|b| self.inflate(BodyBox::of(b)))
             .collect();
         self.update_meim(&boxes);
-        let groups = self.meim.groups().to_vec();
+        let groups = self.owned_groups();
         let placement = self.place(&groups, true);
         let nw = self.links.len();
         let mut per_worker: Vec<Vec<Body>> = (0..nw).map(|_| Vec::new()).collect();
@@ -302,16 +311,16 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             return;
         }
         for g in groups {
-            let Some(i) = self.index(g.first) else {
+            // the worker's groups are the MEIM groups of this step
+            let Some(k) = self.meim.group_of(g.first) else {
                 continue;
             };
             let members: Vec<usize> = self
                 .meim
-                .groups()
+                .group(k)
                 .iter()
-                .find(|m| m.first() == Some(&g.first))
-                .map(|m| m.iter().filter_map(|&id| self.index(id)).collect())
-                .unwrap_or_else(|| vec![i]);
+                .filter_map(|&id| self.index(id))
+                .collect();
             let total: f64 = members.iter().map(|&b| self.info[b].estimate).sum();
             for &b in &members {
                 let t = g.nanos as f64 * self.info[b].estimate / total;
@@ -496,13 +505,17 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                 .filter(|b| self.index(b.id).is_some_and(|i| self.info[i].meshes))
                 .copied()
                 .collect();
-            box_pairs(&meshes, self.contact.margin)
+            self.search.pairs(&meshes)
         } else {
             Vec::new()
         };
         let changed = self.meim.update(self.step, &pairs);
-        self.stats.max_groups = self.stats.max_groups.max(self.meim.groups().len());
+        self.stats.max_groups = self.stats.max_groups.max(self.meim.group_count());
         changed
+    }
+
+    fn owned_groups(&self) -> Vec<Vec<u32>> {
+        self.meim.groups().iter().map(|g| g.to_vec()).collect()
     }
 
     /// Cost per body index under the chosen model.
@@ -564,7 +577,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
     /// Reassign groups; move bodies whose worker changed (whole state, exact bits);
     /// send the new layouts.
     fn migrate(&mut self, groups_changed: bool) -> Result<(), MasterError> {
-        let groups = self.meim.groups().to_vec();
+        let groups = self.owned_groups();
         let placement = self.place(&groups, true);
         let layout = self.layouts(&groups, &placement);
         if !groups_changed && layout == self.layout {
@@ -700,7 +713,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                     .and_then(|&id| self.index(id))
                     .and_then(|i| self.worker_of[i])
                     .unwrap_or(0);
-                (g.clone(), w)
+                (g.to_vec(), w)
             })
             .collect();
         Ok(())

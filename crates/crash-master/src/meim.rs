@@ -15,7 +15,6 @@ use crash_core::contact::{candidate_pairs, BodyBox};
 use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableGraph};
 use petgraph::unionfind::UnionFind;
 use petgraph::Undirected;
-use std::collections::HashMap;
 
 /// A possible contact between two bodies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -32,14 +31,20 @@ pub struct Meim {
     /// Body ids in ascending order; node `k` of the graph is body `ids[k]`.
     ids: Vec<u32>,
     nodes: Vec<NodeIndex>,
-    edges: HashMap<(u32, u32), EdgeIndex>,
+    /// Current edges: (a, b) with a < b by id, sorted, and their graph edge.
+    edges: Vec<((u32, u32), EdgeIndex)>,
     split_after: u64,
-    groups: Vec<Vec<u32>>,
+    /// Groups in CSR form: members of group k are `members[start[k]..start[k + 1]]`.
+    start: Vec<u32>,
+    members: Vec<u32>,
+    /// Group of each body (by position in `ids`).
+    group_of: Vec<u32>,
 }
 
 /// Level-i search: candidate pairs (ids, a < b, sorted) among `boxes`. The contact
 /// engine's own broad phase (`crash_core::contact::candidate_pairs`): the MEIM then
-/// contains every pair the contact stage can see, by construction.
+/// contains every pair the contact stage can see, by construction. (The master calls
+/// it through `pairs::PairSearch`, which caches it between steps.)
 pub fn box_pairs(boxes: &[BodyBox], margin: f64) -> Vec<(u32, u32)> {
     candidate_pairs(boxes, margin)
 }
@@ -49,16 +54,18 @@ impl Meim {
     pub fn new(ids: &[u32], split_after: u64) -> Self {
         let mut sorted = ids.to_vec();
         sorted.sort_unstable();
-        let mut graph = StableGraph::with_capacity(sorted.len(), sorted.len());
+        let n = sorted.len();
+        let mut graph = StableGraph::with_capacity(n, n);
         let nodes = sorted.iter().map(|&id| graph.add_node(id)).collect();
-        let groups = sorted.iter().map(|&id| vec![id]).collect();
         Self {
             graph,
+            members: sorted.clone(),
             ids: sorted,
             nodes,
-            edges: HashMap::new(),
+            edges: Vec::new(),
             split_after,
-            groups,
+            start: (0..=n as u32).collect(),
+            group_of: (0..n as u32).collect(),
         }
     }
 
@@ -66,54 +73,82 @@ impl Meim {
         self.ids.binary_search(&id).ok()
     }
 
-    /// Apply the pairs found at update `step`. Returns true when the groups changed.
+    /// Apply the pairs (a < b, sorted, as `box_pairs` gives them; others are sorted
+    /// first) found at update
+    /// `step`. Returns true when the groups changed. A linear merge of two sorted
+    /// lists: no hashing, cost O(pairs + edges).
     pub fn update(&mut self, step: u64, pairs: &[(u32, u32)]) -> bool {
+        let sorted;
+        let pairs = if pairs.windows(2).all(|w| w[0] < w[1]) {
+            pairs
+        } else {
+            let mut p: Vec<(u32, u32)> = pairs.iter().map(|&(a, b)| (a.min(b), a.max(b))).collect();
+            p.sort_unstable();
+            sorted = p;
+            &sorted
+        };
         let mut changed = false;
-        for &(a, b) in pairs {
-            let key = (a.min(b), a.max(b));
-            if let Some(&e) = self.edges.get(&key) {
-                if let Some(w) = self.graph.edge_weight_mut(e) {
-                    w.seen = step;
+        let old = std::mem::take(&mut self.edges);
+        let mut kept: Vec<((u32, u32), EdgeIndex)> = Vec::with_capacity(old.len().max(pairs.len()));
+        let (mut i, mut j) = (0, 0);
+        loop {
+            let p = pairs.get(i).copied();
+            let o = old.get(j).copied();
+            match (p, o) {
+                (None, None) => break,
+                (Some(pk), Some((ok, e))) if pk == ok => {
+                    if let Some(w) = self.graph.edge_weight_mut(e) {
+                        w.seen = step;
+                    }
+                    kept.push((ok, e));
+                    i += 1;
+                    j += 1;
                 }
-                continue;
+                (Some(pk), o) if o.is_none_or(|(ok, _)| pk < ok) => {
+                    i += 1;
+                    if pk.0 >= pk.1 || kept.last().is_some_and(|(k, _)| *k == pk) {
+                        continue; // not a < b, or a repeated pair
+                    }
+                    let (Some(ia), Some(ib)) = (self.index(pk.0), self.index(pk.1)) else {
+                        continue;
+                    };
+                    let e = self.graph.add_edge(
+                        self.nodes[ia],
+                        self.nodes[ib],
+                        Interaction {
+                            since: step,
+                            seen: step,
+                        },
+                    );
+                    kept.push((pk, e));
+                    changed = true;
+                }
+                (_, Some((ok, e))) => {
+                    j += 1;
+                    let stale = self
+                        .graph
+                        .edge_weight(e)
+                        .is_none_or(|w| step.saturating_sub(w.seen) > self.split_after);
+                    if stale {
+                        self.graph.remove_edge(e);
+                        changed = true;
+                    } else {
+                        kept.push((ok, e));
+                    }
+                }
+                (Some(_), None) => i += 1, // taken by the arm above
             }
-            let (Some(ia), Some(ib)) = (self.index(key.0), self.index(key.1)) else {
-                continue;
-            };
-            let e = self.graph.add_edge(
-                self.nodes[ia],
-                self.nodes[ib],
-                Interaction {
-                    since: step,
-                    seen: step,
-                },
-            );
-            self.edges.insert(key, e);
-            changed = true;
         }
-        let stale: Vec<(u32, u32)> = self
-            .edges
-            .iter()
-            .filter(|(_, &e)| {
-                self.graph
-                    .edge_weight(e)
-                    .is_some_and(|w| step.saturating_sub(w.seen) > self.split_after)
-            })
-            .map(|(k, _)| *k)
-            .collect();
-        for k in stale {
-            if let Some(e) = self.edges.remove(&k) {
-                self.graph.remove_edge(e);
-                changed = true;
-            }
-        }
+        self.edges = kept;
         if changed {
-            self.groups = self.components();
+            self.components();
         }
         changed
     }
 
-    fn components(&self) -> Vec<Vec<u32>> {
+    /// Connected components by union-find over the graph's edges, numbered in order
+    /// of their smallest body id.
+    fn components(&mut self) {
         let n = self.ids.len();
         let mut uf = UnionFind::<usize>::new(n);
         for e in self.graph.edge_indices() {
@@ -122,30 +157,56 @@ impl Meim {
             }
         }
         // Nodes were added in id order with no removals: node index k is ids[k].
-        let mut by_root: HashMap<usize, usize> = HashMap::new();
-        let mut groups: Vec<Vec<u32>> = Vec::new();
+        const NONE: u32 = u32::MAX;
+        let mut label = vec![NONE; n];
+        let mut sizes: Vec<u32> = Vec::new();
         for k in 0..n {
             let r = uf.find_mut(k);
-            let g = *by_root.entry(r).or_insert_with(|| {
-                groups.push(Vec::new());
-                groups.len() - 1
-            });
-            groups[g].push(self.ids[k]);
+            if label[r] == NONE {
+                label[r] = sizes.len() as u32;
+                sizes.push(0);
+            }
+            let g = label[r];
+            self.group_of[k] = g;
+            sizes[g as usize] += 1;
         }
-        // ids ascending, so each group is sorted and groups appear by smallest id.
-        groups
+        self.start.clear();
+        self.start.push(0);
+        let mut acc = 0;
+        for s in &sizes {
+            acc += s;
+            self.start.push(acc);
+        }
+        let mut fill: Vec<u32> = self.start[..sizes.len()].to_vec();
+        for k in 0..n {
+            let g = self.group_of[k] as usize;
+            self.members[fill[g] as usize] = self.ids[k];
+            fill[g] += 1;
+        }
+    }
+
+    pub fn group_count(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    /// Members of group `k` (ascending ids); groups are ordered by smallest id.
+    pub fn group(&self, k: usize) -> &[u32] {
+        &self.members[self.start[k] as usize..self.start[k + 1] as usize]
     }
 
     /// Connected components: sorted by smallest body id, members ascending.
-    pub fn groups(&self) -> &[Vec<u32>] {
-        &self.groups
+    pub fn groups(&self) -> Vec<&[u32]> {
+        (0..self.group_count()).map(|k| self.group(k)).collect()
+    }
+
+    /// The group of a body.
+    pub fn group_of(&self, id: u32) -> Option<usize> {
+        self.index(id).map(|i| self.group_of[i] as usize)
     }
 
     /// Current edges (a < b), sorted.
     pub fn pairs(&self) -> Vec<(u32, u32)> {
-        let mut p: Vec<(u32, u32)> = self.edges.keys().copied().collect();
-        p.sort_unstable();
-        p
+        self.edges.iter().map(|(k, _)| *k).collect()
     }
 
     pub fn edge_count(&self) -> usize {
@@ -154,8 +215,9 @@ impl Meim {
 
     /// The interaction between two bodies, if there is an edge.
     pub fn interaction(&self, a: u32, b: u32) -> Option<Interaction> {
-        let e = self.edges.get(&(a.min(b), a.max(b)))?;
-        self.graph.edge_weight(*e).copied()
+        let key = (a.min(b), a.max(b));
+        let k = self.edges.binary_search_by_key(&key, |(k, _)| *k).ok()?;
+        self.graph.edge_weight(self.edges[k].1).copied()
     }
 }
 
@@ -166,19 +228,21 @@ mod tests {
     #[test]
     fn groups_merge_at_once_and_split_after_persistent_separation() {
         let mut m = Meim::new(&[7, 3, 5, 1], 2);
-        assert_eq!(m.groups(), &[vec![1], vec![3], vec![5], vec![7]]);
+        assert_eq!(m.groups(), [&[1][..], &[3], &[5], &[7]]);
         assert!(m.update(1, &[(3, 7), (1, 5)]));
-        assert_eq!(m.groups(), &[vec![1, 5], vec![3, 7]]);
+        assert_eq!(m.groups(), [&[1, 5][..], &[3, 7]]);
         assert!(m.update(2, &[(1, 5), (5, 7)]));
-        assert_eq!(m.groups(), &[vec![1, 3, 5, 7]]);
+        assert_eq!(m.groups(), [&[1, 3, 5, 7][..]]);
         // (3, 7) last seen at 1: kept through updates 2 and 3, dropped at 4.
         assert!(!m.update(3, &[(1, 5), (5, 7)]));
         assert!(m.update(4, &[(1, 5)]));
-        assert_eq!(m.groups(), &[vec![1, 5, 7], vec![3]]);
+        assert_eq!(m.groups(), [&[1, 5, 7][..], &[3]]);
+        assert_eq!(m.group_of(7), Some(0));
+        assert_eq!(m.group_of(3), Some(1));
         assert!(!m.update(5, &[(1, 5)]));
         assert_eq!(m.interaction(5, 1).map(|i| i.since), Some(1));
         assert_eq!(m.pairs(), vec![(1, 5), (5, 7)]);
         // unknown ids are ignored
-        assert!(!m.update(6, &[(1, 5), (5, 7), (2, 9)]));
+        assert!(!m.update(6, &[(1, 5), (2, 9), (5, 7)]));
     }
 }

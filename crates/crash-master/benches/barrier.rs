@@ -1,0 +1,87 @@
+//! Barrier overhead of one step over gRPC on loopback: the master sends Step to every
+//! worker and waits for every report, the workers hold one trivial body each (2
+//! triangles), so the time is the protocol's: encode, loopback TCP, decode, compute-pool
+//! hand-over, and back. Workers run as threads of this process, each with its own
+//! current-thread runtime and a 1-thread compute pool, exactly as a worker process.
+#![allow(clippy::unwrap_used)]
+
+use crash_core::shapes::{plate, ElementKind};
+use crash_core::{Body, Material, Section, Stabilization, Vec3};
+use crash_master::{Cluster, RemoteOptions, WorkerLink};
+use crash_proto::{Command, Reply, Setup};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use std::time::{Duration, Instant};
+
+fn body(id: u32) -> Body {
+    let s = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).unwrap(), 0.001);
+    Body::new(
+        id,
+        "b",
+        &plate(0.01, 0.01, 1, 1, ElementKind::Tri),
+        s,
+        Stabilization::default(),
+    )
+    .unwrap()
+}
+
+fn cluster(n: usize) -> Cluster {
+    let mut c = Cluster::bind("127.0.0.1:0".parse().unwrap(), n, RemoteOptions::default()).unwrap();
+    let url = format!("http://{}", c.local_addr());
+    for _ in 0..n {
+        let opts = crash_worker::WorkerOptions::new(&url, 1);
+        std::thread::spawn(move || {
+            let _ = crash_worker::run(&opts);
+        });
+    }
+    c.accept().unwrap();
+    let setup = Setup {
+        gravity: Vec3::zeros(),
+        contact: Default::default(),
+    };
+    for (i, l) in c.links_mut().iter_mut().enumerate() {
+        for cmd in [
+            Command::Setup(setup),
+            Command::Load(vec![body(i as u32)]),
+            Command::Regroup(vec![vec![i as u32]]),
+            Command::Start,
+        ] {
+            l.send(cmd).unwrap();
+            assert!(!matches!(l.recv().unwrap(), Reply::Error(_)));
+        }
+    }
+    c
+}
+
+fn barrier(c: &mut Criterion) {
+    let mut g = c.benchmark_group("barrier_step");
+    g.measurement_time(Duration::from_secs(5));
+    for n in [1usize, 2, 4] {
+        let mut cl = cluster(n);
+        let mut step = 0u64;
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter_custom(|iters| {
+                let t = Instant::now();
+                for _ in 0..iters {
+                    let links = cl.links_mut();
+                    for l in links.iter_mut() {
+                        l.send(Command::Step { step, dt: 1e-9 }).unwrap();
+                    }
+                    for l in links.iter_mut() {
+                        let Reply::Report(_) = l.recv().unwrap() else {
+                            panic!("not a report")
+                        };
+                    }
+                    step += 1;
+                }
+                t.elapsed()
+            })
+        });
+        for l in cl.links_mut() {
+            l.close("bench done");
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, barrier);
+criterion_main!(benches);

@@ -1,0 +1,92 @@
+//! Speed-up of worker processes on the ten-spheres-three-plates-small scene (4 400
+//! elements), shortened to `END_TIME`: crash-master with 1 worker x 1 thread, 2 workers
+//! x 1 thread, and 1 worker x 2 threads, each run `REPS` times; prints the median wall
+//! time of the run (summary.json `wall_time_s`: from the first command to the last
+//! frame, without process start-up) and the speed-up over 1 x 1.
+//! Run: cargo bench -p crash-master --bench speedup
+#![allow(clippy::unwrap_used)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+const MASTER: &str = env!("CARGO_BIN_EXE_crash-master");
+const WORKER: &str = env!("CARGO_BIN_EXE_crash-worker");
+const END_TIME: &str = "4e-4";
+const REPS: usize = 3;
+
+fn run(scene: &Path, workers: usize, threads: usize, out: &Path) -> f64 {
+    let _ = std::fs::remove_dir_all(out);
+    let mut m = Command::new(MASTER)
+        .args([
+            scene.to_str().unwrap(),
+            "--listen",
+            "127.0.0.1:0",
+            "--workers",
+            &workers.to_string(),
+            "--out",
+            out.to_str().unwrap(),
+            "--end-time",
+            END_TIME,
+        ])
+        .env("RUST_LOG", "warn")
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(m.stderr.take().unwrap()).lines();
+    let addr = loop {
+        let l = lines.next().unwrap().unwrap();
+        if let Some(a) = l.strip_prefix("crash-master: listening on ") {
+            break a.trim().to_string();
+        }
+    };
+    let mut ws: Vec<_> = (0..workers)
+        .map(|_| {
+            Command::new(WORKER)
+                .args([
+                    "--master",
+                    &format!("http://{addr}"),
+                    "--threads",
+                    &threads.to_string(),
+                ])
+                .env("RUST_LOG", "warn")
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for l in lines.map_while(Result::ok) {
+        eprintln!("  {l}");
+    }
+    assert!(m.wait().unwrap().success());
+    for w in &mut ws {
+        let _ = w.wait();
+    }
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    s.wall_time_s
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    // cargo bench passes --bench; any other argument filters nothing here
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/ten-spheres-three-plates-small.toml");
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("speedup-run");
+    let mut base = None;
+    for (workers, threads) in [(1, 1), (2, 1), (1, 2)] {
+        let times: Vec<f64> = (0..REPS)
+            .map(|_| run(&scene, workers, threads, &out))
+            .collect();
+        let med = median(times.clone());
+        let b = *base.get_or_insert(med);
+        println!(
+            "speedup/{workers}x{threads}: median wall {med:.3} s (runs {times:.3?}), speed-up over 1x1: {:.2}",
+            b / med
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
