@@ -5,7 +5,7 @@ use crate::body::Body;
 use crate::element::plate::{Consts, ShellL};
 use crate::element::quad::{quad_kernel, HgL, QuadElem, QuadIn};
 use crate::element::real::{Lanes, Real, F4, V3};
-use crate::element::tri::{tri_kernel, TriElem, TriIn};
+use crate::element::tri::{tri_kernel, KernelOut, TriElem, TriIn};
 use crate::element::{ElemEnergy, ElemFailure, HourglassState, ShellState, Slot, COLLAPSE_RATIO};
 use crate::error::Fault;
 use crate::material::Section;
@@ -177,23 +177,37 @@ fn tri_batch<S: Lanes>(
     let mut st = shell_in::<S>(sts);
     let mut out = [[S::splat(0.0); 6]; 3];
     let r = tri_kernel(k, &input, h, &mut st, &mut out);
+    book(sec, &r, S::splat(0.0), e0, |l| els[l].area0, sums)?;
+    shell_out(&st, sts);
+    slots_out(&out, slots);
+    Ok(())
+}
+
+/// Check every lane for collapse, then add its energies and time step to the sums.
+#[inline(always)]
+fn book<S: Lanes>(
+    sec: &Section,
+    r: &KernelOut<S>,
+    hourglass: S,
+    e0: usize,
+    area0: impl Fn(usize) -> f64,
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
     for l in 0..S::W {
         let ratio = r.ratio.lane(l);
         if ratio.is_nan() || ratio < COLLAPSE_RATIO {
             return Err((e0 + l, ElemFailure::Collapsed { ratio }));
         }
     }
-    shell_out(&st, sts);
-    slots_out(&out, slots);
     let c = sec.wave_speed;
-    for (l, el) in els.iter().enumerate().take(S::W) {
+    for l in 0..S::W {
         let en = ElemEnergy {
             internal: r.internal.lane(l),
-            hourglass: 0.0,
+            hourglass: hourglass.lane(l),
             damping: r.damping.lane(l),
         };
         let len = r.length.lane(l);
-        sums.add(e0 + l, &en, el.area0, len / c * sec.damping_factor(len));
+        sums.add(e0 + l, &en, area0(l), len / c * sec.damping_factor(len));
     }
     Ok(())
 }
@@ -238,32 +252,19 @@ fn quad_batch<S: Lanes>(
     let mut out = [[S::splat(0.0); 6]; 4];
     let (r, extra) = quad_kernel(k, &input, h, &mut st, &mut hg, &mut out);
     for l in 0..S::W {
-        let ratio = r.ratio.lane(l);
-        if ratio.is_nan() || ratio < COLLAPSE_RATIO {
-            return Err((e0 + l, ElemFailure::Collapsed { ratio }));
-        }
         for (corner, c) in extra.corners.iter().enumerate() {
             if c.lane(l).is_nan() || c.lane(l) <= 0.0 {
                 return Err((e0 + l, ElemFailure::Inverted { corner }));
             }
         }
     }
+    book(sec, &r, extra.hourglass, e0, |l| els[l].area0, sums)?;
     shell_out(&st, sts);
     for (l, s) in hgs.iter_mut().enumerate().take(S::W) {
         s.w = hg.w.lane(l);
         s.th = hg.th.map(|c| c.lane(l));
     }
     slots_out(&out, slots);
-    let c = sec.wave_speed;
-    for (l, el) in els.iter().enumerate().take(S::W) {
-        let en = ElemEnergy {
-            internal: r.internal.lane(l),
-            hourglass: extra.hourglass.lane(l),
-            damping: r.damping.lane(l),
-        };
-        let len = r.length.lane(l);
-        sums.add(e0 + l, &en, el.area0, len / c * sec.damping_factor(len));
-    }
     Ok(())
 }
 
