@@ -16,7 +16,14 @@ fn plate_body(kind: ElementKind) -> Body {
     };
     let mat = Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid");
     let m = plate(1.0, 1.0, nx, ny, kind);
-    let mut b = Body::new(0, "plate", &m, Section::new(mat, 0.002), Stabilization::default()).expect("valid");
+    let mut b = Body::new(
+        0,
+        "plate",
+        &m,
+        Section::new(mat, 0.002),
+        Stabilization::default(),
+    )
+    .expect("valid");
     for i in 0..b.x.len() {
         let p = b.x0[i];
         b.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
@@ -27,11 +34,16 @@ fn plate_body(kind: ElementKind) -> Body {
 fn bench(c: &mut Criterion) {
     for kind in [ElementKind::Tri, ElementKind::Quad] {
         for threads in [1usize, 2] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
             let body = plate_body(kind);
             let n = body.element_count() as u64;
             let mut g = c.benchmark_group(format!("{kind:?}/{threads}t"));
-            g.sample_size(10).measurement_time(Duration::from_secs(4)).warm_up_time(Duration::from_secs(1));
+            g.sample_size(10)
+                .measurement_time(Duration::from_secs(4))
+                .warm_up_time(Duration::from_secs(1));
             g.throughput(Throughput::Elements(n));
             let mut b = body.clone();
             g.bench_function("internal_forces", |bch| {
@@ -39,7 +51,9 @@ fn bench(c: &mut Criterion) {
             });
             let mut group = Group::new(vec![body.clone()], Vec3::zeros());
             pool.install(|| group.start().expect("start"));
-            g.bench_function("whole_step", |bch| pool.install(|| bch.iter(|| group.advance(1e-7).expect("step"))));
+            g.bench_function("whole_step", |bch| {
+                pool.install(|| bch.iter(|| group.advance(1e-7).expect("step")))
+            });
             g.finish();
         }
     }

@@ -15,15 +15,28 @@ fn main() {
     let n = if kind == ElementKind::Tri { 71 } else { 100 };
     let mat = Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid material");
     let m = plate(1.0, 1.0, n, n, kind);
-    let mut b = Body::new(0, "plate", &m, Section::new(mat, 0.002), Stabilization::default())
-        .expect("valid body");
+    let mut b = Body::new(
+        0,
+        "plate",
+        &m,
+        Section::new(mat, 0.002),
+        Stabilization::default(),
+    )
+    .expect("valid body");
     for i in 0..b.x.len() {
         let p = b.x0[i];
         b.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
     }
     let mut e = 0.0;
     for step in 0..cycles {
-        e += b.internal_forces(1e-7, step as u64).expect("forces").energy.internal;
+        e += b
+            .internal_forces(1e-7, step as u64)
+            .expect("forces")
+            .energy
+            .internal;
     }
-    println!("{} elements x {cycles} cycles, energy {e:e}", b.element_count());
+    println!(
+        "{} elements x {cycles} cycles, energy {e:e}",
+        b.element_count()
+    );
 }
