@@ -157,10 +157,15 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         }
     }
     if stats.max_energy_error > energy_limit {
-        eprintln!(
-            "crash: warning: energy-balance error {:.3e} exceeds the scene's limit {energy_limit:.3e} (energy_limit)",
+        let warning = format!(
+            "energy-balance error {:.3e} exceeds the scene's limit {energy_limit:.3e} (energy_limit)",
             stats.max_energy_error
         );
+        eprintln!("crash: warning: {warning}");
+        let path = out.join(crash_io::SUMMARY_JSON);
+        let mut summary = crash_io::read_summary(&path)?;
+        summary.warnings.push(warning);
+        crash_io::write_summary(&path, &summary)?;
         return Ok(ExitCode::from(EXIT_ENERGY));
     }
     Ok(ExitCode::SUCCESS)
