@@ -52,6 +52,64 @@ fn cluster(n: usize) -> Cluster {
     c
 }
 
+/// Calibration: a worker that answers every command at once with an empty report on
+/// its communication thread (no decode of the command, no compute-pool hand-over): the
+/// bare bidirectional-stream round trip through the same master code.
+fn echo_worker(url: String) {
+    use crash_proto::pb;
+    use crash_proto::pb::coordinator_client::CoordinatorClient;
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    rt.block_on(async move {
+        let mut client = CoordinatorClient::connect(url).await.unwrap();
+        let (tx, rx) = tokio::sync::mpsc::unbounded_channel();
+        tx.send(pb::WorkerMessage {
+            reply: Some(pb::worker_message::Reply::Hello(pb::Hello {
+                protocol_version: crash_proto::PROTOCOL_VERSION,
+                threads: 1,
+                host: "echo".into(),
+                pid: 0,
+            })),
+        })
+        .unwrap();
+        let mut inbound = client
+            .attach(tokio_stream::wrappers::UnboundedReceiverStream::new(rx))
+            .await
+            .unwrap()
+            .into_inner();
+        let _welcome = inbound.message().await.unwrap();
+        let report = pb::WorkerMessage {
+            reply: Some(pb::worker_message::Reply::Report(pb::Report {
+                bodies: Some(pb::BodyReports::default()),
+                ..Default::default()
+            })),
+        };
+        while let Ok(Some(_)) = inbound.message().await {
+            if tx.send(report.clone()).is_err() {
+                break;
+            }
+        }
+    });
+}
+
+fn echo(c: &mut Criterion) {
+    let mut cl = Cluster::bind("127.0.0.1:0".parse().unwrap(), 1, RemoteOptions::default()).unwrap();
+    let url = format!("http://{}", cl.local_addr());
+    std::thread::spawn(move || echo_worker(url));
+    cl.accept().unwrap();
+    c.bench_function("stream_round_trip", |b| {
+        b.iter(|| {
+            let l = &mut cl.links_mut()[0];
+            l.send(Command::Step { step: 0, dt: 1e-9 }).unwrap();
+            let Reply::Report(_) = l.recv().unwrap() else {
+                panic!("not a report")
+            };
+        })
+    });
+}
+
 fn barrier(c: &mut Criterion) {
     let mut g = c.benchmark_group("barrier_step");
     g.measurement_time(Duration::from_secs(5));
@@ -83,5 +141,5 @@ fn barrier(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, barrier);
+criterion_group!(benches, echo, barrier);
 criterion_main!(benches);
