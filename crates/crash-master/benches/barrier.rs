@@ -95,7 +95,8 @@ fn echo_worker(url: String) {
 }
 
 fn echo(c: &mut Criterion) {
-    let mut cl = Cluster::bind("127.0.0.1:0".parse().unwrap(), 1, RemoteOptions::default()).unwrap();
+    let mut cl =
+        Cluster::bind("127.0.0.1:0".parse().unwrap(), 1, RemoteOptions::default()).unwrap();
     let url = format!("http://{}", cl.local_addr());
     std::thread::spawn(move || echo_worker(url));
     cl.accept().unwrap();

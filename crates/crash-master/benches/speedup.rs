@@ -65,7 +65,10 @@ fn run(scene: &Path, workers: usize, threads: usize, out: &Path) -> (f64, f64) {
     }
     let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
     let cycles = s.elements as f64 * s.steps as f64;
-    (s.wall_time_s, s.ns_per_element_cycle["compute"] * cycles * 1e-9)
+    (
+        s.wall_time_s,
+        s.ns_per_element_cycle["compute"] * cycles * 1e-9,
+    )
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -80,13 +83,15 @@ fn main() {
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("speedup-run");
     let mut base = None;
     for (workers, threads) in [(1, 1), (2, 1), (1, 2)] {
-        let times: Vec<f64> = (0..REPS)
+        let runs: Vec<(f64, f64)> = (0..REPS)
             .map(|_| run(&scene, workers, threads, &out))
             .collect();
-        let med = median(times.clone());
+        let wall: Vec<f64> = runs.iter().map(|r| r.0).collect();
+        let med = median(wall.clone());
+        let compute = median(runs.iter().map(|r| r.1).collect());
         let b = *base.get_or_insert(med);
         println!(
-            "speedup/{workers}x{threads}: median wall {med:.3} s (runs {times:.3?}), speed-up over 1x1: {:.2}",
+            "speedup/{workers}x{threads}: median wall {med:.3} s (runs {wall:.3?}; compute stage {compute:.3} s), speed-up over 1x1: {:.2}",
             b / med
         );
     }
