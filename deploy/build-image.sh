@@ -35,7 +35,8 @@ done
 ctx="$(mktemp -d "${TMPDIR:-/tmp}/crash-image.XXXXXX")"
 trap 'rm -rf "$ctx"' EXIT
 root="$ctx/rootfs"
-mkdir -p "$root/usr/local/bin" "$root/etc" "$root/work"
+mkdir -p "$root/usr/local/bin" "$root/etc" "$root/tmp"
+chmod 1777 "$root/tmp"
 
 # Copy one file (following symlinks) to the same path under rootfs/.
 copy_at_path() {
@@ -61,11 +62,21 @@ done
 # back ends are built into libc.so.6; docker mounts /etc/hosts and /etc/resolv.conf.
 printf 'hosts: files dns\n' > "$root/etc/nsswitch.conf"
 
-cp deploy/Dockerfile "$ctx/Dockerfile"
 version="$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -n 1)"
+revision="$(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
+{
+  cat deploy/Dockerfile
+  printf 'LABEL org.opencontainers.image.title="crash" org.opencontainers.image.version="%s" org.opencontainers.image.revision="%s"\n' \
+    "${version:-unknown}" "$revision"
+} >"$ctx/Dockerfile"
 echo "build-image: context $(du -sh "$root" | cut -f1) ($(find "$root" -type f | wc -l) files)"
+old_id="$(docker image inspect -f '{{.Id}}' "$tag" 2>/dev/null || true)"
 docker build --quiet \
-  --build-arg "VERSION=${version:-unknown}" \
-  --build-arg "REVISION=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" \
   -t "$tag" "$ctx" >"$ctx/build.log" 2>&1 || { cat "$ctx/build.log" >&2; exit 1; }
+# the image this tag named before, if nothing else names it now, is only garbage
+new_id="$(docker image inspect -f '{{.Id}}' "$tag")"
+if [ -n "$old_id" ] && [ "$old_id" != "$new_id" ] &&
+  [ "$(docker image inspect -f '{{len .RepoTags}}' "$old_id" 2>/dev/null)" = 0 ]; then
+  docker rmi "$old_id" >/dev/null 2>&1 || true
+fi
 docker image ls "$tag" --format 'build-image: {{.Repository}}:{{.Tag}} {{.ID}} {{.Size}}'
