@@ -50,9 +50,11 @@ hash_of() { sed -n 's/.*"final_state_hash": *"\([0-9a-f]*\)".*/\1/p' "$1/summary
 
 tmp="$(mktemp -d "${TMPDIR:-/tmp}/crash-smoke.XXXXXX")"
 mkdir -p "$tmp/local" "$tmp/cluster"
+uid="$(id -u)"
+gid="$(id -g)"
 export CRASH_IMAGE="$image" CRASH_SCENES="$repo/scenes" CRASH_SCENE="$scene" \
   CRASH_OUT="$tmp/cluster" CRASH_WORKERS="$workers" CRASH_THREADS=1 \
-  CRASH_UID="$(id -u)" CRASH_GID="$(id -g)"
+  CRASH_UID="$uid" CRASH_GID="$gid"
 dc() { "${compose[@]}" -p "$project" -f "$repo/deploy/docker-compose.yml" "$@"; }
 
 cleanup() {
