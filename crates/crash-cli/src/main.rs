@@ -24,6 +24,8 @@ enum Command {
         /// The scene file (TOML).
         scene: PathBuf,
     },
+    /// Verification ladders (error against wall time) and the stability matrix.
+    Study(crash_cli::study::cli::StudyArgs),
     /// Pictures of a finished run: snapshots, a contact sheet and the energy plot.
     Render {
         /// The run directory (written by `crash run`).
@@ -41,6 +43,7 @@ fn main() -> ExitCode {
         .init();
     let result = match Cli::parse().command {
         Command::Run(args) => crash_cli::run::run(&args),
+        Command::Study(args) => crash_cli::study::cli::study(&args),
         Command::Check { scene } => crash_cli::check::check(&scene).map(|()| ExitCode::SUCCESS),
         Command::Render { out } => crash_io::render_run(&out)
             .map(|files| {

@@ -22,7 +22,8 @@ pub use history::{
     CONTACTS_CSV, ENERGY_CSV,
 };
 pub use render::{
-    contact_sheet, energy_plot, render_frame, Camera, Colouring, Image, RenderOptions, View,
+    contact_sheet, energy_plot, loglog_plot, render_frame, Camera, Colouring, Image, LogSeries,
+    RenderOptions, View,
 };
 pub use run::render_run;
 pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};

@@ -5,6 +5,7 @@ pub mod camera;
 pub mod colour;
 pub mod font;
 pub mod image;
+pub mod loglog;
 pub mod plot;
 pub mod raster;
 pub mod scene;
@@ -12,6 +13,7 @@ pub mod sheet;
 
 pub use camera::View;
 pub use image::{load_png, Image, Rgb};
+pub use loglog::{loglog_plot, LogSeries};
 pub use plot::energy_plot;
 pub use scene::{render_frame, Camera, Colouring, RenderOptions};
 pub use sheet::contact_sheet;

@@ -6,7 +6,7 @@ use super::image::{Image, Rgb, BLACK, WHITE};
 use super::scene::format_number;
 use crate::history::EnergyRow;
 
-const GREY: Rgb = [225, 225, 225];
+pub(crate) const GREY: Rgb = [225, 225, 225];
 
 /// Ticks at 1, 2 or 5 times a power of ten covering [lo, hi] with about `n` steps.
 pub fn nice_ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
@@ -74,7 +74,6 @@ pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
     let mut img = Image::new(width, height, WHITE);
     let s = if width >= 700 { 2 } else { 1 };
     // The legend sits right of the plot so it never hides a curve.
-    let lh = text_height(s) + 8;
     let lw = SERIES
         .iter()
         .map(|se| text_width(se.name, s))
@@ -191,21 +190,33 @@ pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
         }
     }
 
-    let (lx, ly) = (left + pw + 14, top);
-    img.fill_rect(lx, ly, lw, lh * SERIES.len() as i64 + 8, WHITE);
-    img.stroke_rect(lx, ly, lw, lh * SERIES.len() as i64 + 8, [160, 160, 160]);
-    for (k, se) in SERIES.iter().enumerate() {
+    let entries: Vec<(&str, Rgb)> = SERIES.iter().map(|se| (se.name, se.colour)).collect();
+    draw_legend(&mut img, (left + pw + 14, top), lw, &entries, s);
+    img
+}
+
+/// Legend box of width `lw` at `(lx, ly)`: a line sample and the name per entry.
+pub(crate) fn draw_legend(
+    img: &mut Image,
+    (lx, ly): (i64, i64),
+    lw: i64,
+    entries: &[(&str, Rgb)],
+    s: u32,
+) {
+    let lh = text_height(s) + 8;
+    img.fill_rect(lx, ly, lw, lh * entries.len() as i64 + 8, WHITE);
+    img.stroke_rect(lx, ly, lw, lh * entries.len() as i64 + 8, [160, 160, 160]);
+    for (k, (name, colour)) in entries.iter().enumerate() {
         let y = ly + 6 + k as i64 * lh;
         let mid = (y + text_height(s) / 2) as f64;
         img.line(
             (lx as f64 + 6.0, mid),
             (lx as f64 + 28.0, mid),
             2.5,
-            se.colour,
+            *colour,
         );
-        draw_text(&mut img, lx + 34, y, se.name, s, BLACK);
+        draw_text(img, lx + 34, y, name, s, BLACK);
     }
-    img
 }
 
 /// Keep the first, min, max and last point of each pixel column, in order.

@@ -1,0 +1,167 @@
+//! What a stability cell did: ran stably (with its energy error), stopped with a
+//! diagnostic (input refused, or a run-time fault), or blew up silently (the one
+//! outcome that must never happen).
+
+use crash_core::{Body, EnergyTotals};
+use crash_master::{run_local, MasterError, RunInput, RunOptions, RunStats, Sink, SinkError};
+
+/// Final |energy-balance error| above which a run that ended without a fault counts as
+/// a silent blow-up.
+pub const SILENT_ERROR: f64 = 0.5;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Refused before the run (scene, mesh, material or overlap check).
+    Input,
+    /// Stopped by a run-time guard (`Fault`) or another master error.
+    Run,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    Stable {
+        /// Largest relative energy-balance error of the run.
+        max_error: f64,
+        steps: u64,
+        /// Above the scene's energy limit: `crash run` would warn and exit with 3.
+        over_limit: bool,
+    },
+    Stopped {
+        stage: Stage,
+        message: String,
+        /// Steps taken before the stop (0 for input).
+        steps: u64,
+    },
+    SilentBlowUp {
+        reason: String,
+    },
+}
+
+impl Outcome {
+    pub fn is_silent_blow_up(&self) -> bool {
+        matches!(self, Outcome::SilentBlowUp { .. })
+    }
+
+    pub fn short(&self) -> &'static str {
+        match self {
+            Outcome::Stable {
+                over_limit: false, ..
+            } => "stable",
+            Outcome::Stable {
+                over_limit: true, ..
+            } => "stable, warned",
+            Outcome::Stopped {
+                stage: Stage::Input,
+                ..
+            } => "refused at input",
+            Outcome::Stopped {
+                stage: Stage::Run, ..
+            } => "stopped (fault)",
+            Outcome::SilentBlowUp { .. } => "SILENT BLOW-UP",
+        }
+    }
+}
+
+/// Watches every energy row and every frame for non-finite numbers.
+#[derive(Debug, Default)]
+struct Watch {
+    non_finite: Option<String>,
+    last: Option<EnergyTotals>,
+    steps: u64,
+}
+
+impl Watch {
+    fn flag(&mut self, what: String) {
+        self.non_finite.get_or_insert(what);
+    }
+}
+
+impl Sink for Watch {
+    fn energy(&mut self, step: u64, _time: f64, t: &EnergyTotals) -> Result<(), SinkError> {
+        let all = [
+            t.kinetic,
+            t.internal,
+            t.hourglass,
+            t.contact,
+            t.damping,
+            t.external,
+            t.balance_error,
+        ];
+        if all.iter().any(|v| !v.is_finite()) {
+            self.flag(format!("non-finite energy at step {step}"));
+        }
+        self.last = Some(*t);
+        self.steps = step;
+        Ok(())
+    }
+
+    fn frame(&mut self, step: u64, _time: f64, bodies: &[Body]) -> Result<(), SinkError> {
+        for b in bodies {
+            let finite = |v: &[crash_core::Vec3]| v.iter().all(|p| p.iter().all(|c| c.is_finite()));
+            if !(finite(&b.x) && finite(&b.v) && finite(&b.w)) {
+                self.flag(format!("non-finite state of body {} at step {step}", b.id));
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, _stats: &RunStats, _error: Option<&MasterError>) -> Result<(), SinkError> {
+        Ok(())
+    }
+}
+
+/// Run `input` through the master loop (one in-process worker, like `crash run`) and
+/// classify what happened.
+pub fn run_and_classify(input: RunInput, energy_limit: f64) -> Outcome {
+    let mut watch = Watch::default();
+    let result = run_local(input, 1, &mut watch, &RunOptions::default());
+    classify(result, &watch, energy_limit)
+}
+
+fn classify(result: Result<RunStats, MasterError>, w: &Watch, energy_limit: f64) -> Outcome {
+    match result {
+        Err(e) => Outcome::Stopped {
+            stage: match e {
+                MasterError::Input(_) => Stage::Input,
+                _ => Stage::Run,
+            },
+            message: e.to_string(),
+            steps: w.steps,
+        },
+        Ok(stats) => {
+            if let Some(what) = &w.non_finite {
+                return Outcome::SilentBlowUp {
+                    reason: what.clone(),
+                };
+            }
+            let last = w.last.map_or(f64::NAN, |t| t.balance_error);
+            if !(stats.max_energy_error.is_finite() && last.is_finite()) {
+                return Outcome::SilentBlowUp {
+                    reason: "non-finite energy-balance error".into(),
+                };
+            }
+            if last.abs() > SILENT_ERROR {
+                return Outcome::SilentBlowUp {
+                    reason: format!(
+                        "finished with an energy-balance error of {:.1}% and no fault",
+                        100.0 * last.abs()
+                    ),
+                };
+            }
+            Outcome::Stable {
+                max_error: stats.max_energy_error,
+                steps: stats.steps,
+                over_limit: stats.max_energy_error > energy_limit,
+            }
+        }
+    }
+}
+
+/// An input refused before the run.
+pub fn refused(message: impl std::fmt::Display) -> Outcome {
+    Outcome::Stopped {
+        stage: Stage::Input,
+        message: message.to_string(),
+        steps: 0,
+    }
+}
