@@ -1,13 +1,15 @@
-//! A sink that writes the run directory with crash-io: energy.csv, frames (VTU + PVD)
+//! A sink that writes the run directory with crash-io: energy.csv, contacts.csv, frames
+//! (VTU + PVD)
 //! and summary.json (with the per-stage timing of the master).
 
 use crate::error::MasterError;
 use crate::sink::{Sink, SinkError};
 use crate::stats::RunStats;
+use crash_core::contact::PairStats;
 use crash_core::{Body, EnergyTotals};
 use crash_io::{
-    hash_hex, write_summary, EnergyHistory, Frame, Indicators, SeriesWriter, Summary, ENERGY_CSV,
-    SUMMARY_JSON,
+    hash_hex, write_summary, ContactHistory, ContactRow, EnergyHistory, Frame, Indicators,
+    SeriesWriter, Summary, CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
 };
 use std::path::{Path, PathBuf};
 
@@ -15,6 +17,7 @@ use std::path::{Path, PathBuf};
 pub struct FileSink {
     dir: PathBuf,
     energy: EnergyHistory,
+    contacts: ContactHistory,
     series: SeriesWriter,
     indicators: Indicators,
     summary: Summary,
@@ -40,6 +43,7 @@ impl FileSink {
         Ok(Self {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::create(dir.join(ENERGY_CSV))?,
+            contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
             series: SeriesWriter::create(dir)?,
             indicators: Indicators::default(),
             summary,
@@ -54,15 +58,37 @@ impl Sink for FileSink {
         Ok(())
     }
 
+    /// contacts.csv: one row per pair with pushed nodes, every step.
+    fn contact_stats(
+        &mut self,
+        _step: u64,
+        time: f64,
+        stats: &[PairStats],
+    ) -> Result<(), SinkError> {
+        for s in stats.iter().filter(|s| s.active_nodes > 0) {
+            self.indicators.observe_penetration(s.max_penetration_ratio);
+            self.contacts.write(&ContactRow {
+                time,
+                a: s.a,
+                b: s.b,
+                force: s.normal_force,
+                penetration: s.max_penetration,
+            })?;
+        }
+        Ok(())
+    }
+
     fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError> {
         let refs: Vec<&Body> = bodies.iter().collect();
         self.series.write(&Frame::capture(time, step, &refs))?;
         self.energy.flush()?;
+        self.contacts.flush()?;
         Ok(())
     }
 
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
         self.energy.flush()?;
+        self.contacts.flush()?;
         let s = &mut self.summary;
         s.steps = stats.steps;
         s.end_time = stats.time;

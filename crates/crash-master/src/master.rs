@@ -11,7 +11,7 @@ use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::sink::Sink;
 use crate::stats::{Migration, RunStats};
-use crash_core::contact::{BodyBox, ContactConfig};
+use crash_core::contact::{BodyBox, ContactConfig, PairStats};
 use crash_core::driver::{critical, RUNAWAY_PERSIST};
 use crash_core::{Body, BodyReport, EnergyLedger, EnergyTotals, Fault, RunConfig, Vec3};
 use crash_proto::{Command, Reply, Setup, StepReport};
@@ -53,6 +53,7 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     dt0: f64,
     ledger: EnergyLedger,
     reports: Vec<BodyReport>,
+    contacts: Vec<PairStats>,
     frames: u64,
     last_frame_step: Option<u64>,
     pub(crate) stats: RunStats,
@@ -138,6 +139,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             dt0: 0.0,
             ledger: EnergyLedger::default(),
             reports: Vec::with_capacity(n),
+            contacts: Vec::new(),
             frames: 0,
             last_frame_step: None,
             stats: RunStats::default(),
@@ -266,6 +268,8 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         self.stats.dt_min = f64::INFINITY;
         sink.energy(0, 0.0, &energy)
             .map_err(|e| MasterError::Sink(e.to_string()))?;
+        sink.contact_stats(0, 0.0, &self.contacts)
+            .map_err(|e| MasterError::Sink(e.to_string()))?;
         sink.contacts(0, 0.0, &self.meim.pairs())
             .map_err(|e| MasterError::Sink(e.to_string()))?;
         self.output(sink, true)?;
@@ -276,6 +280,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
     fn gather(&mut self, reps: Vec<StepReport>) -> Result<(), MasterError> {
         let n = self.info.len();
         self.reports.clear();
+        self.contacts.clear();
         let mut slot: Vec<Option<BodyReport>> = vec![None; n];
         let mut count = 0;
         for (w, rep) in reps.into_iter().enumerate() {
@@ -294,6 +299,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                 }
             }
             self.account(&rep.groups);
+            self.contacts.extend_from_slice(&rep.contacts);
         }
         if count != n {
             return Err(MasterError::Network(format!(
@@ -302,6 +308,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             )));
         }
         self.reports.extend(slot.into_iter().flatten());
+        self.contacts.sort_by_key(|c| (c.a, c.b));
         Ok(())
     }
 
@@ -409,6 +416,8 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             self.next_dt = self.choose_dt()?;
             self.check_margin()?;
             sink.energy(self.step, self.time, &energy)
+                .map_err(|e| MasterError::Sink(e.to_string()))?;
+            sink.contact_stats(self.step, self.time, &self.contacts)
                 .map_err(|e| MasterError::Sink(e.to_string()))?;
             let boxes: Vec<BodyBox> = self.reports.iter().map(|r| self.box_of(r)).collect();
             let changed = self.update_meim(&boxes);

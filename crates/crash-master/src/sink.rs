@@ -3,6 +3,7 @@
 
 use crate::error::MasterError;
 use crate::stats::RunStats;
+use crash_core::contact::PairStats;
 use crash_core::{Body, EnergyTotals};
 
 pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
@@ -13,6 +14,16 @@ pub trait Sink {
     fn energy(&mut self, step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError>;
     /// The MEIM edges (possible contacts, body id pairs a < b) whenever they change.
     fn contacts(&mut self, _step: u64, _time: f64, _pairs: &[(u32, u32)]) -> Result<(), SinkError> {
+        Ok(())
+    }
+    /// Contact statistics of the candidate pairs (sorted by pair) after the start and
+    /// after every step.
+    fn contact_stats(
+        &mut self,
+        _step: u64,
+        _time: f64,
+        _stats: &[PairStats],
+    ) -> Result<(), SinkError> {
         Ok(())
     }
     /// All bodies (sorted by id, gathered from every worker) at an output time.
@@ -36,6 +47,8 @@ pub struct RecordSink {
     pub energy: Vec<EnergyRecord>,
     pub frames: Vec<(u64, f64, u64)>,
     pub contacts: Vec<(u64, Vec<(u32, u32)>)>,
+    /// Steps (and times) with at least one pushed node, and the pairs' statistics.
+    pub contact_stats: Vec<(u64, f64, Vec<PairStats>)>,
     /// Hash of the last frame (the final state after a normal end).
     pub last_hash: Option<u64>,
     pub finished: Option<Result<RunStats, String>>,
@@ -53,6 +66,18 @@ impl Sink for RecordSink {
 
     fn contacts(&mut self, step: u64, _time: f64, pairs: &[(u32, u32)]) -> Result<(), SinkError> {
         self.contacts.push((step, pairs.to_vec()));
+        Ok(())
+    }
+
+    fn contact_stats(
+        &mut self,
+        step: u64,
+        time: f64,
+        stats: &[PairStats],
+    ) -> Result<(), SinkError> {
+        if stats.iter().any(|s| s.active_nodes > 0) {
+            self.contact_stats.push((step, time, stats.to_vec()));
+        }
         Ok(())
     }
 

@@ -6,21 +6,43 @@
 mod common;
 
 use common::procs::{master, out_dir, worker};
-use common::{bits, input, rows, scene_path};
+use common::{bits, input, rows, rows as rows_of, scene_path};
 use crash_master::{run_local, CostModel, RecordSink, RunOptions};
 use std::path::Path;
 use std::time::Duration;
 
 const RUN_TIMEOUT: Duration = Duration::from_secs(180);
 
-fn local(scene: &str) -> (Vec<[u64; 8]>, u64) {
+fn local_sink(scene: &str) -> (RecordSink, u64) {
     let opts = RunOptions {
         cost: CostModel::Estimated,
         ..RunOptions::default()
     };
     let mut sink = RecordSink::default();
     let stats = run_local(input(scene), 1, &mut sink, &opts).unwrap();
-    (rows(&sink), stats.final_hash)
+    (sink, stats.final_hash)
+}
+
+fn local(scene: &str) -> (Vec<[u64; 8]>, u64) {
+    let (sink, hash) = local_sink(scene);
+    (rows(&sink), hash)
+}
+
+/// Exact bits of the contacts.csv rows (pairs with pushed nodes).
+fn contact_rows(sink: &RecordSink) -> Vec<(u64, u32, u32, u64, u64)> {
+    let mut out = Vec::new();
+    for (_, time, stats) in &sink.contact_stats {
+        for s in stats.iter().filter(|s| s.active_nodes > 0) {
+            out.push((
+                time.to_bits(),
+                s.a,
+                s.b,
+                s.normal_force.to_bits(),
+                s.max_penetration.to_bits(),
+            ));
+        }
+    }
+    out
 }
 
 /// energy.csv rows and the final hash of a finished run directory.
@@ -36,7 +58,14 @@ fn read_run(dir: &Path) -> (Vec<[u64; 8]>, u64, crash_io::Summary) {
 }
 
 /// Run `scene` on a master and two worker processes with `threads` each.
-fn remote(scene: &str, threads: usize, tag: &str) -> (Vec<[u64; 8]>, u64, crash_io::Summary) {
+type RunFiles = (
+    Vec<[u64; 8]>,
+    u64,
+    crash_io::Summary,
+    Vec<(u64, u32, u32, u64, u64)>,
+);
+
+fn remote(scene: &str, threads: usize, tag: &str) -> RunFiles {
     let out = out_dir(tag);
     let (mut m, url) = master(&scene_path(scene), 2, &out, &["--estimated-costs"]);
     let mut w1 = worker(&url, threads, &[]);
@@ -52,9 +81,22 @@ fn remote(scene: &str, threads: usize, tag: &str) -> (Vec<[u64; 8]>, u64, crash_
             w.log()
         );
     }
-    let r = read_run(&out);
+    let (rows, hash, summary) = read_run(&out);
+    let contacts = crash_io::read_contacts_csv(out.join(crash_io::CONTACTS_CSV))
+        .unwrap()
+        .iter()
+        .map(|r| {
+            (
+                r.time.to_bits(),
+                r.a,
+                r.b,
+                r.force.to_bits(),
+                r.penetration.to_bits(),
+            )
+        })
+        .collect();
     let _ = std::fs::remove_dir_all(&out);
-    r
+    (rows, hash, summary, contacts)
 }
 
 #[test]
@@ -62,7 +104,7 @@ fn two_worker_processes_match_the_local_run_bit_for_bit_with_1_and_2_threads() {
     let scene = "ten-spheres-tiny.toml";
     let (ref_rows, ref_hash) = local(scene);
     for threads in [1, 2] {
-        let (rows, hash, summary) = remote(scene, threads, &format!("ten-{threads}"));
+        let (rows, hash, summary, _) = remote(scene, threads, &format!("ten-{threads}"));
         assert_eq!(rows.len(), ref_rows.len(), "{threads} threads: energy rows");
         assert!(
             rows == ref_rows,
@@ -78,10 +120,20 @@ fn two_worker_processes_match_the_local_run_bit_for_bit_with_1_and_2_threads() {
 #[test]
 fn two_worker_smoke_with_migration_over_the_wire() {
     let scene = "two-spheres-tiny.toml";
-    let (ref_rows, ref_hash) = local(scene);
-    let (rows, hash, _) = remote(scene, 1, "smoke");
-    assert!(rows == ref_rows, "energy rows differ from the local run");
+    let (sink, ref_hash) = local_sink(scene);
+    let (rows, hash, _, contacts) = remote(scene, 1, "smoke");
+    assert!(
+        rows == rows_of(&sink),
+        "energy rows differ from the local run"
+    );
     assert_eq!(hash, ref_hash);
+    // contact statistics travel too: contacts.csv holds the local run's rows, exactly
+    let ref_contacts = contact_rows(&sink);
+    assert!(!ref_contacts.is_empty());
+    assert!(
+        contacts == ref_contacts,
+        "contacts.csv differs from the local run"
+    );
 }
 
 #[test]

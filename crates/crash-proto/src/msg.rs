@@ -8,8 +8,8 @@ use crate::error::ProtoError;
 use crate::pb;
 use crate::pb::master_message::Command as PbCommand;
 use crate::pb::worker_message::Reply as PbReply;
-use crate::report::{fault_to_pb, reports_to_pb};
-use crash_core::contact::{ContactConfig, PenaltyKind};
+use crate::report::{contacts_from_pb, contacts_to_pb, fault_to_pb, reports_to_pb};
+use crash_core::contact::{ContactConfig, PairStats, PenaltyKind};
 use crash_core::{Body, BodyReport, Fault, Vec3};
 
 /// Run-wide parameters every group needs.
@@ -57,6 +57,8 @@ pub struct StepReport {
     pub groups: Vec<GroupTime>,
     /// Wall time the worker spent on the command.
     pub compute_ns: u64,
+    /// Contact statistics of the worker's groups, group after group.
+    pub contacts: Vec<PairStats>,
 }
 
 #[derive(Debug, Clone)]
@@ -216,6 +218,7 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
             group_first: rep.groups.iter().map(|g| g.first).collect(),
             group_nanos: rep.groups.iter().map(|g| g.nanos).collect(),
             compute_nanos: rep.compute_ns,
+            contacts: Some(contacts_to_pb(&rep.contacts)),
         }),
         Reply::Unloaded(bodies) => PbReply::Unloaded(pb::Bodies {
             states: bodies.iter().map(state_to_pb).collect(),
@@ -255,5 +258,9 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
             .map(|(&first, &nanos)| GroupTime { first, nanos })
             .collect(),
         compute_ns: r.compute_nanos,
+        contacts: match &r.contacts {
+            Some(c) => contacts_from_pb(c)?,
+            None => Vec::new(),
+        },
     })
 }

@@ -4,6 +4,7 @@ use crate::body::vec3;
 use crate::error::ProtoError;
 use crate::pb;
 use crate::pb::fault::Kind;
+use crash_core::contact::PairStats;
 use crash_core::{BodyEnergy, BodyReport, Fault};
 
 const VALUES: usize = 15;
@@ -79,6 +80,59 @@ pub fn reports_from_pb(p: &pb::BodyReports) -> Result<Vec<BodyReport>, ProtoErro
             max_move: v[13],
             hot_element: index(e[1])?,
             hot_density: v[14],
+        });
+    }
+    Ok(out)
+}
+
+const CONTACT_VALUES: usize = 6;
+
+/// Column-pack contact statistics.
+pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
+    let mut out = pb::ContactStats {
+        pairs: Vec::with_capacity(2 * stats.len()),
+        active_nodes: Vec::with_capacity(stats.len()),
+        values: Vec::with_capacity(CONTACT_VALUES * stats.len()),
+    };
+    for s in stats {
+        out.pairs.extend_from_slice(&[s.a, s.b]);
+        out.active_nodes.push(s.active_nodes as u64);
+        out.values.extend_from_slice(&[
+            s.max_penetration,
+            s.max_penetration_ratio,
+            s.normal_force,
+            s.force_on_a.x,
+            s.force_on_a.y,
+            s.force_on_a.z,
+        ]);
+    }
+    out
+}
+
+pub fn contacts_from_pb(p: &pb::ContactStats) -> Result<Vec<PairStats>, ProtoError> {
+    let n = p.active_nodes.len();
+    if p.pairs.len() != 2 * n || p.values.len() != CONTACT_VALUES * n {
+        return Err(ProtoError::Invalid(format!(
+            "contact statistics of {n} pairs have {} ids and {} values",
+            p.pairs.len(),
+            p.values.len()
+        )));
+    }
+    let mut out = Vec::with_capacity(n);
+    for ((ab, &active), v) in p
+        .pairs
+        .chunks_exact(2)
+        .zip(&p.active_nodes)
+        .zip(p.values.chunks_exact(CONTACT_VALUES))
+    {
+        out.push(PairStats {
+            a: ab[0],
+            b: ab[1],
+            active_nodes: index(active)?,
+            max_penetration: v[0],
+            max_penetration_ratio: v[1],
+            normal_force: v[2],
+            force_on_a: vec3(&v[3..6]),
         });
     }
     Ok(out)

@@ -190,6 +190,15 @@ fn step_report_round_trips_bit_exact() {
             nanos: 12345,
         }],
         compute_ns: 99,
+        contacts: vec![crash_core::contact::PairStats {
+            a: 0,
+            b: 1,
+            active_nodes: 7,
+            max_penetration: 1.5e-5,
+            max_penetration_ratio: 0.0075,
+            normal_force: 123.456,
+            force_on_a: Vec3::new(-1.0, 0.25, 1e-300),
+        }],
     };
     let msg = reply_to_pb(&Reply::Report(rep.clone()));
     let bytes = msg.encode_to_vec();

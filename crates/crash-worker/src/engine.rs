@@ -240,11 +240,15 @@ impl Engine {
             bodies: Vec::with_capacity(self.body_count()),
             groups: Vec::with_capacity(results.len()),
             compute_ns: 0,
+            contacts: Vec::new(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.bodies.first().map_or(0, |b| b.id);
             match r {
-                Ok(reports) => rep.bodies.extend(reports),
+                Ok(reports) => {
+                    rep.bodies.extend(reports);
+                    rep.contacts.extend_from_slice(g.contact_stats());
+                }
                 Err(fault) => {
                     self.broken = true;
                     return Reply::Fault {
