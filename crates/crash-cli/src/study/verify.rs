@@ -62,7 +62,11 @@ impl LadderResult {
             )),
             Some(_) => {}
         }
-        for m in self.dt.iter().filter(|m| m.error.is_nan() || m.error > self.case.tolerance) {
+        for m in self
+            .dt
+            .iter()
+            .filter(|m| m.error.is_nan() || m.error > self.case.tolerance)
+        {
             p.push(format!(
                 "{name}: error {:.3e} at dt safety {} exceeds the tolerance {:.1e}",
                 m.error, m.level.safety, self.case.tolerance
