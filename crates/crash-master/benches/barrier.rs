@@ -24,7 +24,23 @@ fn body(id: u32) -> Body {
     .unwrap()
 }
 
+fn heavy(id: u32) -> Body {
+    let s = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).unwrap(), 0.001);
+    Body::new(
+        id,
+        "h",
+        &plate(0.3, 0.3, 60, 60, ElementKind::Quad),
+        s,
+        Stabilization::default(),
+    )
+    .unwrap()
+}
+
 fn cluster(n: usize) -> Cluster {
+    cluster_with(n, body)
+}
+
+fn cluster_with(n: usize, make: fn(u32) -> Body) -> Cluster {
     let mut c = Cluster::bind("127.0.0.1:0".parse().unwrap(), n, RemoteOptions::default()).unwrap();
     let url = format!("http://{}", c.local_addr());
     for _ in 0..n {
@@ -41,7 +57,7 @@ fn cluster(n: usize) -> Cluster {
     for (i, l) in c.links_mut().iter_mut().enumerate() {
         for cmd in [
             Command::Setup(setup),
-            Command::Load(vec![body(i as u32)]),
+            Command::Load(vec![make(i as u32)]),
             Command::Regroup(vec![vec![i as u32]]),
             Command::Start,
         ] {
@@ -63,7 +79,9 @@ fn echo_worker(url: String) {
         .build()
         .unwrap();
     rt.block_on(async move {
-        let mut client = CoordinatorClient::connect(url).await.unwrap();
+        let Ok(mut client) = CoordinatorClient::connect(url).await else {
+            return;
+        };
         let (tx, rx) = tokio::sync::mpsc::unbounded_channel();
         tx.send(pb::WorkerMessage {
             reply: Some(pb::worker_message::Reply::Hello(pb::Hello {
@@ -74,12 +92,14 @@ fn echo_worker(url: String) {
             })),
         })
         .unwrap();
-        let mut inbound = client
+        let Ok(resp) = client
             .attach(tokio_stream::wrappers::UnboundedReceiverStream::new(rx))
             .await
-            .unwrap()
-            .into_inner();
-        let _welcome = inbound.message().await.unwrap();
+        else {
+            return;
+        };
+        let mut inbound = resp.into_inner();
+        let _welcome = inbound.message().await;
         let report = pb::WorkerMessage {
             reply: Some(pb::worker_message::Reply::Report(pb::Report {
                 bodies: Some(pb::BodyReports::default()),
@@ -142,5 +162,30 @@ fn barrier(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, echo, barrier);
+/// One worker holding a 3 600-quad plate: the step time minus the worker's own
+/// compute time is the overhead when compute separates the messages.
+fn loaded(c: &mut Criterion) {
+    let mut cl = cluster_with(1, heavy);
+    let mut step = 0u64;
+    let mut compute = 0u64;
+    let mut n = 0u64;
+    c.bench_function("barrier_step_3600_quads/1", |b| {
+        b.iter(|| {
+            let l = &mut cl.links_mut()[0];
+            l.send(Command::Step { step, dt: 1e-8 }).unwrap();
+            let Reply::Report(r) = l.recv().unwrap() else {
+                panic!("not a report")
+            };
+            compute += r.compute_ns;
+            n += 1;
+            step += 1;
+        })
+    });
+    println!(
+        "worker compute per step: {:.1} us",
+        compute as f64 / n.max(1) as f64 * 1e-3
+    );
+}
+
+criterion_group!(benches, echo, barrier, loaded);
 criterion_main!(benches);

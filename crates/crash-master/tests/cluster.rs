@@ -225,3 +225,19 @@ fn a_silent_worker_ends_the_run_after_the_reply_timeout() {
     drop(w2);
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn workers_exit_with_a_clear_message_when_the_master_dies() {
+    let (mut m, mut w1, mut w2, out) = long_run("master-killed", &[]);
+    m.kill();
+    for w in [&mut w1, &mut w2] {
+        let s = w.wait(Duration::from_secs(60));
+        assert!(!s.success());
+        assert!(
+            w.log().contains("lost the master at http://127.0.0.1:"),
+            "{}",
+            w.log()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,9 +1,9 @@
 //! The worker process side of a session: dial the master (retrying with backoff, so
 //! workers may start first), say Hello, then answer commands one by one.
 //!
-//! Threads: one current-thread tokio runtime does all communication; every command
-//! runs as one job on the rayon compute pool (the engine moves into the job and back),
-//! so the runtime stays free while groups are integrated.
+//! Threads: the calling thread drives a current-thread tokio runtime while it waits for
+//! a command, then computes it outside the runtime as worker 0 of the rayon compute
+//! pool (the other pool threads join by work stealing); see `serve`.
 
 use crate::engine::Engine;
 use crash_proto::msg::{command_from_pb, reply_to_pb};
@@ -13,10 +13,10 @@ use crash_proto::pb::{self, worker_message};
 use crash_proto::{Command, Reply, PROTOCOL_VERSION};
 use std::time::{Duration, Instant};
 use thiserror::Error;
-use tokio::sync::{mpsc, oneshot};
+use tokio::sync::mpsc;
 use tokio_stream::wrappers::UnboundedReceiverStream;
 use tonic::transport::{Channel, Endpoint};
-use tonic::Code;
+use tonic::{Code, Streaming};
 
 /// Largest message accepted (a Load of big bodies can be hundreds of MB).
 pub const MAX_MESSAGE: usize = 1 << 31;
@@ -70,12 +70,17 @@ pub fn run(opts: &WorkerOptions) -> Result<String, WorkerError> {
         .enable_all()
         .build()
         .map_err(|e| WorkerError::Start(format!("tokio runtime: {e}")))?;
+    // This thread is worker 0 of the compute pool: a command's compute starts here,
+    // the other threads join through work stealing, and no hand-over between a
+    // communication thread and a compute thread sits in the step's critical path.
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.max(1))
+        .use_current_thread()
         .thread_name(|i| format!("crash-compute-{i}"))
         .build()
         .map_err(|e| WorkerError::Start(format!("compute pool: {e}")))?;
-    rt.block_on(session(opts, pool))
+    let (tx, inbound) = rt.block_on(attach(opts))?;
+    serve(opts, &rt, &pool, tx, inbound)
 }
 
 fn endpoint(url: &str) -> Result<Endpoint, WorkerError> {
@@ -142,13 +147,18 @@ fn hello(opts: &WorkerOptions) -> pb::WorkerMessage {
     }
 }
 
-async fn session(opts: &WorkerOptions, pool: rayon::ThreadPool) -> Result<String, WorkerError> {
+/// Dial the master, say Hello, check its Welcome.
+async fn attach(
+    opts: &WorkerOptions,
+) -> Result<
+    (
+        mpsc::UnboundedSender<pb::WorkerMessage>,
+        Streaming<pb::MasterMessage>,
+    ),
+    WorkerError,
+> {
     let url = opts.master.as_str();
     let lost = |reason: String| WorkerError::Lost {
-        url: url.into(),
-        reason,
-    };
-    let protocol = |reason: String| WorkerError::Protocol {
         url: url.into(),
         reason,
     };
@@ -189,14 +199,38 @@ async fn session(opts: &WorkerOptions, pool: rayon::ThreadPool) -> Result<String
                 w.workers
             );
         }
-        Ok(Some(_)) => return Err(protocol("the first message was not Welcome".into())),
+        Ok(Some(_)) => {
+            return Err(WorkerError::Protocol {
+                url: url.into(),
+                reason: "the first message was not Welcome".into(),
+            })
+        }
         Ok(None) => return Err(lost("the master closed the session before Welcome".into())),
         Err(s) => return Err(lost(format!("{}: {}", s.code(), s.message()))),
     }
+    Ok((tx, inbound))
+}
 
-    let mut engine = Some(Engine::new());
+/// Answer commands until Shutdown. The runtime is driven only while waiting for the
+/// next command (and while flushing the reply, which happens in that same wait):
+/// compute never runs inside it. The protocol is strictly one reply per command, so
+/// nothing needs the connection to progress during compute; TCP keepalive is answered
+/// by the kernel.
+fn serve(
+    opts: &WorkerOptions,
+    rt: &tokio::runtime::Runtime,
+    pool: &rayon::ThreadPool,
+    tx: mpsc::UnboundedSender<pb::WorkerMessage>,
+    mut inbound: Streaming<pb::MasterMessage>,
+) -> Result<String, WorkerError> {
+    let url = opts.master.as_str();
+    let lost = |reason: String| WorkerError::Lost {
+        url: url.into(),
+        reason,
+    };
+    let mut engine = Engine::new();
     loop {
-        let msg = match inbound.message().await {
+        let msg = match rt.block_on(inbound.message()) {
             Ok(Some(m)) => m,
             Ok(None) => {
                 return Err(lost(
@@ -211,20 +245,7 @@ async fn session(opts: &WorkerOptions, pool: rayon::ThreadPool) -> Result<String
                     Command::Shutdown(r) => Some(r.clone()),
                     _ => None,
                 };
-                let eng = engine
-                    .take()
-                    .ok_or_else(|| WorkerError::Start("engine lost".into()))?;
-                let (done_tx, done_rx) = oneshot::channel();
-                pool.spawn(move || {
-                    let mut eng = eng;
-                    let reply = reply_to_pb(&eng.handle(cmd));
-                    let _ = done_tx.send((eng, reply));
-                });
-                let (eng, reply) = done_rx
-                    .await
-                    .map_err(|_| WorkerError::Start("a compute job panicked".into()))?;
-                engine = Some(eng);
-                (reply, shutdown)
+                (pool.install(|| reply_to_pb(&engine.handle(cmd))), shutdown)
             }
             Err(e) => (reply_to_pb(&Reply::Error(e.to_string())), None),
         };
@@ -234,10 +255,12 @@ async fn session(opts: &WorkerOptions, pool: rayon::ThreadPool) -> Result<String
         if let Some(reason) = shutdown {
             // Close our side and let the master close its own, so the Ack is flushed.
             drop(tx);
-            let _ = tokio::time::timeout(Duration::from_secs(5), async {
-                while let Ok(Some(_)) = inbound.message().await {}
-            })
-            .await;
+            rt.block_on(async {
+                let _ = tokio::time::timeout(Duration::from_secs(5), async {
+                    while let Ok(Some(_)) = inbound.message().await {}
+                })
+                .await;
+            });
             return Ok(reason);
         }
     }
