@@ -241,3 +241,47 @@ fn workers_exit_with_a_clear_message_when_the_master_dies() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A physical fault in a worker process reaches the master intact (same text as the
+/// single-process driver) and ends the run; the workers are told to stop.
+#[test]
+fn a_fault_in_a_worker_process_ends_the_run_with_the_drivers_message() {
+    let out = out_dir("fault");
+    let text = std::fs::read_to_string(scene_path("two-spheres-tiny.toml"))
+        .unwrap()
+        .replace(
+            "penalty_scale = 0.1",
+            "penalty_scale = 0.1\nmargin = 1.0e-5",
+        )
+        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [400.0, 0.0, 0.0]");
+    let scene = out.join("fast.toml");
+    std::fs::write(&scene, &text).unwrap();
+    let inp = input_from(&scene);
+    let mut g = crash_core::Group::new(inp.bodies.clone(), inp.gravity);
+    g.contact = inp.contact;
+    let expected = crash_core::driver::Run::new(g, inp.config)
+        .unwrap()
+        .run(|_| {})
+        .unwrap_err()
+        .to_string();
+    let run_dir = out.join("run");
+    let (mut m, url) = master(&scene, 2, &run_dir, &[]);
+    let mut w1 = worker(&url, 1, &[]);
+    let mut w2 = worker(&url, 1, &[]);
+    assert!(!m.wait(RUN_TIMEOUT).success());
+    assert!(
+        m.log().contains(&expected),
+        "expected '{expected}', master said:\n{}",
+        m.log()
+    );
+    for w in [&mut w1, &mut w2] {
+        assert!(w.wait(Duration::from_secs(30)).success(), "{}", w.log());
+    }
+    let s = crash_io::read_summary(run_dir.join(crash_io::SUMMARY_JSON)).unwrap();
+    assert_eq!(s.fault.as_deref(), Some(expected.as_str()));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+fn input_from(path: &Path) -> crash_master::RunInput {
+    crash_master::RunInput::from_built(crash_scene::load(path).unwrap().build().unwrap())
+}

@@ -53,3 +53,39 @@ fn local_workers_match_the_core_driver_bit_for_bit() {
         s3.migrations.len()
     );
 }
+
+/// A physical fault inside a worker stops the run with exactly the driver's fault,
+/// whatever the number of workers (here: tunnelling, a sphere thrown far too fast for
+/// a tiny contact margin).
+#[test]
+fn a_fault_in_a_worker_is_the_drivers_fault() {
+    let text = std::fs::read_to_string(common::scene_path("two-spheres-tiny.toml"))
+        .unwrap()
+        .replace(
+            "penalty_scale = 0.1",
+            "penalty_scale = 0.1\nmargin = 1.0e-5",
+        )
+        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [400.0, 0.0, 0.0]");
+    let scene = crash_scene::parse(&text, "fast.toml").unwrap();
+    let inp = crash_master::RunInput::from_built(scene.build().unwrap());
+    let mut g = crash_core::Group::new(inp.bodies.clone(), inp.gravity);
+    g.contact = inp.contact;
+    let expected = crash_core::driver::Run::new(g, inp.config)
+        .unwrap()
+        .run(|_| {})
+        .unwrap_err();
+    assert!(
+        matches!(expected, crash_core::Fault::Tunnelling { .. }),
+        "{expected}"
+    );
+    for workers in [1, 2] {
+        let mut sink = RecordSink::default();
+        let err = run_local(inp.clone(), workers, &mut sink, &opts()).unwrap_err();
+        match &err {
+            crash_master::MasterError::Fault(f) => assert_eq!(f, &expected),
+            other => panic!("{workers} workers: {other}"),
+        }
+        assert_eq!(err.to_string(), expected.to_string());
+        assert!(matches!(sink.finished, Some(Err(_))));
+    }
+}
