@@ -84,8 +84,13 @@ pub fn study(args: &StudyArgs) -> anyhow::Result<ExitCode> {
                     r.outcome.short(),
                     r.wall_s,
                     match &r.outcome {
-                        Outcome::Stable { max_error, .. } =>
-                            format!(", energy error {max_error:.2e}"),
+                        Outcome::Stable {
+                            max_error,
+                            max_penetration,
+                            ..
+                        } => format!(
+                            ", energy error {max_error:.2e}, penetration/t {max_penetration:.3}"
+                        ),
                         Outcome::Stopped { message, .. } => format!(": {message}"),
                         Outcome::SilentBlowUp { reason } => format!(": {reason}"),
                     }

@@ -2,6 +2,7 @@
 //! diagnostic (input refused, or a run-time fault), or blew up silently (the one
 //! outcome that must never happen).
 
+use crash_core::contact::PairStats;
 use crash_core::{Body, EnergyTotals};
 use crash_master::{run_local, MasterError, RunInput, RunOptions, RunStats, Sink, SinkError};
 
@@ -22,8 +23,11 @@ pub enum Outcome {
     Stable {
         /// Largest relative energy-balance error of the run.
         max_error: f64,
+        /// Largest penetration / thickness of the thinner body seen in any contact.
+        max_penetration: f64,
         steps: u64,
-        /// Above the scene's energy limit: `crash run` would warn and exit with 3.
+        /// Energy error above the scene's energy limit (`crash run` warns and exits with
+        /// 3) or penetration above crash-io's limit (a warning in summary.json).
         over_limit: bool,
     },
     Stopped {
@@ -66,6 +70,7 @@ impl Outcome {
 #[derive(Debug, Default)]
 struct Watch {
     non_finite: Option<String>,
+    max_penetration: f64,
     last: Option<EnergyTotals>,
     steps: u64,
 }
@@ -92,6 +97,16 @@ impl Sink for Watch {
         }
         self.last = Some(*t);
         self.steps = step;
+        Ok(())
+    }
+
+    fn contact_stats(&mut self, step: u64, _time: f64, s: &[PairStats]) -> Result<(), SinkError> {
+        for p in s {
+            if !(p.max_penetration_ratio.is_finite() && p.normal_force.is_finite()) {
+                self.flag(format!("non-finite contact statistics at step {step}"));
+            }
+            self.max_penetration = self.max_penetration.max(p.max_penetration_ratio);
+        }
         Ok(())
     }
 
@@ -150,8 +165,10 @@ fn classify(result: Result<RunStats, MasterError>, w: &Watch, energy_limit: f64)
             }
             Outcome::Stable {
                 max_error: stats.max_energy_error,
+                max_penetration: w.max_penetration,
                 steps: stats.steps,
-                over_limit: stats.max_energy_error > energy_limit,
+                over_limit: stats.max_energy_error > energy_limit
+                    || w.max_penetration > crash_io::summary::PENETRATION_LIMIT,
             }
         }
     }

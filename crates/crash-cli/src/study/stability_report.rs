@@ -24,8 +24,13 @@ fn cell_text(s: &str) -> String {
 fn detail(o: &Outcome) -> String {
     match o {
         Outcome::Stable {
-            max_error, steps, ..
-        } => format!("energy error {:.2e} ({steps} steps)", max_error),
+            max_error,
+            max_penetration,
+            steps,
+            ..
+        } => format!(
+            "energy error {max_error:.2e}, penetration/t {max_penetration:.3} ({steps} steps)"
+        ),
         Outcome::Stopped {
             stage: Stage::Input,
             message,
