@@ -1,5 +1,5 @@
 //! Speed-up of worker processes on the ten-spheres-three-plates-small scene (4 400
-//! elements), shortened to `END_TIME`: crash-master with 1 worker x 1 thread, 2 workers
+//! elements), shortened to `END_TIME` with frames only at the start and the end: crash-master with 1 worker x 1 thread, 2 workers
 //! x 1 thread, and 1 worker x 2 threads, each run `REPS` times; prints the median wall
 //! time of the run (summary.json `wall_time_s`: from the first command to the last
 //! frame, without process start-up) and the speed-up over 1 x 1.
@@ -28,6 +28,8 @@ fn run(scene: &Path, workers: usize, threads: usize, out: &Path) -> (f64, f64) {
             "--out",
             out.to_str().unwrap(),
             "--end-time",
+            END_TIME,
+            "--output-interval",
             END_TIME,
         ])
         .env("RUST_LOG", "warn")

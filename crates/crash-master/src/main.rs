@@ -29,6 +29,9 @@ struct Args {
     /// Replace the scene's end time [s].
     #[arg(long)]
     end_time: Option<f64>,
+    /// Replace the scene's output interval [s].
+    #[arg(long)]
+    output_interval: Option<f64>,
     /// Wait this long for all workers to attach [s].
     #[arg(long, default_value_t = 300.0)]
     accept_timeout: f64,
@@ -64,7 +67,7 @@ fn main() -> ExitCode {
 fn run(args: Args) -> anyhow::Result<()> {
     let scene = crash_scene::load(&args.scene)?.with_overrides(crash_scene::Overrides {
         end_time: args.end_time,
-        output_interval: None,
+        output_interval: args.output_interval,
     })?;
     let input = RunInput::from_built(scene.build()?);
     let mut sink = FileSink::create(&args.out, &input.name, input.scene_hash, &input.bodies)

@@ -285,3 +285,37 @@ fn a_fault_in_a_worker_process_ends_the_run_with_the_drivers_message() {
 fn input_from(path: &Path) -> crash_master::RunInput {
     crash_master::RunInput::from_built(crash_scene::load(path).unwrap().build().unwrap())
 }
+
+/// Workers may start before the master: they retry with backoff until it listens.
+#[test]
+fn workers_started_before_the_master_attach_when_it_comes_up() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let url = format!("http://127.0.0.1:{port}");
+    let mut w1 = worker(&url, 1, &[]);
+    let mut w2 = worker(&url, 1, &[]);
+    std::thread::sleep(Duration::from_millis(1500));
+    let out = out_dir("early");
+    let listen = format!("127.0.0.1:{port}");
+    let mut m = common::procs::Proc::spawn(
+        "crash-master",
+        common::procs::MASTER,
+        &[
+            scene_path("two-spheres-tiny.toml").to_str().unwrap(),
+            "--listen",
+            &listen,
+            "--workers",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert!(m.wait(RUN_TIMEOUT).success(), "{}", m.log());
+    for w in [&mut w1, &mut w2] {
+        assert!(w.wait(Duration::from_secs(30)).success(), "{}", w.log());
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
