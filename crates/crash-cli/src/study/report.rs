@@ -63,6 +63,15 @@ fn table(out: &mut String, r: &LadderResult, ms: &[Measurement], orders: &[Optio
     }
 }
 
+/// "pass", "FAIL", and the coarser levels that stopped.
+fn status(r: &LadderResult, problems: &[String]) -> String {
+    let mut s = if problems.is_empty() { "pass" } else { "FAIL" }.to_string();
+    for f in &r.failures {
+        s.push_str(&format!("; level {} stopped", f.level.mesh));
+    }
+    s
+}
+
 /// Figure file name of a case.
 pub fn figure_name(case_id: &str) -> String {
     format!("verification-{case_id}.png")
@@ -139,7 +148,7 @@ pub fn markdown(results: &[LadderResult], note: &RunNote) -> String {
             r.case.tolerance,
             order_text(r.mesh_orders().last().copied().flatten()),
             r.case.min_order.map_or("–".into(), |o| format!("≥ {o}")),
-            if problems.is_empty() { "pass" } else { "FAIL" }
+            status(r, &problems)
         );
     }
     let mut seen: Vec<&str> = Vec::new();
