@@ -28,6 +28,7 @@ fn main() {
         b.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
     }
     let mut e = 0.0;
+    let start = std::time::Instant::now();
     for step in 0..cycles {
         e += b
             .internal_forces(1e-7, step as u64)
@@ -35,8 +36,9 @@ fn main() {
             .energy
             .internal;
     }
+    let ns = start.elapsed().as_nanos() as f64 / (cycles * b.element_count()) as f64;
     println!(
-        "{} elements x {cycles} cycles, energy {e:e}",
+        "{} elements x {cycles} cycles, energy {e:e}, {ns:.1} ns per element-cycle",
         b.element_count()
     );
 }
