@@ -59,6 +59,65 @@ pub fn critical(reports: &[BodyReport]) -> (f64, u32, usize) {
     best
 }
 
+/// The global time step: safety x the smallest stable dt of the reports (or the fixed dt);
+/// a step below `dt_floor_ratio` of the first one (`dt0`, 0 before it is known) is a fault.
+/// The same rule in every mode (single group, local workers, remote workers).
+pub fn choose_dt(
+    cfg: &RunConfig,
+    reports: &[BodyReport],
+    dt0: f64,
+    step: u64,
+) -> Result<f64, Fault> {
+    let (crit, body, element) = critical(reports);
+    let dt = match cfg.fixed_dt {
+        Some(dt) => dt,
+        None => cfg.safety * crit,
+    };
+    let collapsed = dt0 > 0.0 && dt < cfg.dt_floor_ratio * dt0;
+    if collapsed || dt.is_nan() || dt <= 0.0 {
+        return Err(Fault::DtCollapse {
+            step,
+            dt,
+            floor: cfg.dt_floor_ratio * dt0,
+            body,
+            element,
+        });
+    }
+    Ok(dt)
+}
+
+/// The runaway guard: the relative balance error above `runaway_limit` for more than
+/// `RUNAWAY_PERSIST` consecutive steps (or NaN) stops the run, naming the most strained
+/// element. A start from rest has O(1) relative errors for a few steps while all energies
+/// are tiny; a real instability keeps growing, hence the persistence.
+pub fn check_runaway(
+    cfg: &RunConfig,
+    ledger: &mut EnergyLedger,
+    energy: &EnergyTotals,
+    reports: &[BodyReport],
+    step: u64,
+) -> Result<(), Fault> {
+    if energy.balance_error.abs() <= cfg.runaway_limit {
+        ledger.over_limit = 0;
+    } else {
+        ledger.over_limit += 1;
+    }
+    if ledger.over_limit > RUNAWAY_PERSIST || energy.balance_error.is_nan() {
+        let hot = reports.iter().fold(None::<&BodyReport>, |a, b| match a {
+            Some(a) if a.hot_density >= b.hot_density => Some(a),
+            _ => Some(b),
+        });
+        return Err(Fault::EnergyRunaway {
+            step,
+            error: energy.balance_error,
+            limit: cfg.runaway_limit,
+            body: hot.map_or(0, |h| h.id),
+            element: hot.map_or(0, |h| h.hot_element),
+        });
+    }
+    Ok(())
+}
+
 impl Run {
     pub fn new(mut group: Group, cfg: RunConfig) -> Result<Self, Fault> {
         let reports = group.start()?;
@@ -81,22 +140,7 @@ impl Run {
     }
 
     fn choose_dt(&self) -> Result<f64, Fault> {
-        let (crit, body, element) = critical(&self.reports);
-        let dt = match self.cfg.fixed_dt {
-            Some(dt) => dt,
-            None => self.cfg.safety * crit,
-        };
-        let collapsed = self.dt0 > 0.0 && dt < self.cfg.dt_floor_ratio * self.dt0;
-        if collapsed || dt.is_nan() || dt <= 0.0 {
-            return Err(Fault::DtCollapse {
-                step: self.group.step,
-                dt,
-                floor: self.cfg.dt_floor_ratio * self.dt0,
-                body,
-                element,
-            });
-        }
-        Ok(dt)
+        choose_dt(&self.cfg, &self.reports, self.dt0, self.group.step)
     }
 
     pub fn time(&self) -> f64 {
@@ -120,29 +164,13 @@ impl Run {
         self.energy = self
             .ledger
             .update(EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)));
-        // A start from rest has O(1) relative errors for a few steps while all energies
-        // are tiny; a real instability keeps growing, so require persistence.
-        if self.energy.balance_error.abs() <= self.cfg.runaway_limit {
-            self.ledger.over_limit = 0;
-        } else {
-            self.ledger.over_limit += 1;
-        }
-        if self.ledger.over_limit > RUNAWAY_PERSIST || self.energy.balance_error.is_nan() {
-            let hot = self.reports.iter().fold(&self.reports[0], |a, b| {
-                if b.hot_density > a.hot_density {
-                    b
-                } else {
-                    a
-                }
-            });
-            return Err(Fault::EnergyRunaway {
-                step: self.group.step,
-                error: self.energy.balance_error,
-                limit: self.cfg.runaway_limit,
-                body: hot.id,
-                element: hot.hot_element,
-            });
-        }
+        check_runaway(
+            &self.cfg,
+            &mut self.ledger,
+            &self.energy,
+            &self.reports,
+            self.group.step,
+        )?;
         self.next_dt = self.choose_dt()?;
         Ok(())
     }
