@@ -6,6 +6,9 @@ use crash_io::{loglog_plot, LogSeries};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// The hand-written reading of the results.
+const NOTES: &str = include_str!("verification-notes.md");
+
 /// How the study was run (printed at the top of the report).
 #[derive(Debug, Clone)]
 pub struct RunNote {
@@ -128,18 +131,18 @@ pub fn markdown(results: &[LadderResult], note: &RunNote) -> String {
     let _ = writeln!(out, "## Summary\n");
     let _ = writeln!(
         out,
-        "| case | element | finest mesh | error | tolerance | last order | required order | status |"
+        "| case | element | finest mesh | error | tolerance | last order | order over the quick pair | required | status |"
     );
     let _ = writeln!(
         out,
-        "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- |"
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
     );
     for r in results {
         let last = r.mesh.last();
         let problems = r.problems();
         let _ = writeln!(
             out,
-            "| [{}](#{}) | {} | {} | {} | {:.0e} | {} | {} | {} |",
+            "| [{}](#{}) | {} | {} | {} | {:.0e} | {} | {} | {} | {} |",
             r.case.id,
             r.case.id,
             kind_name(r.kind),
@@ -147,10 +150,12 @@ pub fn markdown(results: &[LadderResult], note: &RunNote) -> String {
             last.map_or("–".into(), |m| format!("{:.3e}", m.error)),
             r.case.tolerance,
             order_text(r.mesh_orders().last().copied().flatten()),
+            order_text(r.checked_order()),
             r.case.min_order.map_or("–".into(), |o| format!("≥ {o}")),
             status(r, &problems)
         );
     }
+    let _ = writeln!(out, "\n{NOTES}");
     let mut seen: Vec<&str> = Vec::new();
     for r in results {
         if seen.contains(&r.case.id) {
