@@ -1,8 +1,9 @@
 //! A sink that writes the run directory with crash-io: energy.csv, contacts.csv, frames
 //! (VTU + PVD)
-//! and summary.json (with the per-stage timing of the master).
+//! and summary.json (with the per-stage timing of the master), and the restart file.
 
 use crate::error::MasterError;
+use crate::master::MasterCheckpoint;
 use crate::sink::{Sink, SinkError};
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
@@ -11,7 +12,33 @@ use crash_io::{
     hash_hex, write_summary, ContactHistory, ContactRow, EnergyHistory, Frame, Indicators,
     SeriesWriter, Summary, CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
 };
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// Name of the restart file inside the run directory (one file, replaced atomically at
+/// every checkpoint).
+pub const RESTART_FILE: &str = "restart.ckp";
+
+/// What a restart file holds: the master loop's state and the sink's own (the
+/// summary's running indicators).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RestartFile {
+    pub master: MasterCheckpoint,
+    pub indicators: Indicators,
+}
+
+/// The same layout as `RestartFile`, borrowed (no copy of the bodies to write it).
+#[derive(Serialize)]
+struct RestartRef<'a> {
+    master: &'a MasterCheckpoint,
+    indicators: &'a Indicators,
+}
+
+/// Read a restart file (errors name the file: missing, not a checkpoint, truncated,
+/// corrupt, other version).
+pub fn read_restart(path: &Path) -> Result<RestartFile, crash_io::IoError> {
+    crash_io::read_checkpoint(path)
+}
 
 #[derive(Debug)]
 pub struct FileSink {
@@ -21,6 +48,8 @@ pub struct FileSink {
     series: SeriesWriter,
     indicators: Indicators,
     summary: Summary,
+    /// Where checkpoints go (None: they are ignored).
+    restart: Option<PathBuf>,
 }
 
 impl FileSink {
@@ -32,22 +61,54 @@ impl FileSink {
         bodies: &[Body],
     ) -> Result<Self, SinkError> {
         std::fs::create_dir_all(dir)?;
-        let summary = Summary {
-            scene: scene.to_string(),
-            scene_hash: hash_hex(scene_hash),
-            bodies: bodies.len(),
-            nodes: bodies.iter().map(Body::node_count).sum(),
-            elements: bodies.iter().map(Body::element_count).sum(),
-            ..Summary::default()
-        };
         Ok(Self {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::create(dir.join(ENERGY_CSV))?,
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
             series: SeriesWriter::create(dir)?,
             indicators: Indicators::default(),
-            summary,
+            summary: Self::summary(scene, scene_hash, bodies),
+            restart: None,
         })
+    }
+
+    /// Continue the run directory of a restarted run: energy.csv and contacts.csv keep
+    /// their rows up to the checkpoint's time, frames.pvd its frames up to that time
+    /// (later ones are removed), and new rows and frames follow.
+    pub fn reopen(
+        dir: &Path,
+        scene: &str,
+        scene_hash: u64,
+        bodies: &[Body],
+        restart: &RestartFile,
+    ) -> Result<Self, SinkError> {
+        let t = restart.master.time;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
+            contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
+            series: SeriesWriter::reopen(dir, t)?,
+            indicators: restart.indicators,
+            summary: Self::summary(scene, scene_hash, bodies),
+            restart: None,
+        })
+    }
+
+    /// Write every checkpoint to `path` (atomically, replacing the previous one).
+    pub fn with_checkpoints(mut self, path: PathBuf) -> Self {
+        self.restart = Some(path);
+        self
+    }
+
+    fn summary(scene: &str, scene_hash: u64, bodies: &[Body]) -> Summary {
+        Summary {
+            scene: scene.to_string(),
+            scene_hash: hash_hex(scene_hash),
+            bodies: bodies.len(),
+            nodes: bodies.iter().map(Body::node_count).sum(),
+            elements: bodies.iter().map(Body::element_count).sum(),
+            ..Summary::default()
+        }
     }
 }
 
@@ -75,6 +136,24 @@ impl Sink for FileSink {
                 penetration: s.max_penetration,
             })?;
         }
+        Ok(())
+    }
+
+    /// The restart file, after the rows up to the checkpoint are on disk (so a
+    /// reopen after an interruption finds them all).
+    fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        let Some(path) = &self.restart else {
+            return Ok(());
+        };
+        self.energy.flush()?;
+        self.contacts.flush()?;
+        crash_io::write_checkpoint(
+            path,
+            &RestartRef {
+                master: state,
+                indicators: &self.indicators,
+            },
+        )?;
         Ok(())
     }
 

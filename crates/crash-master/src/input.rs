@@ -55,6 +55,9 @@ pub struct RunOptions {
     /// With measured costs, also try to rebalance every this many steps (0: only when
     /// groups change).
     pub rebalance_interval: u64,
+    /// Hand the sink a checkpoint (`Sink::checkpoint`) after every this many steps
+    /// (0: never). The last step of a run takes none.
+    pub checkpoint_every: u64,
 }
 
 impl Default for RunOptions {
@@ -65,6 +68,7 @@ impl Default for RunOptions {
             cost: CostModel::Measured,
             balance_tolerance: 0.25,
             rebalance_interval: 500,
+            checkpoint_every: 0,
         }
     }
 }

@@ -24,8 +24,10 @@ pub mod stats;
 
 pub use error::MasterError;
 pub use file_sink::FileSink;
+pub use file_sink::{read_restart, RestartFile, RESTART_FILE};
 pub use input::{CostModel, RunInput, RunOptions};
 pub use link::{LinkError, LocalWorker, WorkerLink};
+pub use master::MasterCheckpoint;
 pub use remote::{Cluster, RemoteOptions, RemoteWorker};
 pub use sink::{EnergyRecord, RecordSink, Sink, SinkError};
 pub use stats::{Migration, RunStats, StageTimes};
@@ -42,7 +44,44 @@ pub fn run_with<L: WorkerLink>(
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
+    drive(input, None, links, sink, opts)
+}
+
+/// Continue a run from a checkpoint (`Sink::checkpoint`) of the same scene to the
+/// input's end time, as `run_with` would have. The sink receives only what follows the
+/// checkpoint. Needs workers that can set their clock (in-process workers).
+pub fn resume_with<L: WorkerLink>(
+    input: RunInput,
+    state: MasterCheckpoint,
+    links: &mut [L],
+    sink: &mut dyn Sink,
+    opts: &RunOptions,
+) -> Result<RunStats, MasterError> {
+    drive(input, Some(state), links, sink, opts)
+}
+
+/// Local mode from a checkpoint.
+pub fn resume_local(
+    input: RunInput,
+    state: MasterCheckpoint,
+    workers: usize,
+    sink: &mut dyn Sink,
+    opts: &RunOptions,
+) -> Result<RunStats, MasterError> {
+    let mut links: Vec<LocalWorker> = (0..workers.max(1)).map(LocalWorker::new).collect();
+    resume_with(input, state, &mut links, sink, opts)
+}
+
+fn drive<L: WorkerLink>(
+    input: RunInput,
+    resume: Option<MasterCheckpoint>,
+    links: &mut [L],
+    sink: &mut dyn Sink,
+    opts: &RunOptions,
+) -> Result<RunStats, MasterError> {
     let wall = Instant::now();
+    // wall time before the checkpoint (the time lost after it is not counted)
+    let wall_before = resume.as_ref().map_or(0.0, |c| c.stats.wall_s);
     let mut m = match Master::new(links, &input, *opts) {
         Ok(m) => m,
         Err(e) => {
@@ -53,14 +92,26 @@ pub fn run_with<L: WorkerLink>(
     let RunInput {
         bodies, gravity, ..
     } = input;
+    let every = opts.checkpoint_every;
     let result = (|| {
-        m.start(bodies, gravity, sink)?;
+        match resume {
+            None => m.start(bodies, gravity, sink)?,
+            Some(state) => m.resume(state, gravity)?,
+        }
         while !m.finished() {
             m.step(sink)?;
+            if every > 0 && m.steps().is_multiple_of(every) && !m.finished() {
+                let t = Instant::now();
+                m.stats.wall_s = wall_before + wall.elapsed().as_secs_f64();
+                let state = m.checkpoint()?;
+                sink.checkpoint(&state)
+                    .map_err(|e| MasterError::Sink(e.to_string()))?;
+                m.stats.stages.output_ns += t.elapsed().as_nanos() as u64;
+            }
         }
         m.finish(sink)
     })();
-    m.stats.wall_s = wall.elapsed().as_secs_f64();
+    m.stats.wall_s = wall_before + wall.elapsed().as_secs_f64();
     match result {
         Ok(()) => {
             m.shutdown("the run is complete");

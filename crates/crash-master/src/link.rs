@@ -36,6 +36,14 @@ pub trait WorkerLink {
     fn recv(&mut self) -> Result<Reply, LinkError>;
     /// Where the worker is, for messages.
     fn peer(&self) -> String;
+    /// Restart: set the empty worker's clock (time, step, last step length) before
+    /// bodies are loaded. Only in-process workers can: the wire protocol does not
+    /// carry a clock.
+    fn set_clock(&mut self, _time: f64, _step: u64, _h_prev: f64) -> Result<(), LinkError> {
+        Err(LinkError::Protocol(
+            "this worker cannot resume a run from a checkpoint (restart needs in-process workers: crash run --restart)".into(),
+        ))
+    }
     /// Tell the worker to stop (best effort: it may be gone; must not block long).
     fn close(&mut self, reason: &str) {
         if self.send(Command::Shutdown(reason.into())).is_ok() {
@@ -80,5 +88,11 @@ impl WorkerLink for LocalWorker {
 
     fn peer(&self) -> String {
         format!("in-process worker {}", self.index)
+    }
+
+    fn set_clock(&mut self, time: f64, step: u64, h_prev: f64) -> Result<(), LinkError> {
+        self.engine
+            .set_clock(time, step, h_prev)
+            .map_err(LinkError::Protocol)
     }
 }

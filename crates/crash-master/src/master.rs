@@ -17,6 +17,9 @@ use crash_core::{Body, BodyReport, EnergyLedger, EnergyTotals, Fault, RunConfig,
 use crash_proto::{Command, Reply, Setup, StepReport};
 use std::time::Instant;
 
+mod restart;
+pub use restart::MasterCheckpoint;
+
 /// What the master keeps per body (index = position in the sorted id list).
 #[derive(Debug, Clone, Copy)]
 struct BodyInfo {
@@ -47,8 +50,11 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     layout: Vec<Vec<Vec<u32>>>,
     meim: Meim,
     search: PairSearch,
+    scene_hash: u64,
     time: f64,
     step: u64,
+    /// Length of the last step (the workers' h_prev).
+    h_prev: f64,
     next_dt: f64,
     dt0: f64,
     ledger: EnergyLedger,
@@ -133,8 +139,10 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             meim: Meim::new(&ids, opts.split_after),
             search: PairSearch::new(c.margin, skin),
             info,
+            scene_hash: input.scene_hash,
             time: 0.0,
             step: 0,
+            h_prev: 0.0,
             next_dt: 0.0,
             dt0: 0.0,
             ledger: EnergyLedger::default(),
@@ -404,6 +412,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         self.stats.stages.barrier_ns += wall - slowest;
         self.time += h;
         self.step += 1;
+        self.h_prev = h;
 
         let t1 = Instant::now();
         {

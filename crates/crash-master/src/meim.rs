@@ -17,7 +17,7 @@ use petgraph::unionfind::UnionFind;
 use petgraph::Undirected;
 
 /// A possible contact between two bodies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Interaction {
     /// Update (step) at which the boxes first came within the margin.
     pub since: u64,
@@ -67,6 +67,35 @@ impl Meim {
             start: (0..=n as u32).collect(),
             group_of: (0..n as u32).collect(),
         }
+    }
+
+    /// The graph rebuilt from `edges` (as `edge_states` gives them): the same groups
+    /// and split timers (for a restart). Edges naming unknown ids are ignored.
+    pub fn restore(ids: &[u32], split_after: u64, edges: &[((u32, u32), Interaction)]) -> Self {
+        let mut m = Self::new(ids, split_after);
+        let mut sorted = edges.to_vec();
+        sorted.sort_by_key(|(k, _)| *k);
+        sorted.dedup_by_key(|(k, _)| *k);
+        for ((a, b), w) in sorted {
+            let (Some(ia), Some(ib)) = (m.index(a), m.index(b)) else {
+                continue;
+            };
+            if a >= b {
+                continue;
+            }
+            let e = m.graph.add_edge(m.nodes[ia], m.nodes[ib], w);
+            m.edges.push(((a, b), e));
+        }
+        m.components();
+        m
+    }
+
+    /// Every edge (a < b, sorted) with its timers.
+    pub fn edge_states(&self) -> Vec<((u32, u32), Interaction)> {
+        self.edges
+            .iter()
+            .filter_map(|&(k, e)| self.graph.edge_weight(e).map(|w| (k, *w)))
+            .collect()
     }
 
     fn index(&self, id: u32) -> Option<usize> {
@@ -244,5 +273,21 @@ mod tests {
         assert_eq!(m.pairs(), vec![(1, 5), (5, 7)]);
         // unknown ids are ignored
         assert!(!m.update(6, &[(1, 5), (2, 9), (5, 7)]));
+    }
+
+    #[test]
+    fn restored_graph_continues_like_the_original() {
+        let mut m = Meim::new(&[1, 3, 5, 7], 2);
+        m.update(1, &[(3, 7), (1, 5)]);
+        m.update(2, &[(1, 5)]);
+        let mut r = Meim::restore(&[7, 5, 3, 1], 2, &m.edge_states());
+        assert_eq!(r.groups(), m.groups());
+        assert_eq!(r.edge_states(), m.edge_states());
+        // (3, 7) last seen at 1 splits at update 4 in both
+        for step in 3..6 {
+            assert_eq!(m.update(step, &[(1, 5)]), r.update(step, &[(1, 5)]));
+            assert_eq!(r.groups(), m.groups());
+        }
+        assert_eq!(r.groups(), [&[1, 5][..], &[3], &[7]]);
     }
 }

@@ -2,6 +2,7 @@
 //! `Sink` (crash-io writers in the binaries, memory in tests).
 
 use crate::error::MasterError;
+use crate::master::MasterCheckpoint;
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
 use crash_core::{Body, EnergyTotals};
@@ -24,6 +25,11 @@ pub trait Sink {
         _time: f64,
         _stats: &[PairStats],
     ) -> Result<(), SinkError> {
+        Ok(())
+    }
+    /// The loop's state after a step, every `RunOptions::checkpoint_every` steps
+    /// (after that step's rows and frame). Keep it to continue the run later.
+    fn checkpoint(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
         Ok(())
     }
     /// All bodies (sorted by id, gathered from every worker) at an output time.
@@ -51,6 +57,8 @@ pub struct RecordSink {
     pub contact_stats: Vec<(u64, f64, Vec<PairStats>)>,
     /// Hash of the last frame (the final state after a normal end).
     pub last_hash: Option<u64>,
+    /// Every checkpoint handed over.
+    pub checkpoints: Vec<MasterCheckpoint>,
     pub finished: Option<Result<RunStats, String>>,
 }
 
@@ -78,6 +86,11 @@ impl Sink for RecordSink {
         if stats.iter().any(|s| s.active_nodes > 0) {
             self.contact_stats.push((step, time, stats.to_vec()));
         }
+        Ok(())
+    }
+
+    fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        self.checkpoints.push(state.clone());
         Ok(())
     }
 

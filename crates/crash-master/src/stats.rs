@@ -1,9 +1,10 @@
 //! Run statistics: per-stage wall time, MEIM and migration counters (for summary.json).
+//! Deserialize: a checkpoint carries them, so a restarted run continues its totals.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Wall time spent per stage of the master's step [ns], summed over the run.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct StageTimes {
     /// Slowest worker's compute time per step (what the step cannot go below).
     pub compute_ns: u64,
@@ -19,7 +20,7 @@ pub struct StageTimes {
 }
 
 /// One body moved between workers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Migration {
     /// Moved after this step, before the next.
     pub step: u64,
@@ -28,7 +29,7 @@ pub struct Migration {
     pub to: usize,
 }
 
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct RunStats {
     pub workers: usize,
     pub steps: u64,

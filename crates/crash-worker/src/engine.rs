@@ -36,6 +36,18 @@ impl Engine {
         Self::default()
     }
 
+    /// Set the clock of an empty engine (a restart: the groups built from the bodies
+    /// loaded next continue at this time, step and last step length).
+    pub fn set_clock(&mut self, time: f64, step: u64, h_prev: f64) -> Result<(), String> {
+        if self.body_count() > 0 {
+            return Err("the clock can only be set before bodies are loaded".into());
+        }
+        self.time = time;
+        self.step = step;
+        self.h_prev = h_prev;
+        Ok(())
+    }
+
     /// Number of bodies held.
     pub fn body_count(&self) -> usize {
         self.loose.len() + self.groups.iter().map(|g| g.bodies.len()).sum::<usize>()

@@ -1,0 +1,88 @@
+//! Restart from a checkpoint continues a run bit-identically (local workers).
+#![allow(clippy::unwrap_used)]
+
+mod common;
+
+use common::{input, rows};
+use crash_master::{resume_local, run_local, CostModel, MasterError, RecordSink, RunOptions};
+
+fn opts(every: u64) -> RunOptions {
+    RunOptions {
+        cost: CostModel::Estimated,
+        split_after: 20,
+        checkpoint_every: every,
+        ..RunOptions::default()
+    }
+}
+
+/// Every checkpoint of a run (taken before, during and after the spheres' contact,
+/// with the MEIM edge alive or waiting to split), written to a file and read back,
+/// continues with 1 and 2 workers to exactly the uninterrupted run's energy rows,
+/// MEIM changes, contact statistics, frame schedule and final state hash.
+#[test]
+fn resumed_runs_match_the_uninterrupted_run_bit_for_bit() {
+    let mut full = RecordSink::default();
+    let stats = run_local(input("two-spheres-tiny.toml"), 2, &mut full, &opts(40)).unwrap();
+    let all = rows(&full);
+    assert!(full.checkpoints.len() >= 5, "{}", full.checkpoints.len());
+    assert!(full.checkpoints.iter().any(|c| !c.edges.is_empty()));
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("master-restart");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("state.ckp");
+    for (k, ck) in full.checkpoints.iter().enumerate() {
+        crash_io::write_checkpoint(&path, ck).unwrap();
+        let ck: crash_master::MasterCheckpoint = crash_io::read_checkpoint(&path).unwrap();
+        let s = ck.step as usize;
+        let workers = 1 + k % 2;
+        let mut rest = RecordSink::default();
+        let st = resume_local(
+            input("two-spheres-tiny.toml"),
+            ck,
+            workers,
+            &mut rest,
+            &opts(0),
+        )
+        .unwrap();
+        assert_eq!(rows(&rest), all[s + 1..], "checkpoint at step {s}");
+        assert_eq!(rest.last_hash, full.last_hash, "checkpoint at step {s}");
+        assert_eq!(st.final_hash, stats.final_hash);
+        assert_eq!(st.steps, stats.steps);
+        assert_eq!(st.frames, stats.frames);
+        assert_eq!(
+            st.max_energy_error.to_bits(),
+            stats.max_energy_error.to_bits()
+        );
+        let later = |v: &[(u64, f64, u64)]| {
+            v.iter()
+                .filter(|f| f.0 > s as u64)
+                .copied()
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(rest.frames, later(&full.frames));
+        let later_c: Vec<_> = full
+            .contacts
+            .iter()
+            .filter(|c| c.0 > s as u64)
+            .cloned()
+            .collect();
+        assert_eq!(rest.contacts, later_c, "MEIM changes after step {s}");
+        let later_s: Vec<_> = full
+            .contact_stats
+            .iter()
+            .filter(|c| c.0 > s as u64)
+            .cloned()
+            .collect();
+        assert_eq!(rest.contact_stats, later_s);
+    }
+}
+
+#[test]
+fn checkpoint_of_another_scene_is_refused() {
+    let mut full = RecordSink::default();
+    run_local(input("two-spheres-tiny.toml"), 1, &mut full, &opts(100)).unwrap();
+    let ck = full.checkpoints[0].clone();
+    let mut rest = RecordSink::default();
+    let err = resume_local(input("ten-spheres-tiny.toml"), ck, 1, &mut rest, &opts(0)).unwrap_err();
+    assert!(matches!(err, MasterError::Input(_)), "{err}");
+    assert!(err.to_string().contains("another scene"), "{err}");
+}
