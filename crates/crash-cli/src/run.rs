@@ -1,13 +1,17 @@
 //! `crash run SCENE`: the whole run in this process, through the master loop with
-//! in-process workers, writing the run directory with crash-io.
+//! in-process workers, writing the run directory with crash-io. With
+//! `--checkpoint-every N` it keeps a restart file (OUT/restart.ckp); `--restart FILE`
+//! continues a run from it in the same run directory.
 
 use crate::progress::Progress;
 use anyhow::Context;
+use crash_core::contact::PairStats;
 use crash_core::{Body, EnergyTotals};
 use crash_master::{
-    run_local, FileSink, MasterError, RunInput, RunOptions, RunStats, Sink, SinkError,
+    read_restart, resume_local, run_local, FileSink, MasterCheckpoint, MasterError, RunInput,
+    RunOptions, RunStats, Sink, SinkError, RESTART_FILE,
 };
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(clap::Args, Debug)]
@@ -26,12 +30,24 @@ pub struct RunArgs {
     /// Replace the scene's end time [s].
     #[arg(long)]
     pub end_time: Option<f64>,
+    /// Replace the scene's output interval [s].
+    #[arg(long)]
+    pub output_interval: Option<f64>,
     /// Plain log lines instead of a progress bar.
     #[arg(long)]
     pub quiet: bool,
     /// Do not render pictures at the end.
     #[arg(long)]
     pub no_pictures: bool,
+    /// Write a restart file (OUT/restart.ckp, replaced atomically each time) every N
+    /// steps.
+    #[arg(long, value_name = "N")]
+    pub checkpoint_every: Option<u64>,
+    /// Continue the run from this restart file (same scene file; the run directory
+    /// defaults to the file's directory and is continued: rows and frames after the
+    /// checkpoint are replaced).
+    #[arg(long, value_name = "FILE")]
+    pub restart: Option<PathBuf>,
 }
 
 /// Exit code of a finished run whose energy-balance error exceeded the scene's limit.
@@ -56,6 +72,19 @@ impl Sink for CliSink {
 
     fn contacts(&mut self, step: u64, time: f64, pairs: &[(u32, u32)]) -> Result<(), SinkError> {
         self.files.contacts(step, time, pairs)
+    }
+
+    fn contact_stats(
+        &mut self,
+        step: u64,
+        time: f64,
+        stats: &[PairStats],
+    ) -> Result<(), SinkError> {
+        self.files.contact_stats(step, time, stats)
+    }
+
+    fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        self.files.checkpoint(state)
     }
 
     fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError> {
@@ -89,34 +118,80 @@ pub fn penetration_message(built: &crash_scene::Built, p: &crash_scene::Penetrat
     )
 }
 
+/// Read a restart file and check that it belongs to this scene.
+fn load_restart(
+    path: &Path,
+    scene_hash: u64,
+    args: &RunArgs,
+) -> anyhow::Result<crash_master::RestartFile> {
+    let r =
+        read_restart(path).with_context(|| format!("cannot restart from {}", path.display()))?;
+    if r.master.scene_hash != scene_hash {
+        anyhow::bail!(
+            "cannot restart from {}: it was written by a run of another scene (scene hash {:016x}; {} has {:016x}); restart with the scene file of the original run",
+            path.display(),
+            r.master.scene_hash,
+            args.scene.display(),
+            scene_hash
+        );
+    }
+    Ok(r)
+}
+
 pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let scene = crash_scene::load(&args.scene)?.with_overrides(crash_scene::Overrides {
         end_time: args.end_time,
-        output_interval: None,
+        output_interval: args.output_interval,
     })?;
     let built = scene.build()?;
     if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
         anyhow::bail!("{}", penetration_message(&built, &p));
     }
     let energy_limit = built.energy_limit;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(&built.name));
+    let restart = match &args.restart {
+        Some(path) => Some((path, load_restart(path, built.scene_hash, args)?)),
+        None => None,
+    };
+    let out = match (&args.out, &restart) {
+        (Some(o), _) => o.clone(),
+        (None, Some((path, _))) => path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
+        (None, None) => PathBuf::from("out").join(&built.name),
+    };
     let input = RunInput::from_built(built);
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(t) = args.threads {
         pool = pool.num_threads(t.max(1));
     }
     let pool = pool.build().context("cannot start the thread pool")?;
-    let files = FileSink::create(&out, &input.name, input.scene_hash, &input.bodies)
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("cannot create the run directory {}", out.display()))?;
+    let files = match &restart {
+        Some((_, r)) => FileSink::reopen(&out, &input.name, input.scene_hash, &input.bodies, r)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("cannot reopen the run directory {}", out.display()))?,
+        None => FileSink::create(&out, &input.name, input.scene_hash, &input.bodies)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("cannot create the run directory {}", out.display()))?,
+    };
+    let files = files.with_checkpoints(out.join(RESTART_FILE));
     let mut sink = CliSink {
         files,
         progress: Progress::new(input.config.end_time, args.quiet),
-        last_time: 0.0,
+        last_time: restart.as_ref().map_or(0.0, |(_, r)| r.master.time),
     };
+    let opts = RunOptions {
+        checkpoint_every: args.checkpoint_every.unwrap_or(0),
+        ..RunOptions::default()
+    };
+    if let Some((path, r)) = &restart {
+        eprintln!(
+            "crash: restarting from {} at step {}, t = {:.6e} s",
+            path.display(),
+            r.master.step,
+            r.master.time
+        );
+    }
     eprintln!(
         "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {} worker(s), writing {}",
         input.name,
@@ -126,13 +201,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         args.workers.max(1),
         out.display()
     );
-    let result = pool.install(|| {
-        run_local(
-            input,
-            args.workers.max(1),
-            &mut sink,
-            &RunOptions::default(),
-        )
+    let workers = args.workers.max(1);
+    let result = pool.install(|| match restart {
+        Some((_, r)) => resume_local(input, r.master, workers, &mut sink, &opts),
+        None => run_local(input, workers, &mut sink, &opts),
     });
     let stats = match result {
         Ok(s) => s,

@@ -24,6 +24,7 @@ pub const RESTART_FILE: &str = "restart.ckp";
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RestartFile {
     pub master: MasterCheckpoint,
+    #[serde(with = "IndicatorsBits")]
     pub indicators: Indicators,
 }
 
@@ -31,7 +32,24 @@ pub struct RestartFile {
 #[derive(Serialize)]
 struct RestartRef<'a> {
     master: &'a MasterCheckpoint,
+    #[serde(with = "IndicatorsBits")]
     indicators: &'a Indicators,
+}
+
+/// `Indicators` as plain f64s: its own Deserialize reads JSON nulls (Option<f64>),
+/// which a binary format cannot pair with the plain f64 its Serialize writes.
+#[derive(Serialize, Deserialize)]
+#[serde(remote = "Indicators")]
+struct IndicatorsBits {
+    final_balance_error: f64,
+    peak_balance_error: f64,
+    hourglass_internal_ratio: f64,
+    contact_internal_ratio: f64,
+    max_penetration_ratio: f64,
+    min_contact_energy: f64,
+    peak_internal: f64,
+    peak_hourglass: f64,
+    peak_contact: f64,
 }
 
 /// Read a restart file (errors name the file: missing, not a checkpoint, truncated,
