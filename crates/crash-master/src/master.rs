@@ -12,7 +12,7 @@ use crate::pairs::PairSearch;
 use crate::sink::Sink;
 use crate::stats::{Migration, RunStats};
 use crash_core::contact::{BodyBox, ContactConfig, PairStats};
-use crash_core::driver::{critical, RUNAWAY_PERSIST};
+use crash_core::driver::{check_runaway, choose_dt};
 use crash_core::{Body, BodyReport, EnergyLedger, EnergyTotals, Fault, RunConfig, Vec3};
 use crash_proto::{Command, Reply, Setup, StepReport};
 use std::time::Instant;
@@ -347,24 +347,9 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         }
     }
 
-    /// As `crash_core::driver::Run`: dt = safety x min stable dt, or the fixed dt;
-    /// a collapse below the floor is a fault.
+    /// The core's rule (`crash_core::driver::choose_dt`), shared by every loop.
     fn choose_dt(&self) -> Result<f64, Fault> {
-        let (crit, body, element) = critical(&self.reports);
-        let dt = match self.cfg.fixed_dt {
-            Some(dt) => dt,
-            None => self.cfg.safety * crit,
-        };
-        if self.dt0 > 0.0 && dt < self.cfg.dt_floor_ratio * self.dt0 || dt.is_nan() || dt <= 0.0 {
-            return Err(Fault::DtCollapse {
-                step: self.step,
-                dt,
-                floor: self.cfg.dt_floor_ratio * self.dt0,
-                body,
-                element,
-            });
-        }
-        Ok(dt)
+        choose_dt(&self.cfg, &self.reports, self.dt0, self.step)
     }
 
     pub(crate) fn finished(&self) -> bool {
@@ -449,31 +434,15 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         self.output(sink, false)
     }
 
-    /// The driver's runaway guard: the balance error above the limit for more than
-    /// RUNAWAY_PERSIST consecutive steps (or NaN).
+    /// The core's runaway guard (`crash_core::driver::check_runaway`).
     fn runaway(&mut self, energy: &EnergyTotals) -> Result<(), Fault> {
-        if energy.balance_error.abs() <= self.cfg.runaway_limit {
-            self.ledger.over_limit = 0;
-        } else {
-            self.ledger.over_limit += 1;
-        }
-        if self.ledger.over_limit > RUNAWAY_PERSIST || energy.balance_error.is_nan() {
-            let hot = self.reports.iter().fold(&self.reports[0], |a, b| {
-                if b.hot_density > a.hot_density {
-                    b
-                } else {
-                    a
-                }
-            });
-            return Err(Fault::EnergyRunaway {
-                step: self.step,
-                error: energy.balance_error,
-                limit: self.cfg.runaway_limit,
-                body: hot.id,
-                element: hot.hot_element,
-            });
-        }
-        Ok(())
+        check_runaway(
+            &self.cfg,
+            &mut self.ledger,
+            energy,
+            &self.reports,
+            self.step,
+        )
     }
 
     /// The margin argument, checked: no contact body may move more in one step than
