@@ -25,6 +25,15 @@ fn sci(v: f64) -> String {
     }
 }
 
+/// A tolerance as written in the case table (0.15, 0.02, 1e-9).
+fn tol_text(t: f64) -> String {
+    if t >= 1e-3 {
+        format!("{t}")
+    } else {
+        format!("{t:e}")
+    }
+}
+
 fn order_text(o: Option<f64>) -> String {
     o.map_or("–".into(), |o| format!("{o:.2}"))
 }
@@ -142,13 +151,13 @@ pub fn markdown(results: &[LadderResult], note: &RunNote) -> String {
         let problems = r.problems();
         let _ = writeln!(
             out,
-            "| [{}](#{}) | {} | {} | {} | {:.0e} | {} | {} | {} | {} |",
+            "| [{}](#{}) | {} | {} | {} | {} | {} | {} | {} | {} |",
             r.case.id,
             r.case.id,
             kind_name(r.kind),
             last.map_or("–".into(), |m| m.level.mesh.to_string()),
             last.map_or("–".into(), |m| format!("{:.3e}", m.error)),
-            r.case.tolerance,
+            tol_text(r.case.tolerance),
             order_text(r.mesh_orders().last().copied().flatten()),
             order_text(r.checked_order()),
             r.case.min_order.map_or("–".into(), |o| format!("≥ {o}")),
@@ -169,8 +178,8 @@ pub fn markdown(results: &[LadderResult], note: &RunNote) -> String {
         let _ = writeln!(out, "- mesh level: {}", r.case.mesh_param);
         let _ = writeln!(
             out,
-            "- tolerance at the finest level: {:.0e}{}\n",
-            r.case.tolerance,
+            "- tolerance at the finest level: {}{}\n",
+            tol_text(r.case.tolerance),
             r.case
                 .min_order
                 .map_or(String::new(), |o| format!("; required order ≥ {o}"))
