@@ -13,6 +13,7 @@
 pub mod assign;
 pub mod error;
 pub mod file_sink;
+pub mod health;
 pub mod input;
 pub mod link;
 mod master;

@@ -157,6 +157,12 @@ impl Cluster {
         let server = CoordinatorServer::from_arc(service.clone())
             .max_decoding_message_size(MAX_MESSAGE)
             .max_encoding_message_size(MAX_MESSAGE);
+        // grpc.health.v1.Health: SERVING for the coordinator while this cluster lives
+        let (reporter, health) = tonic_health::server::health_reporter();
+        rt.block_on(
+            reporter
+                .set_service_status(crate::health::SERVICE, tonic_health::ServingStatus::Serving),
+        );
         let (stop, stopped) = oneshot::channel::<()>();
         let incoming = TcpListenerStream::new(listener);
         rt.spawn(async move {
@@ -168,6 +174,7 @@ impl Cluster {
                 .initial_stream_window_size(8 << 20)
                 .initial_connection_window_size(16 << 20)
                 .add_service(server)
+                .add_service(health)
                 .serve_with_incoming_shutdown(incoming, async {
                     let _ = stopped.await;
                 })

@@ -26,7 +26,8 @@ fn resumed_runs_match_the_uninterrupted_run_bit_for_bit() {
     let all = rows(&full);
     assert!(full.checkpoints.len() >= 5, "{}", full.checkpoints.len());
     assert!(full.checkpoints.iter().any(|c| !c.edges.is_empty()));
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("master-restart");
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("master-restart-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("state.ckp");
     for (k, ck) in full.checkpoints.iter().enumerate() {

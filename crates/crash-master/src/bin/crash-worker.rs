@@ -12,8 +12,15 @@ use std::time::Duration;
 )]
 struct Args {
     /// The master's URL, e.g. http://10.0.0.5:50051 (retried with backoff until it answers).
-    #[arg(long)]
-    master: String,
+    #[arg(long, required_unless_present = "probe")]
+    master: Option<String>,
+    /// Only check the health of the master at this URL (grpc.health.v1 Check of
+    /// crash.v1.Coordinator), without attaching: exit 0 if it is serving, 1 otherwise.
+    #[arg(long, value_name = "URL", conflicts_with = "master")]
+    probe: Option<String>,
+    /// Timeout of --probe [s] (the master answers while it waits on the network).
+    #[arg(long, default_value_t = 5.0, value_name = "SECS")]
+    probe_timeout: f64,
     /// Compute threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -34,10 +41,32 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .init();
     let args = Args::parse();
+    if let Some(url) = &args.probe {
+        let secs = if args.probe_timeout.is_finite() {
+            args.probe_timeout.clamp(0.0, 3600.0)
+        } else {
+            5.0
+        };
+        let timeout = Duration::from_secs_f64(secs);
+        return match crash_master::health::probe(url, timeout) {
+            Ok(()) => {
+                eprintln!("crash-worker: the master at {url} is serving");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("crash-worker: probe failed: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
+    let Some(master) = &args.master else {
+        eprintln!("crash-worker: error: --master URL is required");
+        return ExitCode::FAILURE;
+    };
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let mut opts = crash_worker::WorkerOptions::new(&args.master, threads);
+    let mut opts = crash_worker::WorkerOptions::new(master, threads);
     opts.connect_timeout = Duration::from_secs_f64(args.connect_timeout.max(0.0));
     if let Some(v) = args.protocol_version {
         opts.protocol_version = v;
