@@ -1,5 +1,6 @@
 //! The `crash study` command line.
 
+use super::cases::CASES;
 use super::matrix::run_matrix;
 use super::outcome::Outcome;
 use super::report::{self, RunNote};
@@ -30,9 +31,11 @@ pub struct StudyArgs {
     /// Run only these verification cases (ids as listed in docs/verification.md).
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<String>,
-    /// Where the reports go (figures in DOCS/figures).
-    #[arg(long, default_value = "docs")]
-    pub docs: PathBuf,
+    /// Where the reports go (figures in DOCS/figures) [default: docs; with --quick
+    /// nothing is written unless DOCS is given, so a quick run never replaces the full
+    /// reports].
+    #[arg(long)]
+    pub docs: Option<PathBuf>,
     /// Do not write the reports, only check.
     #[arg(long)]
     pub no_write: bool,
@@ -49,6 +52,21 @@ pub fn study(args: &StudyArgs) -> anyhow::Result<ExitCode> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.max(1))
         .build()?;
+    let docs = match (&args.docs, args.quick || args.no_write) {
+        (Some(d), _) if !args.no_write => Some(d.clone()),
+        (None, false) => Some(PathBuf::from("docs")),
+        _ => None,
+    };
+    if let Some(bad) = args
+        .only
+        .iter()
+        .find(|o| !CASES.iter().any(|c| c.id == o.as_str()))
+    {
+        anyhow::bail!(
+            "unknown verification case '{bad}'; the cases are: {}",
+            CASES.iter().map(|c| c.id).collect::<Vec<_>>().join(", ")
+        );
+    }
     pool.install(|| {
         let sel = Selection {
             quick: args.quick,
@@ -58,13 +76,13 @@ pub fn study(args: &StudyArgs) -> anyhow::Result<ExitCode> {
         if matches!(args.suite, Suite::Verification | Suite::All) {
             let start = std::time::Instant::now();
             let res = run_suite(&sel, |l| eprintln!("{l}"));
-            if !args.no_write {
+            if let Some(docs) = &docs {
                 let note = RunNote {
                     quick: args.quick,
                     threads: args.threads.max(1),
                     total_wall_s: start.elapsed().as_secs_f64(),
                 };
-                for f in report::write(&args.docs, &res, &note)? {
+                for f in report::write(docs, &res, &note)? {
                     println!("{}", f.display());
                 }
             }
@@ -96,9 +114,9 @@ pub fn study(args: &StudyArgs) -> anyhow::Result<ExitCode> {
                     }
                 )
             });
-            if !args.no_write {
-                std::fs::create_dir_all(&args.docs)?;
-                let path = args.docs.join("stability.md");
+            if let Some(docs) = &docs {
+                std::fs::create_dir_all(docs)?;
+                let path = docs.join("stability.md");
                 std::fs::write(
                     &path,
                     stability_report::markdown(&res, args.quick, args.threads.max(1)),
