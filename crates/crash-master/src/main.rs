@@ -2,7 +2,9 @@
 
 use anyhow::Context;
 use clap::Parser;
-use crash_master::{run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput, RunOptions};
+use crash_master::{
+    run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput, RunOptions, RESTART_FILE,
+};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -45,6 +47,11 @@ struct Args {
     /// times: placement is then reproducible.
     #[arg(long)]
     estimated_costs: bool,
+    /// Write a restart file OUT/restart.ckp (replaced atomically) every N steps. It is
+    /// continued in one process with `crash run SCENE --restart OUT/restart.ckp`
+    /// (resuming over the network is not supported: the protocol has no clock).
+    #[arg(long, value_name = "N")]
+    checkpoint_every: Option<u64>,
 }
 
 fn main() -> ExitCode {
@@ -72,7 +79,8 @@ fn run(args: Args) -> anyhow::Result<()> {
     let input = RunInput::from_built(scene.build()?);
     let mut sink = FileSink::create(&args.out, &input.name, input.scene_hash, &input.bodies)
         .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("cannot create the run directory {}", args.out.display()))?;
+        .with_context(|| format!("cannot create the run directory {}", args.out.display()))?
+        .with_checkpoints(args.out.join(RESTART_FILE));
     let mut cluster = Cluster::bind(
         args.listen,
         args.workers,
@@ -95,6 +103,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         } else {
             CostModel::Measured
         },
+        checkpoint_every: args.checkpoint_every.unwrap_or(0),
         ..RunOptions::default()
     };
     let stats = run_remote(input, &mut cluster, &mut sink, &opts)?;

@@ -3,8 +3,10 @@
 
 mod common;
 
-use common::{input, rows};
+use common::procs::{master, out_dir, worker};
+use common::{input, rows, scene_path};
 use crash_master::{resume_local, run_local, CostModel, MasterError, RecordSink, RunOptions};
+use std::time::Duration;
 
 fn opts(every: u64) -> RunOptions {
     RunOptions {
@@ -86,4 +88,37 @@ fn checkpoint_of_another_scene_is_refused() {
     let err = resume_local(input("ten-spheres-tiny.toml"), ck, 1, &mut rest, &opts(0)).unwrap_err();
     assert!(matches!(err, MasterError::Input(_)), "{err}");
     assert!(err.to_string().contains("another scene"), "{err}");
+}
+
+/// A checkpoint written by crash-master over 2 worker processes continues in one
+/// process (local workers) to the remote run's final state hash.
+#[test]
+fn remote_checkpoint_resumes_locally_to_the_same_final_state() {
+    let out = out_dir("restart-remote");
+    let scene = scene_path("two-spheres-tiny.toml");
+    let (mut m, url) = master(
+        &scene,
+        2,
+        &out,
+        &["--checkpoint-every", "300", "--estimated-costs"],
+    );
+    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+    assert!(m.wait(Duration::from_secs(120)).success(), "{}", m.log());
+    for p in &mut w {
+        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    }
+    let remote = crash_io::read_summary(out.join("summary.json")).unwrap();
+    let r = crash_master::read_restart(&out.join(crash_master::RESTART_FILE)).unwrap();
+    assert!(r.master.step >= 300 && r.master.step < remote.steps);
+    let mut rest = RecordSink::default();
+    let st = resume_local(
+        input("two-spheres-tiny.toml"),
+        r.master,
+        1,
+        &mut rest,
+        &RunOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(crash_io::hash_hex(st.final_hash), remote.final_state_hash);
+    assert_eq!(st.steps, remote.steps);
 }
