@@ -57,7 +57,7 @@ pub fn min_length(b: &Body) -> f64 {
 /// by sqrt(1 + xi^2) - xi). The core's own element loop gives the exact value.
 pub fn dt_estimate(b: &Body) -> f64 {
     let l = min_length(b);
-    l / b.section.wave_speed * b.section.damping_factor(l)
+    crash_core::forces::element_dt(&b.section, l)
 }
 
 /// Largest node speed at t = 0, including rigid rotation and prescribed programs.
