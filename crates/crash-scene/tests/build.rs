@@ -248,7 +248,7 @@ velocity = [0.0, 0.0, -5.0]
     let b = build(text);
     let le = 0.1 * 0.1 / (0.1 * 2f64.sqrt());
     let c = (200.0e9f64 / (7800.0 * (1.0 - 0.09))).sqrt();
-    let dt = 0.9 * le / c;
+    let dt = 0.9 * crash_core::forces::DT_SHAPE * le / c;
     let v = 5.0 + 10.0 * 1.0e-3;
     let expect = MARGIN_ELEMENT_FRACTION * le + 2.0 * v * dt * MARGIN_STEPS;
     assert!(
@@ -268,9 +268,10 @@ fn summary_totals_match_the_bodies() {
     );
     assert_eq!(s.elements, 16 + 80);
     assert_eq!(s.bodies[0].fixed_nodes, 5);
-    // plate quads of 0.1 m: L = A / diagonal = 0.1 / sqrt 2; dt = 0.9 L / c
+    // plate quads of 0.1 m: L = A / diagonal = 0.1 / sqrt 2; dt = DT_SHAPE L / c
     let c = (200.0e9f64 / (7800.0 * 0.91)).sqrt();
-    assert!((s.bodies[0].dt_estimate - 0.1 / 2f64.sqrt() / c).abs() < 1e-15);
+    let expect = crash_core::forces::DT_SHAPE * 0.1 / 2f64.sqrt() / c;
+    assert!((s.bodies[0].dt_estimate - expect).abs() < 1e-15);
     let shown = s.to_string();
     assert!(
         shown.contains("plate") && shown.contains("ball") && shown.contains("96 elements"),
