@@ -208,6 +208,59 @@ pub fn cuboid(lx: f64, ly: f64, lz: f64, n: usize, kind: ElementKind) -> Mesh {
     m
 }
 
+/// Spherical cap of radius r around the south pole (a mesh vertex sits exactly at
+/// (0, 0, -r)): the triangles of an icosphere of the given level whose nodes all lie
+/// below z = -r cos(theta). Returns the mesh and its rim nodes (boundary edges).
+pub fn spherical_cap(r: f64, level: u32, theta: f64) -> (Mesh, Vec<usize>) {
+    let mut m = icosphere(1.0, level);
+    let a = m.nodes[0];
+    let rot = nalgebra::Rotation3::rotation_between(&a, &Vec3::new(0.0, 0.0, -1.0))
+        .unwrap_or_else(nalgebra::Rotation3::identity);
+    for p in &mut m.nodes {
+        *p = rot * *p;
+    }
+    let zcut = -theta.cos() + 1e-9;
+    let tris: Vec<[u32; 3]> = m
+        .tris
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&n| m.nodes[n as usize].z <= zcut))
+        .collect();
+    let mut new_id = vec![u32::MAX; m.nodes.len()];
+    let mut nodes = Vec::new();
+    for t in &tris {
+        for &n in t {
+            if new_id[n as usize] == u32::MAX {
+                new_id[n as usize] = nodes.len() as u32;
+                nodes.push(m.nodes[n as usize] * r);
+            }
+        }
+    }
+    let tris: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|n| new_id[n as usize])).collect();
+    let mut edges = std::collections::BTreeMap::new();
+    for t in &tris {
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            *edges.entry((a, b)).or_insert(0) += 1;
+        }
+    }
+    let mut rim: Vec<usize> = edges
+        .iter()
+        .filter(|(_, &c)| c == 1)
+        .flat_map(|(&(a, b), _)| [a as usize, b as usize])
+        .collect();
+    rim.sort_unstable();
+    rim.dedup();
+    (
+        Mesh {
+            nodes,
+            tris,
+            quads: Vec::new(),
+        },
+        rim,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
