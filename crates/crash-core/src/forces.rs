@@ -107,6 +107,20 @@ fn to_fault(body: u32, step: u64, e: usize, f: ElemFailure) -> Fault {
     }
 }
 
+/// Walk `0..len` in SIMD batches of four elements, then the remainder one by one (the
+/// same arithmetic per element either way): `f(first, is_batch_of_four)`.
+#[inline(always)]
+fn for_each_batch<E>(len: usize, mut f: impl FnMut(usize, bool) -> Result<(), E>) -> Result<(), E> {
+    let full = len - len % 4;
+    for j in (0..full).step_by(4) {
+        f(j, true)?;
+    }
+    for j in full..len {
+        f(j, false)?;
+    }
+    Ok(())
+}
+
 /// Build a kernel scalar from W per-lane values.
 #[inline(always)]
 fn lanes<S: Lanes>(f: impl Fn(usize) -> f64) -> S {
@@ -307,36 +321,34 @@ impl Body {
             .map(|(ci, ((els, sts), slots))| {
                 let mut sums = ForceSums::default();
                 let base = ci * CHUNK;
-                let mut j = 0;
-                // four elements per SIMD batch, the remainder one by one (same arithmetic)
-                while j + 4 <= els.len() {
-                    tri_batch(
-                        &k4,
-                        &sec,
-                        &els[j..j + 4],
-                        base + j,
-                        nodes,
-                        F4::splat(h),
-                        &mut sts[j..j + 4],
-                        &mut slots[3 * j..3 * j + 12],
-                        &mut sums,
-                    )?;
-                    j += 4;
-                }
-                while j < els.len() {
-                    tri_batch(
-                        &k1,
-                        &sec,
-                        &els[j..j + 1],
-                        base + j,
-                        nodes,
-                        h,
-                        &mut sts[j..j + 1],
-                        &mut slots[3 * j..3 * j + 3],
-                        &mut sums,
-                    )?;
-                    j += 1;
-                }
+                for_each_batch(els.len(), |j, four| {
+                    let (st, sl) = (&mut sts[j..], &mut slots[3 * j..]);
+                    if four {
+                        tri_batch(
+                            &k4,
+                            &sec,
+                            &els[j..j + 4],
+                            base + j,
+                            nodes,
+                            F4::splat(h),
+                            st,
+                            sl,
+                            &mut sums,
+                        )
+                    } else {
+                        tri_batch(
+                            &k1,
+                            &sec,
+                            &els[j..j + 1],
+                            base + j,
+                            nodes,
+                            h,
+                            st,
+                            sl,
+                            &mut sums,
+                        )
+                    }
+                })?;
                 Ok(sums)
             })
             .collect();
@@ -351,37 +363,36 @@ impl Body {
             .map(|(ci, (((els, sts), hgs), slots))| {
                 let mut sums = ForceSums::default();
                 let base = nt + ci * CHUNK;
-                let mut j = 0;
-                while j + 4 <= els.len() {
-                    quad_batch(
-                        &k4,
-                        &sec,
-                        &els[j..j + 4],
-                        base + j,
-                        nodes,
-                        F4::splat(h),
-                        &mut sts[j..j + 4],
-                        &mut hgs[j..j + 4],
-                        &mut slots[4 * j..4 * j + 16],
-                        &mut sums,
-                    )?;
-                    j += 4;
-                }
-                while j < els.len() {
-                    quad_batch(
-                        &k1,
-                        &sec,
-                        &els[j..j + 1],
-                        base + j,
-                        nodes,
-                        h,
-                        &mut sts[j..j + 1],
-                        &mut hgs[j..j + 1],
-                        &mut slots[4 * j..4 * j + 4],
-                        &mut sums,
-                    )?;
-                    j += 1;
-                }
+                for_each_batch(els.len(), |j, four| {
+                    let (st, hg, sl) = (&mut sts[j..], &mut hgs[j..], &mut slots[4 * j..]);
+                    if four {
+                        quad_batch(
+                            &k4,
+                            &sec,
+                            &els[j..j + 4],
+                            base + j,
+                            nodes,
+                            F4::splat(h),
+                            st,
+                            hg,
+                            sl,
+                            &mut sums,
+                        )
+                    } else {
+                        quad_batch(
+                            &k1,
+                            &sec,
+                            &els[j..j + 1],
+                            base + j,
+                            nodes,
+                            h,
+                            st,
+                            hg,
+                            sl,
+                            &mut sums,
+                        )
+                    }
+                })?;
                 Ok(sums)
             })
             .collect();
