@@ -4,7 +4,7 @@
 use super::colour::body_colour;
 use super::font::{draw_text, text_height, text_width};
 use super::image::{Image, BLACK, WHITE};
-use super::plot::{draw_legend, GREY};
+use super::plot::{draw_legend, PlotArea, GREY};
 use super::scene::format_number;
 
 /// One named line of points (x, y); points that are not finite and > 0 are skipped.
@@ -52,20 +52,20 @@ pub fn loglog_plot(
     height: u32,
 ) -> Image {
     let mut img = Image::new(width, height, WHITE);
-    let s = if width >= 700 { 2 } else { 1 };
-    let lw = series
-        .iter()
-        .map(|se| text_width(&se.name, s))
-        .max()
-        .unwrap_or(0)
-        + 40;
-    let (left, right, top, bottom) = (
-        14 + text_width("8.88e-88", s),
-        lw + 24,
-        18 + 2 * text_height(s),
-        28 + 2 * text_height(s),
+    let PlotArea {
+        s,
+        legend: lw,
+        left,
+        top,
+        pw,
+        ph,
+        ..
+    } = PlotArea::new(
+        width,
+        height,
+        series.iter().map(|se| se.name.as_str()),
+        "8.88e-88",
     );
-    let (pw, ph) = (width as i64 - left - right, height as i64 - top - bottom);
     draw_text(
         &mut img,
         (width as i64 - text_width(title, s)) / 2,

@@ -69,24 +69,63 @@ const SERIES: [Series; 7] = [
     },
 ];
 
+/// Where the plot area sits in a picture: text scale, margins (room for y tick labels
+/// on the left, the legend on the right, title and axis labels) and the area's size.
+#[derive(Debug, Clone, Copy)]
+pub struct PlotArea {
+    pub s: u32,
+    /// Width of the legend column.
+    pub legend: i64,
+    pub left: i64,
+    pub right: i64,
+    pub top: i64,
+    pub bottom: i64,
+    pub pw: i64,
+    pub ph: i64,
+}
+
+impl PlotArea {
+    /// `names` are the legend entries, `widest_tick` the widest y tick label expected.
+    pub fn new<'a>(
+        width: u32,
+        height: u32,
+        names: impl Iterator<Item = &'a str>,
+        widest_tick: &str,
+    ) -> Self {
+        let s = if width >= 700 { 2 } else { 1 };
+        let lw = names.map(|n| text_width(n, s)).max().unwrap_or(0) + 40;
+        let (left, right, top, bottom) = (
+            14 + text_width(widest_tick, s),
+            lw + 24,
+            18 + 2 * text_height(s),
+            28 + 2 * text_height(s),
+        );
+        Self {
+            s,
+            legend: lw,
+            left,
+            right,
+            top,
+            bottom,
+            pw: width as i64 - left - right,
+            ph: height as i64 - top - bottom,
+        }
+    }
+}
+
 /// Plot the energy terms of `rows` (time in ms on x, J on y).
 pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
     let mut img = Image::new(width, height, WHITE);
-    let s = if width >= 700 { 2 } else { 1 };
     // The legend sits right of the plot so it never hides a curve.
-    let lw = SERIES
-        .iter()
-        .map(|se| text_width(se.name, s))
-        .max()
-        .unwrap_or(0)
-        + 40;
-    let (left, right, top, bottom) = (
-        14 + text_width("-8.88e-88", s),
-        lw + 24,
-        18 + 2 * text_height(s),
-        28 + 2 * text_height(s),
-    );
-    let (pw, ph) = (width as i64 - left - right, height as i64 - top - bottom);
+    let PlotArea {
+        s,
+        legend: lw,
+        left,
+        top,
+        pw,
+        ph,
+        ..
+    } = PlotArea::new(width, height, SERIES.iter().map(|se| se.name), "-8.88e-88");
     let title = "Energy balance";
     draw_text(
         &mut img,
