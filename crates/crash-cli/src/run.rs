@@ -6,11 +6,13 @@
 use crate::progress::Progress;
 use anyhow::Context;
 use crash_core::contact::PairStats;
-use crash_core::{Body, EnergyTotals};
+use crash_core::EnergyTotals;
+use crash_io::Frame;
 use crash_master::{
-    read_restart, resume_local, run_local, FileSink, MasterCheckpoint, MasterError, RunInput,
+    read_restart, resume_with, run_with, FileSink, MasterCheckpoint, MasterError, RunInput,
     RunOptions, RunStats, Sink, SinkError, RESTART_FILE,
 };
+use crash_worker::LocalWorker;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -87,8 +89,8 @@ impl Sink for CliSink {
         self.files.checkpoint(state)
     }
 
-    fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError> {
-        self.files.frame(step, time, bodies)
+    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
+        self.files.frame(frame)
     }
 
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
@@ -103,8 +105,8 @@ pub fn penetration_message(built: &crash_scene::Built, p: &crash_scene::Penetrat
         built
             .bodies
             .iter()
-            .find(|b| b.id == id)
-            .map_or_else(|| format!("#{id}"), |b| format!("'{}'", b.name))
+            .find(|b| b.def.id == id)
+            .map_or_else(|| format!("#{id}"), |b| format!("'{}'", b.def.name))
     };
     format!(
         "bodies {} and {} interpenetrate at t = 0: node {} of {} is {:.3e} m inside {} ({} nodes penetrate); move them apart",
@@ -167,10 +169,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     }
     let pool = pool.build().context("cannot start the thread pool")?;
     let files = match &restart {
-        Some((_, r)) => FileSink::reopen(&out, &input.name, input.scene_hash, &input.bodies, r)
+        Some((_, r)) => FileSink::reopen(&out, &input.name, input.scene_hash, input.size(), r)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("cannot reopen the run directory {}", out.display()))?,
-        None => FileSink::create(&out, &input.name, input.scene_hash, &input.bodies)
+        None => FileSink::create(&out, &input.name, input.scene_hash, input.size())
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("cannot create the run directory {}", out.display()))?,
     };
@@ -178,7 +180,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let mut sink = CliSink {
         files,
         progress: Progress::new(input.config.end_time, args.quiet),
-        last_time: restart.as_ref().map_or(0.0, |(_, r)| r.master.time),
+        last_time: restart.as_ref().map_or(0.0, |(_, r)| r.master.clock.time),
     };
     let opts = RunOptions {
         checkpoint_every: args.checkpoint_every.unwrap_or(0),
@@ -188,23 +190,23 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         eprintln!(
             "crash: restarting from {} at step {}, t = {:.6e} s",
             path.display(),
-            r.master.step,
-            r.master.time
+            r.master.clock.step,
+            r.master.clock.time
         );
     }
     eprintln!(
         "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {} worker(s), writing {}",
         input.name,
         input.bodies.len(),
-        input.bodies.iter().map(Body::element_count).sum::<usize>(),
+        input.size().elements,
         input.config.end_time,
         args.workers.max(1),
         out.display()
     );
-    let workers = args.workers.max(1);
+    let mut workers = LocalWorker::many(args.workers);
     let result = pool.install(|| match restart {
-        Some((_, r)) => resume_local(input, r.master, workers, &mut sink, &opts),
-        None => run_local(input, workers, &mut sink, &opts),
+        Some((_, r)) => resume_with(input, r.master, &mut workers, &mut sink, &opts),
+        None => run_with(input, &mut workers, &mut sink, &opts),
     });
     let stats = match result {
         Ok(s) => s,

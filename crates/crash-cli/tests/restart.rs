@@ -124,9 +124,9 @@ fn interrupted_and_restarted_run_equals_the_uninterrupted_run() {
     let ckp = b.join("restart.ckp");
     let r = crash_master::read_restart(&ckp).unwrap();
     assert!(
-        r.master.step >= 100 && r.master.time < 1.7e-3,
+        r.master.clock.step >= 100 && r.master.clock.time < 1.7e-3,
         "{}",
-        r.master.step
+        r.master.clock.step
     );
     let o = ok(crash(&[
         s(&sc),
@@ -147,7 +147,7 @@ fn interrupted_and_restarted_run_equals_the_uninterrupted_run() {
         "150",
     ]));
     let ckp = c.join("restart.ckp");
-    let step = crash_master::read_restart(&ckp).unwrap().master.step;
+    let step = crash_master::read_restart(&ckp).unwrap().master.clock.step;
     ok(crash(&[s(&sc), "--restart", s(&ckp), "--out", s(&c)]));
     assert_same_run(&a, &c);
     assert!(step >= 150);

@@ -25,12 +25,12 @@ use std::time::Duration;
 const T: f64 = 0.002;
 
 fn body(id: u32, mesh: &crash_core::Mesh, at: Vec3) -> Body {
-    let mat = Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid");
+    let mat = Material::steel();
     let mut m = mesh.clone();
     m.transform(&nalgebra::Matrix3::identity(), at);
     let mut b =
         Body::new(id, "b", &m, Section::new(mat, T), Stabilization::default()).expect("valid");
-    b.contact = true;
+    b.def_mut().contact = true;
     b
 }
 
@@ -49,7 +49,7 @@ fn spheres_on_plates() -> Vec<Body> {
     for p in 0..3u32 {
         let origin = Vec3::new(p as f64 * 0.5, 0.0, 0.0);
         let mut pl = body(p, &pm, origin);
-        for i in 0..pl.x.len() {
+        for i in 0..pl.state.x.len() {
             pl.fix(i, dof::ALL);
         }
         out.push(pl);
@@ -75,7 +75,7 @@ fn stage_bench(c: &mut Criterion, name: &str, mut bodies: Vec<Body>) {
     let dts: Vec<f64> = bodies.iter().map(|_| 1e-6).collect();
     let mut state = ContactState::default();
     contact_forces(&mut bodies, &cfg, &mut state, &dts);
-    let nodes: usize = bodies.iter().map(|b| b.x.len()).sum();
+    let nodes: usize = bodies.iter().map(|b| b.state.x.len()).sum();
     let active: usize = state.stats().iter().map(|s| s.active_nodes).sum();
     println!(
         "{name}: {} bodies, {nodes} contact-body nodes, {active} active contacts, {} pairs",
@@ -112,13 +112,13 @@ fn search_bench(c: &mut Criterion) {
         println!(
             "{label}: {} segments, {} query nodes, {hits} hits",
             segs.len(),
-            q.x.len()
+            q.state.x.len()
         );
         let mut g = c.benchmark_group(format!("search/{label}"));
         g.sample_size(10)
             .measurement_time(Duration::from_secs(2))
             .warm_up_time(Duration::from_millis(500));
-        g.throughput(Throughput::Elements(q.x.len() as u64));
+        g.throughput(Throughput::Elements(q.state.x.len() as u64));
         g.bench_function("rtree", |b| {
             b.iter(|| black_box(search(&q, &s, &surf, false)))
         });
@@ -126,10 +126,10 @@ fn search_bench(c: &mut Criterion) {
         g.bench_function(format!("brute_{brute_nodes}_nodes"), |b| {
             b.iter(|| {
                 let mut found = 0usize;
-                for p in &q.x[..brute_nodes] {
+                for p in &q.state.x[..brute_nodes] {
                     let mut best = f64::INFINITY;
                     for seg in &segs {
-                        best = best.min(project(p, seg, &s.x).dist);
+                        best = best.min(project(p, seg, &s.state.x).dist);
                     }
                     found += usize::from(best < T);
                 }

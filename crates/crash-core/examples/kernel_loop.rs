@@ -13,7 +13,7 @@ fn main() {
     };
     let cycles: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20);
     let n = if kind == ElementKind::Tri { 71 } else { 100 };
-    let mat = Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid material");
+    let mat = Material::steel();
     let m = plate(1.0, 1.0, n, n, kind);
     let mut b = Body::new(
         0,
@@ -23,9 +23,9 @@ fn main() {
         Stabilization::default(),
     )
     .expect("valid body");
-    for i in 0..b.x.len() {
-        let p = b.x0[i];
-        b.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
+    for i in 0..b.state.x.len() {
+        let p = b.def.x0[i];
+        b.state.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
     }
     let mut e = 0.0;
     let start = std::time::Instant::now();

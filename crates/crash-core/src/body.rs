@@ -6,6 +6,7 @@ use crate::material::Section;
 use crate::mesh::Mesh;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// Fixed-DOF bits: translations x, y, z then rotations x, y, z.
 pub mod dof {
@@ -87,17 +88,17 @@ pub struct BodyEnergy {
 pub const ROT_INERTIA_QUAD: f64 = 1.0 / 8.0;
 pub const ROT_INERTIA_TRI: f64 = 1.0 / 2.0;
 
+/// What never changes during a run: mesh and reference element data, section,
+/// supports, programs, loads and the lumped masses derived from them. Shared behind an
+/// `Arc`: copies of a body (snapshots, migrations in one process) share one definition,
+/// and a definition crosses the wire once per worker.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Body {
+pub struct BodyDef {
     pub id: u32,
     pub name: String,
     pub section: Section,
     pub stab: Stabilization,
-    /// Current positions x_n, half-step velocities v_{n-1/2} (v_0 before the first step),
-    /// angular velocities.
-    pub x: Vec<Vec3>,
-    pub v: Vec<Vec3>,
-    pub w: Vec<Vec3>,
+    /// Reference (initial) positions.
     pub x0: Vec<Vec3>,
     pub mass: Vec<f64>,
     pub inertia: Vec<f64>,
@@ -112,25 +113,44 @@ pub struct Body {
     pub mass_damping: f64,
     pub tris: Vec<TriElem>,
     pub quads: Vec<QuadElem>,
-    /// Resultant state: triangles first, then quads.
-    pub shell: Vec<ShellState>,
-    pub hourglass: Vec<HourglassState>,
-    /// Per-element force slots (tri: 3, quad: 4), gathered per node in a fixed order.
-    pub slots: Vec<Slot>,
+    /// Gather map: the force slots of node n are gather_slot[gather_start[n]..gather_start[n+1]].
     pub gather_start: Vec<u32>,
     pub gather_slot: Vec<u32>,
-    /// Contact forces on nodes (written by the contact stage, zero otherwise).
-    pub f_contact: Vec<Vec3>,
     /// Contact participates (has a contact surface).
     pub contact: bool,
     /// Self-contact of this body enabled.
     pub self_contact: bool,
     /// Every DOF of every node constrained: no internal forces are computed.
     pub kinematic: bool,
+}
+
+/// What a step changes: nodal motion, element resultants and force slots, contact
+/// forces, energies. Snapshots, migrations and checkpoints carry this.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BodyState {
+    /// Current positions x_n, half-step velocities v_{n-1/2} (v_0 before the first step),
+    /// angular velocities.
+    pub x: Vec<Vec3>,
+    pub v: Vec<Vec3>,
+    pub w: Vec<Vec3>,
+    /// Resultant state: triangles first, then quads.
+    pub shell: Vec<ShellState>,
+    pub hourglass: Vec<HourglassState>,
+    /// Per-element force slots (tri: 3, quad: 4), gathered per node in a fixed order.
+    pub slots: Vec<Slot>,
+    /// Contact forces on nodes (written by the contact stage, zero otherwise).
+    pub f_contact: Vec<Vec3>,
     pub energy: BodyEnergy,
     /// Internal and hourglass energy of the current configuration (last force pass).
     pub internal_now: f64,
     pub hourglass_now: f64,
+}
+
+/// A body: its shared definition and its own state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Body {
+    pub def: Arc<BodyDef>,
+    pub state: BodyState,
 }
 
 impl Body {
@@ -209,42 +229,204 @@ impl Body {
             }
         }
         let ne = tris.len() + quads.len();
+        let nslots = slot_nodes.len();
         Ok(Self {
-            id,
-            name: name.into(),
-            section,
-            stab,
-            x0: x.clone(),
-            v: vec![Vec3::zeros(); nn],
-            w: vec![Vec3::zeros(); nn],
-            x,
-            mass,
-            inertia,
-            fixed: vec![0; nn],
-            program: vec![NO_PROGRAM; nn],
-            programs: Vec::new(),
-            loads: Vec::new(),
-            load_of: vec![u32::MAX; nn],
-            mass_damping: 0.0,
-            shell: vec![ShellState::default(); ne],
-            hourglass: vec![HourglassState::default(); quads.len()],
-            slots: vec![[0.0; 6]; slot_nodes.len()],
-            gather_start: count,
-            gather_slot,
-            tris,
-            quads,
-            f_contact: Vec::new(),
-            contact: false,
-            self_contact: false,
-            kinematic: false,
-            energy: BodyEnergy::default(),
-            internal_now: 0.0,
-            hourglass_now: 0.0,
+            state: BodyState {
+                v: vec![Vec3::zeros(); nn],
+                w: vec![Vec3::zeros(); nn],
+                x: x.clone(),
+                shell: vec![ShellState::default(); ne],
+                hourglass: vec![HourglassState::default(); quads.len()],
+                slots: vec![[0.0; 6]; nslots],
+                f_contact: Vec::new(),
+                energy: BodyEnergy::default(),
+                internal_now: 0.0,
+                hourglass_now: 0.0,
+            },
+            def: Arc::new(BodyDef {
+                id,
+                name: name.into(),
+                section,
+                stab,
+                x0: x,
+                mass,
+                inertia,
+                fixed: vec![0; nn],
+                program: vec![NO_PROGRAM; nn],
+                programs: Vec::new(),
+                loads: Vec::new(),
+                load_of: vec![u32::MAX; nn],
+                mass_damping: 0.0,
+                gather_start: count,
+                gather_slot,
+                tris,
+                quads,
+                contact: false,
+                self_contact: false,
+                kinematic: false,
+            }),
         })
     }
 
+    /// The body's id (its definition's).
+    pub fn id(&self) -> u32 {
+        self.def.id
+    }
+
+    /// The definition, for changes while a body is being built (copies it first if it
+    /// is shared: never on the stepping path).
+    pub fn def_mut(&mut self) -> &mut BodyDef {
+        Arc::make_mut(&mut self.def)
+    }
+
+    /// Put a definition and a state back together, checking that they fit.
+    pub fn from_parts(def: Arc<BodyDef>, state: BodyState) -> Result<Self, CoreError> {
+        let nn = def.x0.len();
+        let ne = def.tris.len() + def.quads.len();
+        let nslots = 3 * def.tris.len() + 4 * def.quads.len();
+        let fits = state.x.len() == nn
+            && state.v.len() == nn
+            && state.w.len() == nn
+            && state.shell.len() == ne
+            && state.hourglass.len() == def.quads.len()
+            && state.slots.len() == nslots
+            && (state.f_contact.is_empty() || state.f_contact.len() == nn);
+        if !fits {
+            return Err(CoreError::Other {
+                body: def.name.clone(),
+                what: format!(
+                    "a state of {} nodes / {} elements does not fit the definition ({nn} nodes, {ne} elements)",
+                    state.x.len(),
+                    state.shell.len()
+                ),
+            });
+        }
+        Ok(Self { def, state })
+    }
+
     pub fn node_count(&self) -> usize {
-        self.x.len()
+        self.state.x.len()
+    }
+
+    pub fn element_count(&self) -> usize {
+        self.def.element_count()
+    }
+
+    pub fn total_mass(&self) -> f64 {
+        self.def.total_mass()
+    }
+
+    /// Rigid initial motion: v_I = v + omega x (x_I - centre), w_I = omega.
+    pub fn set_rigid_velocity(&mut self, v: Vec3, omega: Vec3, centre: Vec3) {
+        let s = &mut self.state;
+        for i in 0..s.x.len() {
+            s.v[i] = v + omega.cross(&(s.x[i] - centre));
+            s.w[i] = omega;
+        }
+    }
+
+    /// Mass-weighted centre of the current positions.
+    pub fn centre_of_mass(&self) -> Vec3 {
+        let mut c = Vec3::zeros();
+        for (p, m) in self.state.x.iter().zip(&self.def.mass) {
+            c += p * *m;
+        }
+        c / self.total_mass()
+    }
+
+    /// Constrain DOFs of a node to zero velocity (bits of `dof`).
+    pub fn fix(&mut self, node: usize, mask: u8) {
+        let d = self.def_mut();
+        d.fixed[node] |= mask;
+        d.refresh_kinematic();
+    }
+
+    /// Prescribe the velocity of the given nodes (all six DOFs follow the program).
+    pub fn prescribe(&mut self, nodes: &[usize], program: VelocityProgram) {
+        let d = self.def_mut();
+        let id = d.programs.len() as u16;
+        d.programs.push(program);
+        for &n in nodes {
+            d.fixed[n] = dof::ALL;
+            d.program[n] = id;
+        }
+        d.refresh_kinematic();
+        let (v, w) = program.at(0.0);
+        for &n in nodes {
+            self.state.v[n] = v;
+            self.state.w[n] = w;
+        }
+    }
+
+    /// Add a nodal load (several loads on one node add up).
+    pub fn add_load(&mut self, load: NodalLoad) {
+        let d = self.def_mut();
+        d.loads.push(load);
+        d.loads.sort_by_key(|l| l.node);
+        d.load_of.iter_mut().for_each(|l| *l = u32::MAX);
+        for (k, l) in d.loads.iter().enumerate().rev() {
+            d.load_of[l.node as usize] = k as u32;
+        }
+    }
+
+    /// Zero all DOFs whose bits are fixed and apply programs at time t (used at start).
+    pub fn apply_constraints(&mut self, t: f64) {
+        let (d, s) = (&*self.def, &mut self.state);
+        for i in 0..s.x.len() {
+            let f = d.fixed[i];
+            if f == 0 {
+                continue;
+            }
+            let (pv, pw) = match d.program[i] {
+                NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
+                p => d.programs[p as usize].at(t),
+            };
+            for k in 0..3 {
+                if f & (1 << k) != 0 {
+                    s.v[i][k] = pv[k];
+                }
+                if f & (8 << k) != 0 {
+                    s.w[i][k] = pw[k];
+                }
+            }
+        }
+    }
+
+    /// Translational + rotational kinetic energy of the current (half-step) velocities.
+    pub fn kinetic_energy_now(&self) -> f64 {
+        let (d, s) = (&*self.def, &self.state);
+        let mut e = 0.0;
+        for i in 0..s.x.len() {
+            e += 0.5 * (d.mass[i] * s.v[i].norm_squared() + d.inertia[i] * s.w[i].norm_squared());
+        }
+        e
+    }
+
+    /// Linear momentum sum m v.
+    pub fn linear_momentum(&self) -> Vec3 {
+        let mut p = Vec3::zeros();
+        for (v, m) in self.state.v.iter().zip(&self.def.mass) {
+            p += v * *m;
+        }
+        p
+    }
+
+    /// Angular momentum about the origin: sum m x x v + I w (positions at the same time
+    /// level as v when called between steps: x_{n+1} with v_{n+1/2} is exactly conserved
+    /// by central differences).
+    pub fn angular_momentum(&self) -> Vec3 {
+        let (d, s) = (&*self.def, &self.state);
+        let mut l = Vec3::zeros();
+        for i in 0..s.x.len() {
+            l += s.x[i].cross(&s.v[i]) * d.mass[i] + s.w[i] * d.inertia[i];
+        }
+        l
+    }
+}
+
+impl BodyDef {
+    pub fn node_count(&self) -> usize {
+        self.x0.len()
     }
 
     pub fn element_count(&self) -> usize {
@@ -255,108 +437,8 @@ impl Body {
         self.mass.iter().sum()
     }
 
-    /// Rigid initial motion: v_I = v + omega x (x_I - centre), w_I = omega.
-    pub fn set_rigid_velocity(&mut self, v: Vec3, omega: Vec3, centre: Vec3) {
-        for i in 0..self.x.len() {
-            self.v[i] = v + omega.cross(&(self.x[i] - centre));
-            self.w[i] = omega;
-        }
-    }
-
-    /// Mass-weighted centre of the current positions.
-    pub fn centre_of_mass(&self) -> Vec3 {
-        let mut c = Vec3::zeros();
-        for (p, m) in self.x.iter().zip(&self.mass) {
-            c += p * *m;
-        }
-        c / self.total_mass()
-    }
-
-    /// Constrain DOFs of a node to zero velocity (bits of `dof`).
-    pub fn fix(&mut self, node: usize, mask: u8) {
-        self.fixed[node] |= mask;
-        self.refresh_kinematic();
-    }
-
-    /// Prescribe the velocity of the given nodes (all six DOFs follow the program).
-    pub fn prescribe(&mut self, nodes: &[usize], program: VelocityProgram) {
-        let id = self.programs.len() as u16;
-        self.programs.push(program);
-        let (v, w) = program.at(0.0);
-        for &n in nodes {
-            self.fixed[n] = dof::ALL;
-            self.program[n] = id;
-            self.v[n] = v;
-            self.w[n] = w;
-        }
-        self.refresh_kinematic();
-    }
-
-    /// Add a nodal load (several loads on one node add up).
-    pub fn add_load(&mut self, load: NodalLoad) {
-        self.loads.push(load);
-        self.loads.sort_by_key(|l| l.node);
-        self.load_of.iter_mut().for_each(|l| *l = u32::MAX);
-        for (k, l) in self.loads.iter().enumerate().rev() {
-            self.load_of[l.node as usize] = k as u32;
-        }
-    }
-
     fn refresh_kinematic(&mut self) {
         self.kinematic = self.fixed.iter().all(|&f| f == dof::ALL);
-    }
-
-    /// Zero all DOFs whose bits are fixed and apply programs at time t (used at start).
-    pub fn apply_constraints(&mut self, t: f64) {
-        for i in 0..self.x.len() {
-            let f = self.fixed[i];
-            if f == 0 {
-                continue;
-            }
-            let (pv, pw) = match self.program[i] {
-                NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
-                p => self.programs[p as usize].at(t),
-            };
-            for d in 0..3 {
-                if f & (1 << d) != 0 {
-                    self.v[i][d] = pv[d];
-                }
-                if f & (8 << d) != 0 {
-                    self.w[i][d] = pw[d];
-                }
-            }
-        }
-    }
-
-    /// Translational + rotational kinetic energy of the current (half-step) velocities.
-    pub fn kinetic_energy_now(&self) -> f64 {
-        let mut e = 0.0;
-        for i in 0..self.x.len() {
-            e += 0.5
-                * (self.mass[i] * self.v[i].norm_squared()
-                    + self.inertia[i] * self.w[i].norm_squared());
-        }
-        e
-    }
-
-    /// Linear momentum sum m v.
-    pub fn linear_momentum(&self) -> Vec3 {
-        let mut p = Vec3::zeros();
-        for i in 0..self.x.len() {
-            p += self.v[i] * self.mass[i];
-        }
-        p
-    }
-
-    /// Angular momentum about the origin: sum m x x v + I w (positions at the same time
-    /// level as v when called between steps: x_{n+1} with v_{n+1/2} is exactly conserved
-    /// by central differences).
-    pub fn angular_momentum(&self) -> Vec3 {
-        let mut l = Vec3::zeros();
-        for i in 0..self.x.len() {
-            l += self.x[i].cross(&self.v[i]) * self.mass[i] + self.w[i] * self.inertia[i];
-        }
-        l
     }
 }
 
@@ -387,11 +469,11 @@ mod tests {
             h: 1e-6,
             step: 0,
         };
-        let before = b.v.clone();
+        let before = b.state.v.clone();
         b.integrate(&clock, Vec3::zeros()).expect("finite");
         // node 2 got 3 N, node 0 got 5 N, over hbar = h/2
-        let a2 = (b.v[2].z - before[2].z) / 0.5e-6 * b.mass[2];
-        let a0 = (b.v[0].z - before[0].z) / 0.5e-6 * b.mass[0];
+        let a2 = (b.state.v[2].z - before[2].z) / 0.5e-6 * b.def.mass[2];
+        let a0 = (b.state.v[0].z - before[0].z) / 0.5e-6 * b.def.mass[0];
         assert!(
             (a2 - 3.0).abs() < 1e-9 && (a0 - 5.0).abs() < 1e-9,
             "{a2} {a0}"

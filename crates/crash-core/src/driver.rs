@@ -1,6 +1,7 @@
 //! The in-process time loop over one group: global dt = safety * min element dt,
 //! energy balance every step, and the run-time guards (runaway, dt collapse).
 
+use crate::clock::Clock;
 use crate::energy::{EnergyLedger, EnergyTotals};
 use crate::error::Fault;
 use crate::group::{BodyReport, Group};
@@ -37,6 +38,8 @@ pub const RUNAWAY_PERSIST: u32 = 3;
 #[derive(Debug)]
 pub struct Run {
     pub group: Group,
+    /// The run's one clock.
+    pub clock: Clock,
     pub cfg: RunConfig,
     pub ledger: EnergyLedger,
     pub reports: Vec<BodyReport>,
@@ -125,6 +128,7 @@ impl Run {
         let energy = ledger.update(EnergyTotals::sum(reports.iter().map(|r| &r.energy)));
         let mut run = Self {
             group,
+            clock: Clock::default(),
             cfg,
             ledger,
             reports,
@@ -140,27 +144,28 @@ impl Run {
     }
 
     fn choose_dt(&self) -> Result<f64, Fault> {
-        choose_dt(&self.cfg, &self.reports, self.dt0, self.group.step)
+        choose_dt(&self.cfg, &self.reports, self.dt0, self.clock.step)
     }
 
     pub fn time(&self) -> f64 {
-        self.group.time
+        self.clock.time
     }
 
     pub fn finished(&self) -> bool {
-        self.group.time >= self.cfg.end_time * (1.0 - 1e-12)
+        self.clock.time >= self.cfg.end_time * (1.0 - 1e-12)
     }
 
     /// Take one step; the last step is shortened to land on the end time.
     pub fn step(&mut self) -> Result<(), Fault> {
         let mut h = self.next_dt;
-        let left = self.cfg.end_time - self.group.time;
+        let left = self.cfg.end_time - self.clock.time;
         if left < h && left > 0.0 {
             h = left;
         }
         self.dt_min = self.dt_min.min(h);
         self.dt_max = self.dt_max.max(h);
-        self.reports = self.group.advance(h)?;
+        self.reports = self.group.advance(&self.clock, h)?;
+        self.clock = self.clock.after(h);
         self.energy = self
             .ledger
             .update(EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)));
@@ -169,7 +174,7 @@ impl Run {
             &mut self.ledger,
             &self.energy,
             &self.reports,
-            self.group.step,
+            self.clock.step,
         )?;
         self.next_dt = self.choose_dt()?;
         Ok(())

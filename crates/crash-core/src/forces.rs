@@ -299,20 +299,21 @@ impl Body {
     /// the half-step velocities over `h` (h = 0 at the start). Fixed/kinematic bodies
     /// compute nothing.
     pub fn internal_forces(&mut self, h: f64, step: u64) -> Result<ForceSums, Fault> {
-        if self.kinematic {
-            self.internal_now = 0.0;
-            self.hourglass_now = 0.0;
+        if self.def.kinematic {
+            self.state.internal_now = 0.0;
+            self.state.hourglass_now = 0.0;
             return Ok(ForceSums::default());
         }
-        let sec = self.section;
-        let k4 = Consts::<F4>::new(&sec, &self.stab);
-        let k1 = Consts::<f64>::new(&sec, &self.stab);
-        let nodes = (&self.x[..], &self.v[..], &self.w[..]);
-        let nt = self.tris.len();
-        let (tri_slots, quad_slots) = self.slots.split_at_mut(3 * nt);
-        let (tri_state, quad_state) = self.shell.split_at_mut(nt);
+        let sec = self.def.section;
+        let k4 = Consts::<F4>::new(&sec, &self.def.stab);
+        let k1 = Consts::<f64>::new(&sec, &self.def.stab);
+        let nodes = (&self.state.x[..], &self.state.v[..], &self.state.w[..]);
+        let nt = self.def.tris.len();
+        let (tri_slots, quad_slots) = self.state.slots.split_at_mut(3 * nt);
+        let (tri_state, quad_state) = self.state.shell.split_at_mut(nt);
 
         let tri_chunks: Vec<ChunkResult> = self
+            .def
             .tris
             .par_chunks(CHUNK)
             .zip(tri_state.par_chunks_mut(CHUNK))
@@ -354,10 +355,11 @@ impl Body {
             .collect();
 
         let quad_chunks: Vec<ChunkResult> = self
+            .def
             .quads
             .par_chunks(CHUNK)
             .zip(quad_state.par_chunks_mut(CHUNK))
-            .zip(self.hourglass.par_chunks_mut(CHUNK))
+            .zip(self.state.hourglass.par_chunks_mut(CHUNK))
             .zip(quad_slots.par_chunks_mut(4 * CHUNK))
             .enumerate()
             .map(|(ci, (((els, sts), hgs), slots))| {
@@ -401,21 +403,21 @@ impl Body {
         for r in tri_chunks.iter().chain(quad_chunks.iter()) {
             match r {
                 Ok(s) => total = total.merge(s),
-                Err((e, f)) => return Err(to_fault(self.id, step, *e, *f)),
+                Err((e, f)) => return Err(to_fault(self.def.id, step, *e, *f)),
             }
         }
         let en = &total.energy;
         if !(en.internal.is_finite() && en.hourglass.is_finite()) {
             return Err(Fault::NonFinite {
                 step,
-                body: self.id,
+                body: self.def.id,
                 place: format!("element {}", total.hot_element),
                 what: "internal energy",
             });
         }
-        self.internal_now = en.internal;
-        self.hourglass_now = en.hourglass;
-        self.energy.damping += en.damping;
+        self.state.internal_now = en.internal;
+        self.state.hourglass_now = en.hourglass;
+        self.state.energy.damping += en.damping;
         Ok(total)
     }
 }

@@ -5,10 +5,10 @@
 //! reported is that of the configuration the next step starts from.
 
 use crate::body::{Body, BodyEnergy};
+use crate::clock::Clock;
 use crate::contact::{ContactConfig, ContactState, PairStats};
 use crate::error::Fault;
 use crate::forces::ForceSums;
-use crate::integrate::StepClock;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -33,11 +33,6 @@ pub struct BodyReport {
 pub struct Group {
     pub bodies: Vec<Body>,
     pub gravity: Vec3,
-    /// t_n of the current positions.
-    pub time: f64,
-    pub step: u64,
-    /// h_{n-1/2}: the last step taken (0 before the first).
-    pub h_prev: f64,
     /// Contact parameters.
     #[serde(default)]
     pub contact: ContactConfig,
@@ -49,8 +44,8 @@ pub struct Group {
 
 fn report(b: &Body, f: &ForceSums, lo: Vec3, hi: Vec3, max_move: f64) -> BodyReport {
     BodyReport {
-        id: b.id,
-        energy: b.energy,
+        id: b.def.id,
+        energy: b.state.energy,
         stable_dt: f.dt,
         dt_element: f.dt_element,
         lo,
@@ -66,9 +61,6 @@ impl Group {
         Self {
             bodies,
             gravity,
-            time: 0.0,
-            step: 0,
-            h_prev: 0.0,
             contact: ContactConfig::default(),
             contact_state: ContactState::default(),
         }
@@ -100,36 +92,30 @@ impl Group {
         for b in &mut self.bodies {
             b.apply_constraints(0.0);
             let f = b.internal_forces(0.0, 0)?;
-            let (lo, hi) = crate::mesh::bounds(&b.x);
-            b.energy.internal = b.internal_now;
-            b.energy.hourglass = b.hourglass_now;
-            b.energy.kinetic = b.kinetic_energy_now();
+            let (lo, hi) = crate::mesh::bounds(&b.state.x);
+            b.state.energy.internal = b.state.internal_now;
+            b.state.energy.hourglass = b.state.hourglass_now;
+            b.state.energy.kinetic = b.kinetic_energy_now();
             out.push(report(b, &f, lo, hi, 0.0));
         }
         self.contact_pass(&mut out);
         Ok(out)
     }
 
-    /// One step of length h: returns one report per body, in the group's body order.
-    pub fn advance(&mut self, h: f64) -> Result<Vec<BodyReport>, Fault> {
-        let clock = StepClock {
-            t: self.time,
-            h_prev: self.h_prev,
-            h,
-            step: self.step,
-        };
+    /// One step of length h from `clock` (the run's clock, owned by its loop): returns
+    /// one report per body, in the group's body order.
+    pub fn advance(&mut self, clock: &Clock, h: f64) -> Result<Vec<BodyReport>, Fault> {
+        let sc = clock.step_of(h);
         let mut sums = Vec::with_capacity(self.bodies.len());
         for b in &mut self.bodies {
-            sums.push(b.integrate(&clock, self.gravity)?);
+            sums.push(b.integrate(&sc, self.gravity)?);
         }
-        self.time += h;
-        self.step += 1;
-        self.h_prev = h;
+        let step = clock.after(h).step;
         let moves: Vec<(f64, usize)> = sums.iter().map(|s| (s.max_move, s.max_move_node)).collect();
-        crate::contact::check_moves(&self.bodies, &self.contact, &moves, h, self.step)?;
+        crate::contact::check_moves(&self.bodies, &self.contact, &moves, h, step)?;
         let mut out = Vec::with_capacity(self.bodies.len());
         for (b, s) in self.bodies.iter_mut().zip(&sums) {
-            let f = b.internal_forces(h, self.step)?;
+            let f = b.internal_forces(h, step)?;
             out.push(report(b, &f, s.lo, s.hi, s.max_move));
         }
         self.contact_pass(&mut out);

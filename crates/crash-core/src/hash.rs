@@ -1,6 +1,7 @@
 //! Bitwise state hash (FNV-1a over the exact f64 bits) used to prove determinism.
 
 use crate::body::Body;
+use crate::Vec3;
 
 const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 const PRIME: u64 = 0x0000_0100_0000_01b3;
@@ -35,14 +36,25 @@ impl Fnv {
 /// Hash of positions, velocities and angular velocities of the bodies, in the order
 /// given (callers pass bodies sorted by id).
 pub fn state_hash<'a>(bodies: impl IntoIterator<Item = &'a Body>) -> u64 {
+    state_hash_of(
+        bodies
+            .into_iter()
+            .map(|b| (b.def.id, &b.state.x[..], &b.state.v[..], &b.state.w[..])),
+    )
+}
+
+/// The same hash from the parts of each body (id, x, v, w), e.g. of an output frame.
+pub fn state_hash_of<'a>(
+    bodies: impl IntoIterator<Item = (u32, &'a [Vec3], &'a [Vec3], &'a [Vec3])>,
+) -> u64 {
     let mut h = Fnv::default();
-    for b in bodies {
-        h.u64(b.id as u64);
-        for i in 0..b.x.len() {
+    for (id, x, v, w) in bodies {
+        h.u64(id as u64);
+        for i in 0..x.len() {
             for d in 0..3 {
-                h.f64(b.x[i][d]);
-                h.f64(b.v[i][d]);
-                h.f64(b.w[i][d]);
+                h.f64(x[i][d]);
+                h.f64(v[i][d]);
+                h.f64(w[i][d]);
             }
         }
     }

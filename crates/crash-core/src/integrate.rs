@@ -94,25 +94,30 @@ impl Body {
         let h = clock.h;
         let hbar = 0.5 * (clock.h_prev + h);
         let t_half = clock.t + 0.5 * h;
-        let c = self.mass_damping;
+        let c = self.def.mass_damping;
         let (dn, dd) = (1.0 - 0.5 * c * hbar, 1.0 / (1.0 + 0.5 * c * hbar));
-        let kinematic = self.kinematic;
-        let slots = &self.slots;
-        let gs = &self.gather_start;
-        let gi = &self.gather_slot;
-        let fc = &self.f_contact;
-        let loads = &self.loads;
-        let load_of = &self.load_of;
-        let programs = &self.programs;
-        let (mass, inertia, fixed, program) =
-            (&self.mass, &self.inertia, &self.fixed, &self.program);
+        let kinematic = self.def.kinematic;
+        let slots = &self.state.slots;
+        let gs = &self.def.gather_start;
+        let gi = &self.def.gather_slot;
+        let fc = &self.state.f_contact;
+        let loads = &self.def.loads;
+        let load_of = &self.def.load_of;
+        let programs = &self.def.programs;
+        let (mass, inertia, fixed, program) = (
+            &self.def.mass,
+            &self.def.inertia,
+            &self.def.fixed,
+            &self.def.program,
+        );
         let t = clock.t;
 
         let parts: Vec<NodeSums> = self
+            .state
             .x
             .par_chunks_mut(CHUNK)
-            .zip(self.v.par_chunks_mut(CHUNK))
-            .zip(self.w.par_chunks_mut(CHUNK))
+            .zip(self.state.v.par_chunks_mut(CHUNK))
+            .zip(self.state.w.par_chunks_mut(CHUNK))
             .enumerate()
             .map(|(ci, ((xs, vs), ws))| {
                 let mut s = NodeSums::default();
@@ -220,19 +225,19 @@ impl Body {
         if let Some(n) = total.bad_node {
             return Err(Fault::NonFinite {
                 step: clock.step,
-                body: self.id,
+                body: self.def.id,
                 place: format!("node {n}"),
                 what: "velocity or position",
             });
         }
-        let e = &mut self.energy;
+        let e = &mut self.state.energy;
         e.kinetic = total.kinetic;
         // Shadow internal energy at t_{n+1/2}: E(x_n) + h/2 f_int(x_n) . v_{n+1/2}, which
         // equals x_n K x_{n+1} / 2 for a linear system, the quadratic form that central
         // differences conserve exactly (so the balance closes to round-off in the linear
         // undamped case, high frequencies included).
-        e.internal = self.internal_now + 0.5 * h * total.internal_power;
-        e.hourglass = self.hourglass_now;
+        e.internal = self.state.internal_now + 0.5 * h * total.internal_power;
+        e.hourglass = self.state.hourglass_now;
         e.external += total.external + total.reaction;
         e.contact -= total.contact;
         e.damping += total.mass_damping;

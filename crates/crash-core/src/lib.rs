@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod body;
+pub mod clock;
 pub mod contact;
 pub mod driver;
 pub mod element;
@@ -26,7 +27,8 @@ pub mod shapes;
 /// 3-vector of f64 (nalgebra).
 pub type Vec3 = nalgebra::Vector3<f64>;
 
-pub use body::{dof, Body, BodyEnergy, NodalLoad, VelocityProgram};
+pub use body::{dof, Body, BodyDef, BodyEnergy, BodyState, NodalLoad, VelocityProgram};
+pub use clock::Clock;
 pub use driver::{Run, RunConfig};
 pub use element::Stabilization;
 pub use energy::{EnergyLedger, EnergyTotals};

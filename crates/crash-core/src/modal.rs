@@ -11,38 +11,40 @@ use crate::Vec3;
 /// rate state) to the nodal vector u = (translations, rotations); returns K u.
 fn stiffness_action(base: &Body, u: &[[f64; 6]], eps: f64) -> Vec<[f64; 6]> {
     let mut b = base.clone();
-    b.section.material.kelvin = 0.0;
-    for s in &mut b.shell {
+    b.def_mut().section.material.kelvin = 0.0;
+    for s in &mut b.state.shell {
         *s = ShellState::default();
     }
-    for s in &mut b.hourglass {
+    for s in &mut b.state.hourglass {
         *s = HourglassState::default();
     }
-    for i in 0..b.x.len() {
+    for i in 0..b.state.x.len() {
         let t = Vec3::new(u[i][0], u[i][1], u[i][2]) * eps;
-        b.x[i] = base.x[i] + t;
-        b.v[i] = t;
-        b.w[i] = Vec3::new(u[i][3], u[i][4], u[i][5]) * eps;
+        b.state.x[i] = base.state.x[i] + t;
+        b.state.v[i] = t;
+        b.state.w[i] = Vec3::new(u[i][3], u[i][4], u[i][5]) * eps;
     }
     let mut base_f = base.clone();
-    base_f.section.material.kelvin = 0.0;
-    for s in &mut base_f.shell {
+    base_f.def_mut().section.material.kelvin = 0.0;
+    for s in &mut base_f.state.shell {
         *s = ShellState::default();
     }
-    for s in &mut base_f.hourglass {
+    for s in &mut base_f.state.hourglass {
         *s = HourglassState::default();
     }
-    base_f.v.iter_mut().for_each(|v| *v = Vec3::zeros());
-    base_f.w.iter_mut().for_each(|v| *v = Vec3::zeros());
+    base_f.state.v.iter_mut().for_each(|v| *v = Vec3::zeros());
+    base_f.state.w.iter_mut().for_each(|v| *v = Vec3::zeros());
     let ok = b.internal_forces(1.0, 0).is_ok() && base_f.internal_forces(1.0, 0).is_ok();
-    let mut out = vec![[0.0; 6]; b.x.len()];
+    let mut out = vec![[0.0; 6]; b.state.x.len()];
     if !ok {
         return out;
     }
     for (i, o) in out.iter_mut().enumerate() {
-        for &sl in &b.gather_slot[b.gather_start[i] as usize..b.gather_start[i + 1] as usize] {
+        for &sl in
+            &b.def.gather_slot[b.def.gather_start[i] as usize..b.def.gather_start[i + 1] as usize]
+        {
             for d in 0..6 {
-                o[d] += (b.slots[sl as usize][d] - base_f.slots[sl as usize][d]) / eps;
+                o[d] += (b.state.slots[sl as usize][d] - base_f.state.slots[sl as usize][d]) / eps;
             }
         }
     }
@@ -51,16 +53,19 @@ fn stiffness_action(base: &Body, u: &[[f64; 6]], eps: f64) -> Vec<[f64; 6]> {
 
 /// Estimate omega_max [rad/s] of the free (unconstrained DOFs) body.
 pub fn max_frequency(body: &Body, iterations: usize) -> f64 {
-    let n = body.x.len();
-    let scale = crate::mesh::bounds(&body.x);
+    let n = body.state.x.len();
+    let scale = crate::mesh::bounds(&body.state.x);
     let eps = 1e-9 * (scale.1 - scale.0).norm().max(1e-12);
     let minv: Vec<[f64; 6]> = (0..n)
         .map(|i| {
-            let (m, r) = (body.mass[i].sqrt().recip(), body.inertia[i].sqrt().recip());
+            let (m, r) = (
+                body.def.mass[i].sqrt().recip(),
+                body.def.inertia[i].sqrt().recip(),
+            );
             [m, m, m, r, r, r]
         })
         .collect();
-    let free = |i: usize, d: usize| body.fixed[i] & (1 << d) == 0;
+    let free = |i: usize, d: usize| body.def.fixed[i] & (1 << d) == 0;
     // deterministic start vector with high-frequency content
     let mut z: Vec<[f64; 6]> = (0..n)
         .map(|i| {

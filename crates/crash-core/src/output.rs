@@ -26,19 +26,19 @@ impl Resultants {
 impl Body {
     /// Resultants of every element (triangles first, then quads).
     pub fn resultants(&self) -> Vec<Resultants> {
-        let sec = &self.section;
+        let sec = &self.def.section;
         let mut out = Vec::with_capacity(self.element_count());
-        let x = &self.x;
-        for (k, e) in self.tris.iter().enumerate() {
+        let x = &self.state.x;
+        for (k, e) in self.def.tris.iter().enumerate() {
             let p = e.nodes.map(|n| x[n as usize]);
             let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
             out.push(Resultants {
                 n: sec.plane(sec.membrane, green(&f1, &f2)),
-                m: self.shell[k].m,
+                m: self.state.shell[k].m,
             });
         }
-        let nt = self.tris.len();
-        for (k, e) in self.quads.iter().enumerate() {
+        let nt = self.def.tris.len();
+        for (k, e) in self.def.quads.iter().enumerate() {
             let p = e.nodes.map(|n| x[n as usize]);
             let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
             let g = green(&f1, &f2);
@@ -47,7 +47,7 @@ impl Body {
                     sec.membrane,
                     [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]],
                 ),
-                m: self.shell[nt + k].m,
+                m: self.state.shell[nt + k].m,
             });
         }
         out

@@ -25,7 +25,7 @@ fn strip(kind: ElementKind, nx: usize, ny: usize) -> crash_core::Body {
 /// Split a total end load over the tip nodes like a uniform line load.
 fn tip_loads(b: &mut crash_core::Body, force: Vec3, moment: Vec3, ramp: f64) {
     let mut tip = nodes_at(b, 0, L, 1e-9);
-    tip.sort_by(|&i, &j| b.x0[i].y.total_cmp(&b.x0[j].y));
+    tip.sort_by(|&i, &j| b.def.x0[i].y.total_cmp(&b.def.x0[j].y));
     let n = tip.len() - 1;
     for (k, &node) in tip.iter().enumerate() {
         let w = if k == 0 || k == n { 0.5 } else { 1.0 } / n as f64;
@@ -54,7 +54,10 @@ fn run(b: crash_core::Body, end: f64) -> crash_core::Body {
 
 fn mean_tip(b: &crash_core::Body) -> Vec3 {
     let tip = nodes_at(b, 0, L, 1e-9);
-    tip.iter().map(|&i| b.x[i] - b.x0[i]).sum::<Vec3>() / tip.len() as f64
+    tip.iter()
+        .map(|&i| b.state.x[i] - b.def.x0[i])
+        .sum::<Vec3>()
+        / tip.len() as f64
 }
 
 #[test]
@@ -67,7 +70,7 @@ fn cantilever_tip_deflection_matches_beam_theory_without_shear_locking() {
     let omega1 = 1.875f64.powi(2) * (e * inertia / (7800.0 * B * T)).sqrt() / (L * L);
     for kind in kinds() {
         let mut b = strip(kind, 40, 4);
-        b.mass_damping = 2.0 * omega1;
+        b.def_mut().mass_damping = 2.0 * omega1;
         tip_loads(&mut b, Vec3::new(0.0, 0.0, -p), Vec3::zeros(), 0.05);
         let b = run(b, 0.25);
         let w = -mean_tip(&b).z;
@@ -88,13 +91,13 @@ fn cantilever_rolls_into_a_full_circle_under_end_moment() {
     let omega1 = 1.875f64.powi(2) * (e * inertia / (7800.0 * B * T)).sqrt() / (L * L);
     for kind in kinds() {
         let mut b = strip(kind, 40, 2);
-        b.mass_damping = 2.0 * omega1;
+        b.def_mut().mass_damping = 2.0 * omega1;
         // moment about -y rolls the strip up towards +z
         tip_loads(&mut b, Vec3::zeros(), Vec3::new(0.0, -moment, 0.0), 0.6);
         let b = run(b, 1.0);
         let tip: Vec3 = {
             let t = nodes_at(&b, 0, L, 1e-9);
-            t.iter().map(|&i| b.x[i]).sum::<Vec3>() / t.len() as f64
+            t.iter().map(|&i| b.state.x[i]).sum::<Vec3>() / t.len() as f64
         };
         let root = Vec3::new(0.0, B / 2.0, 0.0);
         let gap = (tip - root).norm();

@@ -45,6 +45,7 @@ fn sphere_dropped_on_fixed_plate_rebounds_with_small_penetration() {
         }
         lowest = lowest.min(
             r.group.bodies[0]
+                .state
                 .x
                 .iter()
                 .map(|p| p.z)
@@ -54,6 +55,7 @@ fn sphere_dropped_on_fixed_plate_rebounds_with_small_penetration() {
     .expect("run");
     let vz = com_velocity(&run.group.bodies[0]).z;
     let zmin = run.group.bodies[0]
+        .state
         .x
         .iter()
         .map(|p| p.z)

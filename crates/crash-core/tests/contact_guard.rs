@@ -91,7 +91,8 @@ fn initial_penetrations_name_bodies_and_depth() {
         .expect("reported");
     assert!((hit.depth - depth).abs() < 1e-12, "depth {}", hit.depth);
     assert!(
-        (s.x[hit.node].z - s.x.iter().map(|q| q.z).fold(f64::INFINITY, f64::min)).abs() < 1e-15
+        (s.state.x[hit.node].z - s.state.x.iter().map(|q| q.z).fold(f64::INFINITY, f64::min)).abs()
+            < 1e-15
     );
     assert!(found
         .iter()
@@ -101,7 +102,7 @@ fn initial_penetrations_name_bodies_and_depth() {
         .all(|q| q.nodes == 1 && (q.depth - depth).abs() < 1e-12));
     // moved clear: nothing to report
     let mut lifted = s.clone();
-    for x in &mut lifted.x {
+    for x in &mut lifted.state.x {
         x.z += 2.0 * depth;
     }
     assert!(initial_penetrations(&[lifted, p], &ContactConfig::default()).is_empty());

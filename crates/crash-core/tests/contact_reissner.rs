@@ -15,14 +15,14 @@ fn force_approach_slope_matches_reissner_stiffness() {
     for &n in &rim {
         c.fix(n, crash_core::dof::ALL);
     }
-    c.mass_damping = 5000.0;
-    let pole = (0..c.x.len())
-        .min_by(|&a, &b| c.x[a].z.total_cmp(&c.x[b].z))
+    c.def_mut().mass_damping = 5000.0;
+    let pole = (0..c.state.x.len())
+        .min_by(|&a, &b| c.state.x[a].z.total_cmp(&c.state.x[b].z))
         .expect("nodes");
     let gap0 = 5e-5;
     let vp = 0.2;
     let mut p = fixed_plate(1, 0.04, 8, tp, -r - 0.5 * (t + tp) - gap0);
-    let all: Vec<usize> = (0..p.x.len()).collect();
+    let all: Vec<usize> = (0..p.state.x.len()).collect();
     p.prescribe(
         &all,
         VelocityProgram {
@@ -50,10 +50,10 @@ fn force_approach_slope_matches_reissner_stiffness() {
         run.dt0,
         end / run.dt0
     );
-    let z0 = run.group.bodies[0].x[pole].z;
+    let z0 = run.group.bodies[0].state.x[pole].z;
     let mut curve = Vec::new();
     run.run(|r| {
-        let w = r.group.bodies[0].x[pole].z - z0;
+        let w = r.group.bodies[0].state.x[pole].z - z0;
         let f = r
             .group
             .contact_stats()

@@ -20,7 +20,7 @@ fn sheet(z: f64) -> Mesh {
 }
 
 fn set_v(b: &mut Body, v: f64) {
-    for x in &mut b.v {
+    for x in &mut b.state.v {
         *x = Vec3::new(0.0, 0.0, v);
     }
 }
@@ -65,13 +65,16 @@ fn self_contact_between_two_sheets_of_one_body_matches_two_bodies() {
     m.quads.extend(b.quads.iter().map(|q| q.map(|i| i + n)));
     let mean_z = |r: &Run, range: std::ops::Range<usize>| {
         let b = &r.group.bodies[0];
-        range.clone().map(|i| b.v[i].z * b.mass[i]).sum::<f64>()
-            / range.map(|i| b.mass[i]).sum::<f64>()
+        range
+            .clone()
+            .map(|i| b.state.v[i].z * b.def.mass[i])
+            .sum::<f64>()
+            / range.map(|i| b.def.mass[i]).sum::<f64>()
     };
     let one = |self_contact: bool| {
         let mut body = shell(0, &m, T);
-        body.self_contact = self_contact;
-        for (i, v) in body.v.iter_mut().enumerate() {
+        body.def_mut().self_contact = self_contact;
+        for (i, v) in body.state.v.iter_mut().enumerate() {
             *v = Vec3::new(0.0, 0.0, if i < n as usize { V } else { -V });
         }
         run(vec![body], |r| {
@@ -100,7 +103,7 @@ fn thick_closed_shell_at_rest_has_no_self_contact() {
     // element edges ~13 mm, thickness 20 mm: second-ring segments are within contact
     // distance of a node from the start and must be excluded
     let mut s = sphere(0, 0.1, 0.02, 3, Vec3::zeros(), Vec3::zeros());
-    s.self_contact = true;
+    s.def_mut().self_contact = true;
     let mut g = group(
         vec![s],
         ContactConfig {

@@ -22,9 +22,9 @@ fn scene() -> Vec<Body> {
             Stabilization::default(),
         )
         .expect("valid");
-        for i in 0..b.x.len() {
-            let p = b.x0[i];
-            b.v[i] = Vec3::new(0.3 * p.y, 0.0, 2.0 * (9.0 * p.x).sin() * (7.0 * p.y).cos());
+        for i in 0..b.state.x.len() {
+            let p = b.def.x0[i];
+            b.state.v[i] = Vec3::new(0.3 * p.y, 0.0, 2.0 * (9.0 * p.x).sin() * (7.0 * p.y).cos());
         }
         out.push(b);
     }

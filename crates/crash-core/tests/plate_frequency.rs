@@ -27,8 +27,8 @@ fn first_frequency(
 ) -> (f64, usize, u64) {
     let mut b = corner_plate(a, a, n, n, kind, mat, t);
     let tol = 1e-9 * a;
-    for i in 0..b.x.len() {
-        let p = b.x0[i];
+    for i in 0..b.state.x.len() {
+        let p = b.def.x0[i];
         if p.x.abs() < tol || (p.x - a).abs() < tol {
             b.fix(i, dof::X | dof::Y | dof::Z | dof::RX);
         }
@@ -36,11 +36,11 @@ fn first_frequency(
             b.fix(i, dof::X | dof::Y | dof::Z | dof::RY);
         }
         let v = 1e-3 * (PI * p.x / a).sin() * (PI * p.y / a).sin();
-        b.v[i] = Vec3::new(0.0, 0.0, v);
+        b.state.v[i] = Vec3::new(0.0, 0.0, v);
     }
-    let centre = (0..b.x.len())
+    let centre = (0..b.state.x.len())
         .min_by(|&i, &j| {
-            let d = |k: usize| (b.x0[k] - Vec3::new(a / 2.0, a / 2.0, 0.0)).norm();
+            let d = |k: usize| (b.def.x0[k] - Vec3::new(a / 2.0, a / 2.0, 0.0)).norm();
             d(i).total_cmp(&d(j))
         })
         .expect("nodes");
@@ -56,7 +56,7 @@ fn first_frequency(
     let mut crossings = Vec::new();
     let mut prev = (0.0, 0.0);
     run.run(|r| {
-        let w = r.group.bodies[0].x[centre].z;
+        let w = r.group.bodies[0].state.x[centre].z;
         let time = r.time();
         if prev.0 > 0.0 && prev.1 * w < 0.0 {
             crossings.push(prev.0 + prev.1 / (prev.1 - w) * (time - prev.0));
@@ -66,7 +66,7 @@ fn first_frequency(
     .expect("run");
     let half_periods = (crossings.len() - 1) as f64;
     let f = half_periods / (2.0 * (crossings[crossings.len() - 1] - crossings[0]));
-    (f, elements, run.group.step)
+    (f, elements, run.clock.step)
 }
 
 fn ladder(

@@ -21,9 +21,9 @@ fn free_plate(kind: ElementKind, nx: usize, ny: usize) -> crash_core::Body {
         }
     }
     let mut b = body(&m, steel(), 0.002);
-    for i in 0..b.x.len() {
-        let p = b.x0[i];
-        b.v[i] = Vec3::new(
+    for i in 0..b.state.x.len() {
+        let p = b.def.x0[i];
+        b.state.v[i] = Vec3::new(
             0.0,
             0.0,
             0.5 * (std::f64::consts::PI * p.x / 0.2).cos() * (p.y / 0.1),
@@ -169,6 +169,7 @@ fn time_step_above_the_critical_one_is_stopped_with_a_diagnostic() {
         assert!(msg.contains("step") && msg.contains("body"), "{msg}");
         // nothing non-finite was written into the state
         assert!(run.group.bodies[0]
+            .state
             .x
             .iter()
             .all(|p| p.iter().all(|c| c.is_finite())));

@@ -23,7 +23,7 @@ fn membrane_wave_speed_matches_plate_theory() {
     for kind in kinds() {
         let mut b = corner_plate(1.0, 0.02, 200, 4, kind, mat, 0.002);
         // lateral strain suppressed (plane strain in y) and pure membrane motion
-        for i in 0..b.x.len() {
+        for i in 0..b.state.x.len() {
             b.fix(i, dof::Y | dof::Z | dof::ROTATIONS);
         }
         let end: Vec<usize> = nodes_at(&b, 0, 0.0, 1e-9);
@@ -49,8 +49,8 @@ fn membrane_wave_speed_matches_plate_theory() {
         run.run(|r| {
             let b = &r.group.bodies[0];
             for (h, set) in hist.iter_mut().zip(&sets) {
-                let v = set.iter().map(|&i| b.v[i].x).sum::<f64>() / set.len() as f64;
-                h.push((r.time() - 0.5 * r.group.h_prev, v));
+                let v = set.iter().map(|&i| b.state.v[i].x).sum::<f64>() / set.len() as f64;
+                h.push((r.time() - 0.5 * r.clock.last_dt, v));
             }
         })
         .expect("run");

@@ -8,7 +8,7 @@ use crash_io::{render_frame, Colouring, Encoding, Frame, RenderOptions};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn frame() -> Frame {
-    let sec = |t| Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).expect("material"), t);
+    let sec = |t| Section::new(Material::steel(), t);
     let p = Body::new(
         0,
         "plate",
@@ -32,7 +32,7 @@ fn bench(c: &mut Criterion) {
             0,
             "plate",
             &plate(0.4, 0.4, 100, 100, ElementKind::Quad),
-            Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).expect("m"), 0.002),
+            Section::new(Material::steel(), 0.002),
             Stabilization::default(),
         )
         .expect("p");

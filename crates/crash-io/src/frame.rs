@@ -17,6 +17,8 @@ pub struct FrameBody {
     pub x0: Vec<Vec3>,
     /// Nodal velocities [m/s].
     pub v: Vec<Vec3>,
+    /// Nodal angular velocities [rad/s].
+    pub w: Vec<Vec3>,
     pub tris: Vec<[u32; 3]>,
     pub quads: Vec<[u32; 4]>,
     /// von Mises stress at the top (+t/2) and bottom (-t/2) surface per element [Pa].
@@ -32,23 +34,24 @@ pub struct FrameBody {
 
 impl FrameBody {
     pub fn capture(b: &Body) -> Self {
-        let t = b.section.thickness;
+        let t = b.def.section.thickness;
         let res = b.resultants();
         let (top, bottom): (Vec<f64>, Vec<f64>) = res.iter().map(|r| r.von_mises(t)).unzip();
-        let f_contact = if b.f_contact.len() == b.x.len() {
-            b.f_contact.clone()
+        let f_contact = if b.state.f_contact.len() == b.state.x.len() {
+            b.state.f_contact.clone()
         } else {
-            vec![Vec3::zeros(); b.x.len()]
+            vec![Vec3::zeros(); b.state.x.len()]
         };
         Self {
-            id: b.id,
-            name: b.name.clone(),
+            id: b.def.id,
+            name: b.def.name.clone(),
             thickness: t,
-            x: b.x.clone(),
-            x0: b.x0.clone(),
-            v: b.v.clone(),
-            tris: b.tris.iter().map(|e| e.nodes).collect(),
-            quads: b.quads.iter().map(|e| e.nodes).collect(),
+            x: b.state.x.clone(),
+            x0: b.def.x0.clone(),
+            v: b.state.v.clone(),
+            w: b.state.w.clone(),
+            tris: b.def.tris.iter().map(|e| e.nodes).collect(),
+            quads: b.def.quads.iter().map(|e| e.nodes).collect(),
             von_mises_top: top,
             von_mises_bottom: bottom,
             n: res.iter().map(|r| r.n).collect(),
@@ -94,6 +97,16 @@ impl Frame {
 
     pub fn node_count(&self) -> usize {
         self.bodies.iter().map(|b| b.x.len()).sum()
+    }
+
+    /// The state hash of the bodies in the frame (the same value as
+    /// `crash_core::hash::state_hash` of the bodies it was captured from).
+    pub fn state_hash(&self) -> u64 {
+        crash_core::hash::state_hash_of(
+            self.bodies
+                .iter()
+                .map(|b| (b.id, &b.x[..], &b.v[..], &b.w[..])),
+        )
     }
 
     pub fn element_count(&self) -> usize {

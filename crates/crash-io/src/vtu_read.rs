@@ -220,6 +220,8 @@ pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
             x: vecs(&x, start..end),
             x0: Vec::new(),
             v: vecs(&v, start..end),
+            // angular velocities are not written to .vtu files
+            w: Vec::new(),
             tris: Vec::new(),
             quads: Vec::new(),
             von_mises_top: Vec::new(),

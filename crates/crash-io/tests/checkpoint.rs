@@ -5,11 +5,11 @@ mod common;
 
 use common::{stepped_group, test_dir};
 use crash_core::hash::state_hash;
-use crash_core::Group;
+use crash_core::{Clock, Group};
 use crash_io::checkpoint::checkpoint_payload;
 use crash_io::{read_checkpoint, write_checkpoint, IoError};
 
-fn advance(g: &mut Group, n: usize) {
+fn advance((clock, g): &mut (Clock, Group), n: usize) {
     let mut reports = g.start().expect("start");
     // start() recomputes forces at the current state without changing it.
     for _ in 0..n {
@@ -18,7 +18,8 @@ fn advance(g: &mut Group, n: usize) {
                 .iter()
                 .map(|r| r.stable_dt)
                 .fold(f64::INFINITY, f64::min);
-        reports = g.advance(h).expect("step");
+        reports = g.advance(clock, h).expect("step");
+        *clock = clock.after(h);
     }
 }
 
@@ -32,27 +33,29 @@ fn group_round_trips_bit_exactly_and_continues_identically() {
         !dir.join("checkpoint.bin.tmp").exists(),
         "temp file renamed away"
     );
-    let mut restored: Group = read_checkpoint(&path).expect("read");
+    let mut restored: (Clock, Group) = read_checkpoint(&path).expect("read");
 
-    assert_eq!(state_hash(&restored.bodies), state_hash(&original.bodies));
+    assert_eq!(
+        state_hash(&restored.1.bodies),
+        state_hash(&original.1.bodies)
+    );
     assert_eq!(
         checkpoint_payload(&restored).expect("encode"),
         checkpoint_payload(&original).expect("encode"),
         "every serialized byte equal"
     );
-    assert_eq!(restored.time.to_bits(), original.time.to_bits());
-    assert_eq!(
-        (restored.step, restored.h_prev.to_bits()),
-        (original.step, original.h_prev.to_bits())
-    );
+    assert!(restored.0.same_as(&original.0), "the clock, bit for bit");
 
     advance(&mut original, 30);
     advance(&mut restored, 30);
-    assert_eq!(state_hash(&restored.bodies), state_hash(&original.bodies));
-    assert_eq!(restored.step, 55);
+    assert_eq!(
+        state_hash(&restored.1.bodies),
+        state_hash(&original.1.bodies)
+    );
+    assert_eq!(restored.0.step, 55);
     // The continued state is not the checkpointed one (the test can fail).
-    let saved: Group = read_checkpoint(&path).expect("read");
-    assert_ne!(state_hash(&saved.bodies), state_hash(&original.bodies));
+    let saved: (Clock, Group) = read_checkpoint(&path).expect("read");
+    assert_ne!(state_hash(&saved.1.bodies), state_hash(&original.1.bodies));
 }
 
 #[test]
@@ -64,19 +67,19 @@ fn damaged_checkpoints_are_refused_with_the_file_named() {
     let named = |e: &IoError| e.to_string().contains("state.ckp");
 
     std::fs::write(&path, &good[..good.len() - 10]).expect("truncate");
-    let e = read_checkpoint::<Group>(&path).expect_err("truncated");
+    let e = read_checkpoint::<(Clock, Group)>(&path).expect_err("truncated");
     assert!(matches!(e, IoError::Truncated { .. }) && named(&e), "{e}");
 
     let mut bad = good.clone();
     bad[0] = b'X';
     std::fs::write(&path, &bad).expect("magic");
-    let e = read_checkpoint::<Group>(&path).expect_err("magic");
+    let e = read_checkpoint::<(Clock, Group)>(&path).expect_err("magic");
     assert!(matches!(e, IoError::BadMagic { .. }) && named(&e), "{e}");
 
     let mut bad = good.clone();
     bad[8] = 99;
     std::fs::write(&path, &bad).expect("version");
-    let e = read_checkpoint::<Group>(&path).expect_err("version");
+    let e = read_checkpoint::<(Clock, Group)>(&path).expect_err("version");
     assert!(
         matches!(e, IoError::Version { found: 99, .. }) && named(&e),
         "{e}"
@@ -86,12 +89,12 @@ fn damaged_checkpoints_are_refused_with_the_file_named() {
     let k = bad.len() / 2;
     bad[k] ^= 0x40;
     std::fs::write(&path, &bad).expect("flip");
-    let e = read_checkpoint::<Group>(&path).expect_err("checksum");
+    let e = read_checkpoint::<(Clock, Group)>(&path).expect_err("checksum");
     assert!(matches!(e, IoError::Checksum { .. }) && named(&e), "{e}");
 
     let e = read_checkpoint::<Group>(dir.join("missing.ckp")).expect_err("missing");
     assert!(e.to_string().contains("missing.ckp"), "{e}");
 
     std::fs::write(&path, &good).expect("restore");
-    assert!(read_checkpoint::<Group>(&path).is_ok());
+    assert!(read_checkpoint::<(Clock, Group)>(&path).is_ok());
 }

@@ -79,9 +79,9 @@ fn sphere_renders_as_a_round_blob_filling_the_view() {
 #[test]
 fn stress_picture_has_legend_and_many_colours() {
     let dir = test_dir("pictures_stress");
-    let g = stepped_group(40);
+    let (clock, g) = stepped_group(40);
     let refs: Vec<&Body> = g.bodies.iter().collect();
-    let frame = Frame::capture(g.time, g.step, &refs);
+    let frame = Frame::capture(clock.time, clock.step, &refs);
     let by_body = render_frame(&frame, &RenderOptions::default());
     by_body.save_png(dir.join("by_body.png")).expect("save");
     let stress = render_frame(
@@ -202,23 +202,24 @@ fn render_run_writes_snapshots_sheet_and_energy_plot() {
     let dir = test_dir("render_run");
     let mut series = SeriesWriter::create(&dir).expect("series");
     let mut energy = EnergyHistory::create(dir.join("energy.csv")).expect("csv");
-    let mut g = stepped_group(0);
+    let (mut clock, mut g) = stepped_group(0);
     let mut reports = g.start().expect("start");
     for k in 0..=40 {
         if k % 8 == 0 {
             let refs: Vec<&Body> = g.bodies.iter().collect();
             series
-                .write(&Frame::capture(g.time, g.step, &refs))
+                .write(&Frame::capture(clock.time, clock.step, &refs))
                 .expect("frame");
         }
         let e = EnergyTotals::sum(reports.iter().map(|r| &r.energy));
-        energy.write(g.time, &e).expect("row");
+        energy.write(clock.time, &e).expect("row");
         let h = 0.9
             * reports
                 .iter()
                 .map(|r| r.stable_dt)
                 .fold(f64::INFINITY, f64::min);
-        reports = g.advance(h).expect("step");
+        reports = g.advance(&clock, h).expect("step");
+        clock = clock.after(h);
     }
     energy.flush().expect("flush");
     let written = render_run(&dir).expect("render");

@@ -7,10 +7,10 @@ use crash_io::{read_pvd, read_vtu, Encoding, Frame, SeriesWriter};
 use vtkio::model::{Attribute, CellType, DataSet, IOBuffer, Piece, VertexNumbers};
 
 fn frame_at(steps: usize) -> Frame {
-    let g = stepped_group(steps);
+    let (clock, g) = stepped_group(steps);
     // Reverse the body order: a master gathers bodies in any order.
     let refs: Vec<&crash_core::Body> = g.bodies.iter().rev().collect();
-    Frame::capture(g.time, g.step, &refs)
+    Frame::capture(clock.time, clock.step, &refs)
 }
 
 fn f64s(b: &IOBuffer) -> Vec<f64> {
@@ -230,9 +230,9 @@ fn create_removes_frames_of_an_earlier_series() {
 
 #[test]
 fn frame_capture_sorts_bodies_by_id_whatever_the_gather_order() {
-    let g = stepped_group(3);
-    let a = Frame::capture(g.time, g.step, &[&g.bodies[0], &g.bodies[1]]);
-    let b = Frame::capture(g.time, g.step, &[&g.bodies[1], &g.bodies[0]]);
+    let (clock, g) = stepped_group(3);
+    let a = Frame::capture(clock.time, clock.step, &[&g.bodies[0], &g.bodies[1]]);
+    let b = Frame::capture(clock.time, clock.step, &[&g.bodies[1], &g.bodies[0]]);
     assert_eq!(a, b);
     assert_eq!(
         a.bodies.iter().map(|b| b.id).collect::<Vec<_>>(),

@@ -1,6 +1,7 @@
 //! Why a distributed run stopped.
 
 use crash_core::Fault;
+use crash_link::LinkError;
 use thiserror::Error;
 
 #[derive(Debug, Error)]
@@ -10,13 +11,21 @@ pub enum MasterError {
     /// A physical fault, exactly as a single-process run reports it.
     #[error(transparent)]
     Fault(#[from] Fault),
-    /// A worker disconnected, stopped answering or broke the protocol.
+    /// A worker disconnected, stopped answering, broke the protocol or refused a command.
     #[error("step {step}: worker {worker} ({peer}): {reason}")]
     Worker {
         step: u64,
         worker: usize,
         peer: String,
-        reason: String,
+        reason: LinkError,
+    },
+    /// Fewer bodies came back than the workers hold.
+    #[error("step {step}: {got} of {expected} {what} came back from the workers")]
+    Incomplete {
+        step: u64,
+        what: &'static str,
+        got: usize,
+        expected: usize,
     },
     /// The MEIM margin no longer covers the motion between two updates.
     #[error("step {step}: body {body} moved {moved:.3e} m in one step, more than the {allowed:.3e} m the interaction-graph margin allows (margin {margin:.3e} m, factor {factor}): contact could begin between bodies on different workers unseen; raise the contact margin or the margin factor")]
@@ -32,4 +41,11 @@ pub enum MasterError {
     Sink(String),
     #[error("network: {0}")]
     Network(String),
+}
+
+impl MasterError {
+    /// An output error (the sink's own error type is boxed).
+    pub fn sink(e: crate::sink::SinkError) -> Self {
+        MasterError::Sink(e.to_string())
+    }
 }

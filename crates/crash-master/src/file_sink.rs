@@ -2,12 +2,13 @@
 //! (VTU + PVD)
 //! and summary.json (with the per-stage timing of the master), and the restart file.
 
+use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
-use crate::master::MasterCheckpoint;
+use crate::input::RunSize;
 use crate::sink::{Sink, SinkError};
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
-use crash_core::{Body, EnergyTotals};
+use crash_core::EnergyTotals;
 use crash_io::{
     hash_hex, write_summary, ContactHistory, ContactRow, EnergyHistory, Frame, Indicators,
     SeriesWriter, Summary, CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
@@ -71,12 +72,12 @@ pub struct FileSink {
 }
 
 impl FileSink {
-    /// Create the run directory's files. `bodies` give the counts for the summary.
+    /// Create the run directory's files. `size` gives the counts for the summary.
     pub fn create(
         dir: &Path,
         scene: &str,
         scene_hash: u64,
-        bodies: &[Body],
+        size: RunSize,
     ) -> Result<Self, SinkError> {
         std::fs::create_dir_all(dir)?;
         Ok(Self {
@@ -85,7 +86,7 @@ impl FileSink {
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
             series: SeriesWriter::create(dir)?,
             indicators: Indicators::default(),
-            summary: Self::summary(scene, scene_hash, bodies),
+            summary: Self::summary(scene, scene_hash, size),
             restart: None,
         })
     }
@@ -97,17 +98,17 @@ impl FileSink {
         dir: &Path,
         scene: &str,
         scene_hash: u64,
-        bodies: &[Body],
+        size: RunSize,
         restart: &RestartFile,
     ) -> Result<Self, SinkError> {
-        let t = restart.master.time;
+        let t = restart.master.clock.time;
         Ok(Self {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
             series: SeriesWriter::reopen(dir, t)?,
             indicators: restart.indicators,
-            summary: Self::summary(scene, scene_hash, bodies),
+            summary: Self::summary(scene, scene_hash, size),
             restart: None,
         })
     }
@@ -118,13 +119,13 @@ impl FileSink {
         self
     }
 
-    fn summary(scene: &str, scene_hash: u64, bodies: &[Body]) -> Summary {
+    fn summary(scene: &str, scene_hash: u64, size: RunSize) -> Summary {
         Summary {
             scene: scene.to_string(),
             scene_hash: hash_hex(scene_hash),
-            bodies: bodies.len(),
-            nodes: bodies.iter().map(Body::node_count).sum(),
-            elements: bodies.iter().map(Body::element_count).sum(),
+            bodies: size.bodies,
+            nodes: size.nodes,
+            elements: size.elements,
             ..Summary::default()
         }
     }
@@ -175,9 +176,8 @@ impl Sink for FileSink {
         Ok(())
     }
 
-    fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError> {
-        let refs: Vec<&Body> = bodies.iter().collect();
-        self.series.write(&Frame::capture(time, step, &refs))?;
+    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
+        self.series.write(frame)?;
         self.energy.flush()?;
         self.contacts.flush()?;
         Ok(())

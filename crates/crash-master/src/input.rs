@@ -17,7 +17,23 @@ pub struct RunInput {
     pub scene_hash: u64,
 }
 
+/// How big a run is (for the summary).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RunSize {
+    pub bodies: usize,
+    pub nodes: usize,
+    pub elements: usize,
+}
+
 impl RunInput {
+    pub fn size(&self) -> RunSize {
+        RunSize {
+            bodies: self.bodies.len(),
+            nodes: self.bodies.iter().map(Body::node_count).sum(),
+            elements: self.bodies.iter().map(Body::element_count).sum(),
+        }
+    }
+
     pub fn from_built(b: crash_scene::Built) -> Self {
         let config = b.run_config();
         Self {

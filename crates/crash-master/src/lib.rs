@@ -1,38 +1,40 @@
-//! crash-master: the global time loop of a distributed run.
+//! crash-master: the global time loop of a run.
 //!
 //! The master holds the MEIM (bodies and their possible contacts, a petgraph
 //! StableGraph), groups bodies into its connected components, places groups on workers
 //! (balanced, sticky), drives the step barrier, chooses the global time step exactly as
-//! the single-process driver does, migrates bodies between workers and merges the
-//! workers' data into one view for output.
+//! the single-process driver does, migrates bodies between workers and writes what the
+//! workers send at output times.
 //!
-//! The same loop drives in-process workers ([`run_local`], no network, no
-//! serialization) and worker processes over gRPC ([`remote::Cluster`], [`run_remote`]).
-//! Architecture: docs/architecture-cluster.md.
+//! The same loop drives any `crash_link::WorkerLink`: in-process workers
+//! (`crash_worker::LocalWorker`, used by `crash run`) or worker processes over gRPC
+//! ([`server::Cluster`], used by the `crash-master` binary). This crate depends on
+//! crash-link, never on crash-worker. Architecture: docs/architecture.md.
 
 pub mod assign;
+pub mod checkpoint;
 pub mod error;
 pub mod file_sink;
-pub mod health;
 pub mod input;
-pub mod link;
 mod master;
 pub mod meim;
 pub mod pairs;
-pub mod remote;
+pub mod remote_link;
+pub mod server;
 pub mod sink;
 pub mod stats;
 
+pub use checkpoint::MasterCheckpoint;
 pub use error::MasterError;
 pub use file_sink::FileSink;
 pub use file_sink::{read_restart, RestartFile, RESTART_FILE};
-pub use input::{CostModel, RunInput, RunOptions};
-pub use link::{LinkError, LocalWorker, WorkerLink};
-pub use master::MasterCheckpoint;
-pub use remote::{Cluster, RemoteOptions, RemoteWorker};
+pub use input::{CostModel, RunInput, RunOptions, RunSize};
+pub use remote_link::RemoteWorker;
+pub use server::{Cluster, RemoteOptions};
 pub use sink::{EnergyRecord, RecordSink, Sink, SinkError};
 pub use stats::{Migration, RunStats, StageTimes};
 
+use crash_link::WorkerLink;
 use master::Master;
 use std::time::Instant;
 
@@ -49,8 +51,8 @@ pub fn run_with<L: WorkerLink>(
 }
 
 /// Continue a run from a checkpoint (`Sink::checkpoint`) of the same scene to the
-/// input's end time, as `run_with` would have. The sink receives only what follows the
-/// checkpoint. Needs workers that can set their clock (in-process workers).
+/// input's end time, as `run_with` would have, on any number of workers. The sink
+/// receives only what follows the checkpoint.
 pub fn resume_with<L: WorkerLink>(
     input: RunInput,
     state: MasterCheckpoint,
@@ -59,18 +61,6 @@ pub fn resume_with<L: WorkerLink>(
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
     drive(input, Some(state), links, sink, opts)
-}
-
-/// Local mode from a checkpoint.
-pub fn resume_local(
-    input: RunInput,
-    state: MasterCheckpoint,
-    workers: usize,
-    sink: &mut dyn Sink,
-    opts: &RunOptions,
-) -> Result<RunStats, MasterError> {
-    let mut links: Vec<LocalWorker> = (0..workers.max(1)).map(LocalWorker::new).collect();
-    resume_with(input, state, &mut links, sink, opts)
 }
 
 fn drive<L: WorkerLink>(
@@ -90,14 +80,12 @@ fn drive<L: WorkerLink>(
             return Err(e);
         }
     };
-    let RunInput {
-        bodies, gravity, ..
-    } = input;
+    let bodies = input.bodies;
     let every = opts.checkpoint_every;
     let result = (|| {
         match resume {
-            None => m.start(bodies, gravity, sink)?,
-            Some(state) => m.resume(state, gravity)?,
+            None => m.start(bodies, sink)?,
+            Some(state) => m.resume(state, bodies)?,
         }
         while !m.finished() {
             m.step(sink)?;
@@ -105,8 +93,7 @@ fn drive<L: WorkerLink>(
                 let t = Instant::now();
                 m.stats.wall_s = wall_before + wall.elapsed().as_secs_f64();
                 let state = m.checkpoint()?;
-                sink.checkpoint(&state)
-                    .map_err(|e| MasterError::Sink(e.to_string()))?;
+                sink.checkpoint(&state).map_err(MasterError::sink)?;
                 m.stats.stages.output_ns += t.elapsed().as_nanos() as u64;
             }
         }
@@ -116,29 +103,17 @@ fn drive<L: WorkerLink>(
     match result {
         Ok(()) => {
             m.shutdown("the run is complete");
-            sink.finish(&m.stats, None)
-                .map_err(|e| MasterError::Sink(e.to_string()))?;
+            sink.finish(&m.stats, None).map_err(MasterError::sink)?;
             Ok(m.stats.clone())
         }
         Err(e) => {
-            tracing::error!("run stopped: {e}");
+            tracing::error!("run stopped at step {}: {e}", m.clock().step);
             m.shutdown(&format!("the run stopped: {e}"));
             m.stats.final_hash = 0;
             let _ = sink.finish(&m.stats, Some(&e));
             Err(e)
         }
     }
-}
-
-/// Local mode: the same master loop over `workers` in-process workers.
-pub fn run_local(
-    input: RunInput,
-    workers: usize,
-    sink: &mut dyn Sink,
-    opts: &RunOptions,
-) -> Result<RunStats, MasterError> {
-    let mut links: Vec<LocalWorker> = (0..workers.max(1)).map(LocalWorker::new).collect();
-    run_with(input, &mut links, sink, opts)
 }
 
 /// Remote mode: the master loop over the worker processes attached to `cluster`.
@@ -149,4 +124,15 @@ pub fn run_remote(
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
     run_with(input, cluster.links_mut(), sink, opts)
+}
+
+/// Remote mode from a checkpoint: any number of workers.
+pub fn resume_remote(
+    input: RunInput,
+    state: MasterCheckpoint,
+    cluster: &mut Cluster,
+    sink: &mut dyn Sink,
+    opts: &RunOptions,
+) -> Result<RunStats, MasterError> {
+    resume_with(input, state, cluster.links_mut(), sink, opts)
 }

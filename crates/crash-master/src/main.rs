@@ -3,7 +3,8 @@
 use anyhow::Context;
 use clap::Parser;
 use crash_master::{
-    run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput, RunOptions, RESTART_FILE,
+    read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput,
+    RunOptions, RESTART_FILE,
 };
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -48,10 +49,15 @@ struct Args {
     #[arg(long)]
     estimated_costs: bool,
     /// Write a restart file OUT/restart.ckp (replaced atomically) every N steps. It is
-    /// continued in one process with `crash run SCENE --restart OUT/restart.ckp`
-    /// (resuming over the network is not supported: the protocol has no clock).
+    /// continued with `crash-master --resume OUT/restart.ckp` on any number of workers,
+    /// or in one process with `crash run SCENE --restart OUT/restart.ckp`.
     #[arg(long, value_name = "N")]
     checkpoint_every: Option<u64>,
+    /// Continue the run of this scene from a restart file (its checkpoint's clock,
+    /// states and schedule) with the workers that attach now, in the run directory
+    /// --out: rows and frames after the checkpoint are replaced.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -77,9 +83,17 @@ fn run(args: Args) -> anyhow::Result<()> {
         output_interval: args.output_interval,
     })?;
     let input = RunInput::from_built(scene.build()?);
-    let mut sink = FileSink::create(&args.out, &input.name, input.scene_hash, &input.bodies)
+    let restart = match &args.resume {
+        Some(path) => Some(read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?),
+        None => None,
+    };
+    let sink = match &restart {
+        None => FileSink::create(&args.out, &input.name, input.scene_hash, input.size()),
+        Some(r) => FileSink::reopen(&args.out, &input.name, input.scene_hash, input.size(), r),
+    };
+    let mut sink = sink
         .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("cannot create the run directory {}", args.out.display()))?
+        .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
         .with_checkpoints(args.out.join(RESTART_FILE));
     let mut cluster = Cluster::bind(
         args.listen,
@@ -106,7 +120,16 @@ fn run(args: Args) -> anyhow::Result<()> {
         checkpoint_every: args.checkpoint_every.unwrap_or(0),
         ..RunOptions::default()
     };
-    let stats = run_remote(input, &mut cluster, &mut sink, &opts)?;
+    let stats = match restart {
+        None => run_remote(input, &mut cluster, &mut sink, &opts)?,
+        Some(r) => {
+            eprintln!(
+                "crash-master: resuming from step {} (t = {:.6e} s)",
+                r.master.clock.step, r.master.clock.time
+            );
+            resume_remote(input, r.master, &mut cluster, &mut sink, &opts)?
+        }
+    };
     eprintln!(
         "crash-master: done: {} steps to t = {:.6e} s in {:.2} s, {} migrations, final state hash {:016x}",
         stats.steps,

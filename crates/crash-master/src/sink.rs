@@ -1,11 +1,12 @@
 //! Where results go: the master hands every energy row, MEIM change and frame to a
 //! `Sink` (crash-io writers in the binaries, memory in tests).
 
+use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
-use crate::master::MasterCheckpoint;
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
-use crash_core::{Body, EnergyTotals};
+use crash_core::EnergyTotals;
+use crash_io::Frame;
 
 pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
 
@@ -32,8 +33,8 @@ pub trait Sink {
     fn checkpoint(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
         Ok(())
     }
-    /// All bodies (sorted by id, gathered from every worker) at an output time.
-    fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError>;
+    /// Every body (sorted by id, gathered from every worker) at an output time.
+    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError>;
     /// The run ended: normally (`error` None, the final frame was written) or not (the
     /// frames written so far are the last complete ones).
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError>;
@@ -94,9 +95,9 @@ impl Sink for RecordSink {
         Ok(())
     }
 
-    fn frame(&mut self, step: u64, time: f64, bodies: &[Body]) -> Result<(), SinkError> {
-        let h = crash_core::hash::state_hash(bodies);
-        self.frames.push((step, time, h));
+    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
+        let h = frame.state_hash();
+        self.frames.push((frame.step, frame.time, h));
         self.last_hash = Some(h);
         Ok(())
     }

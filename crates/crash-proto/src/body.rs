@@ -10,8 +10,10 @@
 use crate::error::ProtoError;
 use crate::pb;
 use crash_core::body::NodalLoad;
-use crash_core::element::Stabilization;
-use crash_core::{Body, BodyEnergy, Material, Mesh, Section, Vec3, VelocityProgram};
+use crash_core::element::{HourglassState, ShellState, Stabilization};
+use crash_core::{
+    Body, BodyDef, BodyEnergy, BodyState, Material, Mesh, Section, Vec3, VelocityProgram,
+};
 
 const TRI_REF: usize = 7;
 const QUAD_REF: usize = 19;
@@ -77,7 +79,7 @@ pub(crate) fn energy_from_pb(e: &pb::Energy) -> BodyEnergy {
 }
 
 /// The static part of a body.
-pub fn def_to_pb(b: &Body) -> pb::BodyDef {
+pub fn def_to_pb(b: &BodyDef) -> pb::BodyDef {
     let s = &b.section;
     let m = &s.material;
     let mut tri_nodes = Vec::with_capacity(3 * b.tris.len());
@@ -155,7 +157,7 @@ pub fn def_to_pb(b: &Body) -> pb::BodyDef {
 }
 
 /// The evolving part of a body.
-pub fn state_to_pb(b: &Body) -> pb::BodyState {
+pub fn state_to_pb(id: u32, b: &BodyState) -> pb::BodyState {
     let mut shell = Vec::with_capacity(6 * b.shell.len());
     for s in &b.shell {
         shell.extend_from_slice(&s.m);
@@ -168,7 +170,7 @@ pub fn state_to_pb(b: &Body) -> pb::BodyState {
         hourglass.extend_from_slice(&h.th);
     }
     pb::BodyState {
-        id: b.id,
+        id,
         x: pack3(&b.x),
         v: pack3(&b.v),
         w: pack3(&b.w),
@@ -184,8 +186,8 @@ pub fn state_to_pb(b: &Body) -> pb::BodyState {
 
 pub fn body_to_pb(b: &Body) -> pb::Body {
     pb::Body {
-        def: Some(def_to_pb(b)),
-        state: Some(state_to_pb(b)),
+        def: Some(def_to_pb(&b.def)),
+        state: Some(state_to_pb(b.def.id, &b.state)),
     }
 }
 
@@ -216,13 +218,21 @@ fn stab_from_pb(s: &pb::Stabilization) -> Stabilization {
 pub fn body_from_pb(p: &pb::Body) -> Result<Body, ProtoError> {
     let d = p.def.as_ref().ok_or(ProtoError::Missing("body.def"))?;
     let st = p.state.as_ref().ok_or(ProtoError::Missing("body.state"))?;
-    let id = d.id;
-    if st.id != id {
+    if st.id != d.id {
         return Err(ProtoError::Invalid(format!(
-            "body definition {id} carries the state of body {}",
-            st.id
+            "body definition {} carries the state of body {}",
+            d.id, st.id
         )));
     }
+    let mut b = def_from_pb(d)?;
+    apply_state(&mut b, st)?;
+    Ok(b)
+}
+
+/// Rebuild a body from its definition alone: the state is the one `Body::new` gives
+/// (initial positions, at rest); apply a transmitted state with `apply_state`.
+pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
+    let id = d.id;
     let section = section_from_pb(
         d.section
             .as_ref()
@@ -247,16 +257,26 @@ pub fn body_from_pb(p: &pb::Body) -> Result<Body, ProtoError> {
             .collect(),
     };
     let mut b = Body::new(id, &d.name, &mesh, section, stab)?;
-    let (nt, nq) = (b.tris.len(), b.quads.len());
+    let (nt, nq) = (b.def.tris.len(), b.def.quads.len());
 
     check(id, "tri_ref", &d.tri_ref, nt, TRI_REF)?;
-    for (e, r) in b.tris.iter_mut().zip(d.tri_ref.chunks_exact(TRI_REF)) {
+    for (e, r) in b
+        .def_mut()
+        .tris
+        .iter_mut()
+        .zip(d.tri_ref.chunks_exact(TRI_REF))
+    {
         e.bx0.copy_from_slice(&r[0..3]);
         e.by0.copy_from_slice(&r[3..6]);
         e.area0 = r[6];
     }
     check(id, "quad_ref", &d.quad_ref, nq, QUAD_REF)?;
-    for (e, r) in b.quads.iter_mut().zip(d.quad_ref.chunks_exact(QUAD_REF)) {
+    for (e, r) in b
+        .def_mut()
+        .quads
+        .iter_mut()
+        .zip(d.quad_ref.chunks_exact(QUAD_REF))
+    {
         e.bx0.copy_from_slice(&r[0..4]);
         e.by0.copy_from_slice(&r[4..8]);
         e.gamma.copy_from_slice(&r[8..12]);
@@ -269,25 +289,37 @@ pub fn body_from_pb(p: &pb::Body) -> Result<Body, ProtoError> {
     check(id, "fixed", &d.fixed, nn, 1)?;
     check(id, "program", &d.program, nn, 1)?;
     check(id, "load_of", &d.load_of, nn, 1)?;
-    check(id, "gather_start", &d.gather_start, b.gather_start.len(), 1)?;
-    check(id, "gather_slot", &d.gather_slot, b.gather_slot.len(), 1)?;
+    check(
+        id,
+        "gather_start",
+        &d.gather_start,
+        b.def.gather_start.len(),
+        1,
+    )?;
+    check(
+        id,
+        "gather_slot",
+        &d.gather_slot,
+        b.def.gather_slot.len(),
+        1,
+    )?;
     if d.programs.len() % PROGRAM != 0 {
         return Err(ProtoError::Invalid(format!(
             "body {id}: programs not whole"
         )));
     }
     check(id, "load_values", &d.load_values, d.load_nodes.len(), LOAD)?;
-    b.mass.clone_from(&d.mass);
-    b.inertia.clone_from(&d.inertia);
-    b.fixed.clone_from(&d.fixed);
-    b.program = d
+    b.def_mut().mass.clone_from(&d.mass);
+    b.def_mut().inertia.clone_from(&d.inertia);
+    b.def_mut().fixed.clone_from(&d.fixed);
+    b.def_mut().program = d
         .program
         .iter()
         .map(|&p| {
             u16::try_from(p).map_err(|_| ProtoError::Invalid(format!("body {id}: program {p}")))
         })
         .collect::<Result<_, _>>()?;
-    b.programs = d
+    b.def_mut().programs = d
         .programs
         .chunks_exact(PROGRAM)
         .map(|c| VelocityProgram {
@@ -296,7 +328,7 @@ pub fn body_from_pb(p: &pb::Body) -> Result<Body, ProtoError> {
             ramp: c[6],
         })
         .collect();
-    b.loads = d
+    b.def_mut().loads = d
         .load_nodes
         .iter()
         .zip(d.load_values.chunks_exact(LOAD))
@@ -308,69 +340,130 @@ pub fn body_from_pb(p: &pb::Body) -> Result<Body, ProtoError> {
             t1: c[7],
         })
         .collect();
-    b.load_of.clone_from(&d.load_of);
-    b.gather_start.clone_from(&d.gather_start);
-    b.gather_slot.clone_from(&d.gather_slot);
-    b.mass_damping = d.mass_damping;
-    b.contact = d.contact;
-    b.self_contact = d.self_contact;
-    b.kinematic = d.kinematic;
+    b.def_mut().load_of.clone_from(&d.load_of);
+    b.def_mut().gather_start.clone_from(&d.gather_start);
+    b.def_mut().gather_slot.clone_from(&d.gather_slot);
+    b.def_mut().mass_damping = d.mass_damping;
+    b.def_mut().contact = d.contact;
+    b.def_mut().self_contact = d.self_contact;
+    b.def_mut().kinematic = d.kinematic;
     validate_indices(&b)?;
-    apply_state(&mut b, st)?;
     Ok(b)
 }
 
 /// Indices that the physics uses to index arrays must be in range (a corrupt message
 /// must not make a worker panic).
 fn validate_indices(b: &Body) -> Result<(), ProtoError> {
-    let id = b.id;
+    let id = b.def.id;
     let bad = |what: String| Err(ProtoError::Invalid(format!("body {id}: {what}")));
-    let np = b.programs.len();
+    let np = b.def.programs.len();
     if let Some(p) = b
+        .def
         .program
         .iter()
         .find(|&&p| p != crash_core::body::NO_PROGRAM && p as usize >= np)
     {
         return bad(format!("velocity program {p} of {np}"));
     }
-    let nl = b.loads.len();
+    let nl = b.def.loads.len();
     if let Some(l) = b
+        .def
         .load_of
         .iter()
         .find(|&&l| l != u32::MAX && l as usize >= nl)
     {
         return bad(format!("load {l} of {nl}"));
     }
-    let nn = b.x0.len();
-    if let Some(l) = b.loads.iter().find(|l| l.node as usize >= nn) {
+    let nn = b.def.x0.len();
+    if let Some(l) = b.def.loads.iter().find(|l| l.node as usize >= nn) {
         return bad(format!("load on node {} of {nn}", l.node));
     }
-    let ns = b.slots.len() as u32;
-    if b.gather_slot.iter().any(|&s| s >= ns)
-        || b.gather_start
+    let ns = b.state.slots.len() as u32;
+    if b.def.gather_slot.iter().any(|&s| s >= ns)
+        || b.def
+            .gather_start
             .iter()
-            .any(|&s| s as usize > b.gather_slot.len())
-        || b.gather_start.windows(2).any(|w| w[0] > w[1])
+            .any(|&s| s as usize > b.def.gather_slot.len())
+        || b.def.gather_start.windows(2).any(|w| w[0] > w[1])
     {
         return bad("gather map out of range".into());
     }
     Ok(())
 }
 
+/// Decode a state on its own (strides checked; whether it fits a definition is checked
+/// when the two are joined, `Body::from_parts`).
+pub fn state_from_pb(s: &pb::BodyState) -> Result<BodyState, ProtoError> {
+    let id = s.id;
+    let whole = |field: &'static str, d: &[f64], stride: usize| -> Result<usize, ProtoError> {
+        if d.len() % stride == 0 {
+            Ok(d.len() / stride)
+        } else {
+            Err(ProtoError::Invalid(format!(
+                "body {id}: '{field}' has {} values, not a multiple of {stride}",
+                d.len()
+            )))
+        }
+    };
+    let nn = whole("x", &s.x, 3)?;
+    let x = unpack3(id, "x", &s.x, nn)?;
+    let v = unpack3(id, "v", &s.v, nn)?;
+    let w = unpack3(id, "w", &s.w, nn)?;
+    whole("shell", &s.shell, 6)?;
+    whole("hourglass", &s.hourglass, 3)?;
+    whole("slots", &s.slots, 6)?;
+    whole("f_contact", &s.f_contact, 3)?;
+    let energy = s
+        .energy
+        .as_ref()
+        .ok_or(ProtoError::Missing("state.energy"))?;
+    Ok(BodyState {
+        x,
+        v,
+        w,
+        shell: s
+            .shell
+            .chunks_exact(6)
+            .map(|c| ShellState {
+                m: [c[0], c[1], c[2]],
+                q: [c[3], c[4]],
+                drill: c[5],
+            })
+            .collect(),
+        hourglass: s
+            .hourglass
+            .chunks_exact(3)
+            .map(|c| HourglassState {
+                w: c[0],
+                th: [c[1], c[2]],
+            })
+            .collect(),
+        slots: s
+            .slots
+            .chunks_exact(6)
+            .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
+            .collect(),
+        f_contact: s.f_contact.chunks_exact(3).map(vec3).collect(),
+        energy: energy_from_pb(energy),
+        internal_now: s.internal_now,
+        hourglass_now: s.hourglass_now,
+    })
+}
+
 /// Overwrite the evolving state of `b` with `s` (exact bits). The sizes must match the
 /// body's definition.
 pub fn apply_state(b: &mut Body, s: &pb::BodyState) -> Result<(), ProtoError> {
-    let id = b.id;
+    let id = b.def.id;
     if s.id != id {
         return Err(ProtoError::Invalid(format!(
             "state of body {} applied to body {id}",
             s.id
         )));
     }
-    let nn = b.x.len();
-    let ne = b.shell.len();
-    let nq = b.hourglass.len();
-    let nslot = b.slots.len();
+    let nn = b.state.x.len();
+    let ne = b.state.shell.len();
+    let nq = b.state.hourglass.len();
+    let nslot = b.state.slots.len();
     let x = unpack3(id, "x", &s.x, nn)?;
     let v = unpack3(id, "v", &s.v, nn)?;
     let w = unpack3(id, "w", &s.w, nn)?;
@@ -384,24 +477,29 @@ pub fn apply_state(b: &mut Body, s: &pb::BodyState) -> Result<(), ProtoError> {
         .energy
         .as_ref()
         .ok_or(ProtoError::Missing("state.energy"))?;
-    b.x = x;
-    b.v = v;
-    b.w = w;
-    for (st, c) in b.shell.iter_mut().zip(s.shell.chunks_exact(6)) {
+    b.state.x = x;
+    b.state.v = v;
+    b.state.w = w;
+    for (st, c) in b.state.shell.iter_mut().zip(s.shell.chunks_exact(6)) {
         st.m = [c[0], c[1], c[2]];
         st.q = [c[3], c[4]];
         st.drill = c[5];
     }
-    for (h, c) in b.hourglass.iter_mut().zip(s.hourglass.chunks_exact(3)) {
+    for (h, c) in b
+        .state
+        .hourglass
+        .iter_mut()
+        .zip(s.hourglass.chunks_exact(3))
+    {
         h.w = c[0];
         h.th = [c[1], c[2]];
     }
-    for (slot, c) in b.slots.iter_mut().zip(s.slots.chunks_exact(6)) {
+    for (slot, c) in b.state.slots.iter_mut().zip(s.slots.chunks_exact(6)) {
         slot.copy_from_slice(c);
     }
-    b.f_contact = s.f_contact.chunks_exact(3).map(vec3).collect();
-    b.energy = energy_from_pb(energy);
-    b.internal_now = s.internal_now;
-    b.hourglass_now = s.hourglass_now;
+    b.state.f_contact = s.f_contact.chunks_exact(3).map(vec3).collect();
+    b.state.energy = energy_from_pb(energy);
+    b.state.internal_now = s.internal_now;
+    b.state.hourglass_now = s.hourglass_now;
     Ok(())
 }

@@ -161,16 +161,17 @@ fn body(
         }
         other => geometry_error(ctx, &s, other),
     })?;
-    body.mass_damping = non_negative(ctx, &format!("{key}.mass_damping"), b.mass_damping, "1/s")?;
-    body.contact = b.contact.unwrap_or(true);
-    body.self_contact = b.self_contact.unwrap_or(false);
+    body.def_mut().mass_damping =
+        non_negative(ctx, &format!("{key}.mass_damping"), b.mass_damping, "1/s")?;
+    body.def_mut().contact = b.contact.unwrap_or(true);
+    body.def_mut().self_contact = b.self_contact.unwrap_or(false);
 
     let v = finite_vec(ctx, &format!("{key}.velocity"), b.velocity)?;
     let w = finite_vec(ctx, &format!("{key}.angular_velocity"), b.angular_velocity)?;
     let com = body.centre_of_mass();
     body.set_rigid_velocity(v, w, com);
 
-    let global = body.x0.clone();
+    let global = body.def.x0.clone();
     let mut info = BodyInfo {
         shape: s.describe.clone(),
         material: b.material.clone(),
@@ -244,8 +245,9 @@ fn body(
         body.add_load(l);
         info.loaded_nodes += 1;
     }
-    info.fixed_nodes = body.fixed.iter().filter(|&&f| f != 0).count();
+    info.fixed_nodes = body.def.fixed.iter().filter(|&&f| f != 0).count();
     info.prescribed_nodes = body
+        .def
         .program
         .iter()
         .filter(|&&p| p != crash_core::body::NO_PROGRAM)
@@ -276,13 +278,13 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
             Some(_) => format!("bodies[{later}].position"),
             None => format!("bodies[{later}]"),
         };
-        let gap = 0.5 * (a.section.thickness + b.section.thickness);
+        let gap = 0.5 * (a.def.section.thickness + b.def.section.thickness);
         return Err(ctx.key_error(
             ErrorKind::Geometry,
             &key,
             format!(
                 "bodies \"{}\" and \"{}\" interpenetrate at t = 0: {} node(s) of \"{}\" lie closer to \"{}\" than the half-thickness sum {:.4e} m (node {} by {:.4e} m, at element {}); move them apart",
-                a.name, b.name, p.nodes, a.name, b.name, gap, p.node, p.depth, p.segment
+                a.def.name, b.def.name, p.nodes, a.def.name, b.def.name, gap, p.node, p.depth, p.segment
             ),
         ));
     }

@@ -45,9 +45,9 @@ pub fn element_lengths(
 /// Smallest characteristic element length of a body.
 pub fn min_length(b: &Body) -> f64 {
     element_lengths(
-        &b.x,
-        b.tris.iter().map(|e| e.nodes),
-        b.quads.iter().map(|e| e.nodes),
+        &b.state.x,
+        b.def.tris.iter().map(|e| e.nodes),
+        b.def.quads.iter().map(|e| e.nodes),
     )
     .into_iter()
     .fold(f64::INFINITY, f64::min)
@@ -57,13 +57,14 @@ pub fn min_length(b: &Body) -> f64 {
 /// by sqrt(1 + xi^2) - xi). The core's own element loop gives the exact value.
 pub fn dt_estimate(b: &Body) -> f64 {
     let l = min_length(b);
-    crash_core::forces::element_dt(&b.section, l)
+    crash_core::forces::element_dt(&b.def.section, l)
 }
 
 /// Largest node speed at t = 0, including rigid rotation and prescribed programs.
 pub fn max_speed(b: &Body) -> f64 {
-    let v0 = b.v.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    let v0 = b.state.v.iter().map(|v| v.norm()).fold(0.0, f64::max);
     let vp = b
+        .def
         .programs
         .iter()
         .map(|p| p.velocity.norm())
@@ -73,7 +74,7 @@ pub fn max_speed(b: &Body) -> f64 {
 
 /// The default contact margin of a set of bodies (see the module docs).
 pub fn default_margin(bodies: &[Body], gravity: Vec3, end_time: f64, safety: f64) -> f64 {
-    let contact: Vec<&Body> = bodies.iter().filter(|b| b.contact).collect();
+    let contact: Vec<&Body> = bodies.iter().filter(|b| b.def.contact).collect();
     if contact.is_empty() {
         return 0.0;
     }

@@ -36,10 +36,10 @@ mod tests {
         use crash_core::{Material, Section, Stabilization};
         let mut m = plate(1.0, 1.0, 4, 4, ElementKind::Quad);
         m.transform(&nalgebra::Matrix3::identity(), Vec3::new(0.0, 0.0, z));
-        let mat = Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid");
+        let mat = Material::steel();
         let mut b =
             Body::new(id, "p", &m, Section::new(mat, t), Stabilization::default()).expect("valid");
-        b.contact = true;
+        b.def_mut().contact = true;
         b
     }
 
@@ -63,7 +63,7 @@ mod tests {
         };
         assert_eq!(check_initial_overlap(&close, &off), None);
         let mut no_contact = close.clone();
-        no_contact[1].contact = false;
+        no_contact[1].def_mut().contact = false;
         assert_eq!(check_initial_overlap(&no_contact, &cfg), None);
     }
 }

@@ -50,14 +50,14 @@ impl Built {
             .iter()
             .zip(&self.info)
             .map(|(b, i)| BodySummary {
-                id: b.id,
-                name: b.name.clone(),
+                id: b.def.id,
+                name: b.def.name.clone(),
                 shape: i.shape.clone(),
                 material: i.material.clone(),
-                thickness: b.section.thickness,
+                thickness: b.def.section.thickness,
                 nodes: b.node_count(),
-                tris: b.tris.len(),
-                quads: b.quads.len(),
+                tris: b.def.tris.len(),
+                quads: b.def.quads.len(),
                 mass: b.total_mass(),
                 fixed_nodes: i.fixed_nodes,
                 prescribed_nodes: i.prescribed_nodes,

@@ -30,13 +30,13 @@ fn defaults_are_applied() {
     assert_eq!(b.contact.penalty_scale, 0.1);
     assert_eq!(b.contact.damping_ratio, 0.0);
     assert_eq!(
-        b.bodies.iter().map(|x| x.id).collect::<Vec<_>>(),
+        b.bodies.iter().map(|x| x.def.id).collect::<Vec<_>>(),
         vec![0, 1]
     );
     assert!(b
         .bodies
         .iter()
-        .all(|x| x.contact && !x.self_contact && x.mass_damping == 0.0));
+        .all(|x| x.def.contact && !x.def.self_contact && x.def.mass_damping == 0.0));
     assert_eq!(b.run_config().end_time, 1.0e-3);
 }
 
@@ -87,14 +87,16 @@ fn rotation_is_right_handed_in_degrees_and_applied_before_the_position() {
     let b = build(&text);
     let p = &b.bodies[0];
     // node 14 = (i 4, j 2) is the local corner (0.2, 0.1, 0)
-    let x = p.x0[14];
+    let x = p.def.x0[14];
     assert!((x - Vec3::new(1.2, 2.0, 3.1)).norm() < 1e-12, "{x}");
     // x- stays the local edge x = -0.2 after rotation: 3 nodes, all at global x = 0.8
-    let fixed: Vec<usize> = (0..p.node_count()).filter(|&i| p.fixed[i] != 0).collect();
+    let fixed: Vec<usize> = (0..p.node_count())
+        .filter(|&i| p.def.fixed[i] != 0)
+        .collect();
     assert_eq!(fixed.len(), 3);
     assert!(fixed
         .iter()
-        .all(|&i| (p.x0[i].x - 0.8).abs() < 1e-12 && p.fixed[i] == dof::ALL));
+        .all(|&i| (p.def.x0[i].x - 0.8).abs() < 1e-12 && p.def.fixed[i] == dof::ALL));
 }
 
 #[test]
@@ -110,9 +112,10 @@ fn initial_spin_is_about_the_centre_of_mass() {
     let m = s.total_mass();
     assert!((s.linear_momentum() - Vec3::new(m, 0.0, 0.0)).norm() < 1e-12 * m);
     for i in 0..s.node_count() {
-        let expect = Vec3::new(1.0, 0.0, 0.0) + Vec3::new(0.0, 0.0, 10.0).cross(&(s.x[i] - com));
-        assert!((s.v[i] - expect).norm() < 1e-12, "node {i}");
-        assert_eq!(s.w[i], Vec3::new(0.0, 0.0, 10.0));
+        let expect =
+            Vec3::new(1.0, 0.0, 0.0) + Vec3::new(0.0, 0.0, 10.0).cross(&(s.state.x[i] - com));
+        assert!((s.state.v[i] - expect).norm() < 1e-12, "node {i}");
+        assert_eq!(s.state.w[i], Vec3::new(0.0, 0.0, 10.0));
     }
 }
 
@@ -124,12 +127,14 @@ fn box_selector_and_dof_list_fix_exactly_the_named_bits() {
     );
     let b = build(&text);
     let p = &b.bodies[0];
-    let fixed: Vec<usize> = (0..p.node_count()).filter(|&i| p.fixed[i] != 0).collect();
+    let fixed: Vec<usize> = (0..p.node_count())
+        .filter(|&i| p.def.fixed[i] != 0)
+        .collect();
     // the y- edge of a 4 x 4 plate: nodes 0..=4
     assert_eq!(fixed, vec![0, 1, 2, 3, 4]);
     assert!(fixed
         .iter()
-        .all(|&i| p.fixed[i] == dof::X | dof::Z | dof::RX));
+        .all(|&i| p.def.fixed[i] == dof::X | dof::Z | dof::RX));
 }
 
 #[test]
@@ -140,8 +145,11 @@ fn selector_lists_are_unions_and_named_sets_map_to_masks() {
     );
     let b = build(&text);
     let p = &b.bodies[0];
-    assert_eq!(p.fixed.iter().filter(|&&f| f == dof::ROTATIONS).count(), 16);
-    assert_eq!(p.fixed.iter().filter(|&&f| f == 0).count(), 9);
+    assert_eq!(
+        p.def.fixed.iter().filter(|&&f| f == dof::ROTATIONS).count(),
+        16
+    );
+    assert_eq!(p.def.fixed.iter().filter(|&&f| f == 0).count(), 9);
     assert_eq!(b.info[0].fixed_nodes, 16);
 }
 
@@ -151,23 +159,24 @@ fn prescribed_velocity_with_ramp_starts_at_rest_and_without_ramp_at_full_speed()
     let b = build(&text);
     let s = &b.bodies[1];
     let moved: Vec<usize> = (0..s.node_count())
-        .filter(|&i| s.program[i] != NO_PROGRAM)
+        .filter(|&i| s.def.program[i] != NO_PROGRAM)
         .collect();
     // z- of a level-1 icosphere is one node (the lowest)
     assert_eq!(moved.len(), 1);
     let n = moved[0];
-    assert_eq!(s.fixed[n], dof::ALL);
-    assert_eq!(s.programs[0].velocity, Vec3::new(0.0, 0.0, -2.0));
-    assert_eq!(s.programs[0].ramp, 1.0e-4);
-    assert_eq!(s.v[n], Vec3::zeros());
+    assert_eq!(s.def.fixed[n], dof::ALL);
+    assert_eq!(s.def.programs[0].velocity, Vec3::new(0.0, 0.0, -2.0));
+    assert_eq!(s.def.programs[0].ramp, 1.0e-4);
+    assert_eq!(s.state.v[n], Vec3::zeros());
     let text =
         format!("{BASE}\n[[bodies.prescribe]]\nselect = \"all\"\nvelocity = [0.0, 0.0, -2.0]\n");
     let b = build(&text);
     assert!(b.bodies[1]
+        .state
         .v
         .iter()
         .all(|v| *v == Vec3::new(0.0, 0.0, -2.0)));
-    assert!(b.bodies[1].kinematic);
+    assert!(b.bodies[1].def.kinematic);
 }
 
 #[test]
@@ -177,12 +186,12 @@ fn load_total_is_split_equally_and_loads_on_one_node_add_up() {
     );
     let b = build(&text);
     let s = &b.bodies[1];
-    assert_eq!(s.loads.len(), s.node_count());
-    let total: Vec3 = s.loads.iter().map(|l| l.force).sum();
+    assert_eq!(s.def.loads.len(), s.node_count());
+    let total: Vec3 = s.def.loads.iter().map(|l| l.force).sum();
     assert!((total - Vec3::new(0.0, 0.0, -42.0)).norm() < 1e-12);
-    let m: Vec3 = s.loads.iter().map(|l| l.moment).sum();
+    let m: Vec3 = s.def.loads.iter().map(|l| l.moment).sum();
     assert_eq!(m, Vec3::new(1.0, 0.0, 0.0));
-    assert!(s.loads.iter().all(|l| l.t0 == 0.0 && l.t1 == 1.0e-4));
+    assert!(s.def.loads.iter().all(|l| l.t0 == 0.0 && l.t1 == 1.0e-4));
     assert_eq!(b.info[1].loaded_nodes, s.node_count());
 }
 
@@ -192,9 +201,9 @@ fn element_size_sets_cells_and_sphere_level() {
         with("cells = [4, 4]", "element_size = 0.03").replace("level = 1", "element_size = 0.03");
     let b = build(&text);
     // ceil(0.4 / 0.03) = 14 cells per side
-    assert_eq!(b.bodies[0].quads.len(), 14 * 14);
+    assert_eq!(b.bodies[0].def.quads.len(), 14 * 14);
     // icosphere edge ~ 0.1 * 1.0515 / 2^l <= 0.03 first at l = 2: 320 triangles
-    assert_eq!(b.bodies[1].tris.len(), 320);
+    assert_eq!(b.bodies[1].def.tris.len(), 320);
 }
 
 #[test]
@@ -216,9 +225,9 @@ fn cylinder_and_box_shapes_have_the_expected_counts_and_areas() {
         "box = { size = [0.2, 0.1, 0.1], cells = 4 }\nelement = \"tri\"",
     );
     let b = build(&text);
-    assert_eq!(b.bodies[0].quads.len(), 24 * 6);
+    assert_eq!(b.bodies[0].def.quads.len(), 24 * 6);
     // box: 4 x 2 x 2 cells, 2 triangles each
-    assert_eq!(b.bodies[1].tris.len(), 2 * 2 * (4 * 2 + 2 * 2 + 2 * 4));
+    assert_eq!(b.bodies[1].def.tris.len(), 2 * 2 * (4 * 2 + 2 * 2 + 2 * 4));
     let area = b.bodies[1].total_mass() / (7800.0 * 1.0e-3);
     assert!((area - 2.0 * (0.02 + 0.01 + 0.02)).abs() < 1e-12, "{area}");
 }

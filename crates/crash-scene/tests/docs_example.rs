@@ -23,16 +23,19 @@ fn docs_complete_example_builds_as_documented() {
     assert_eq!(b.bodies.len(), 3);
     assert_eq!(b.contact.margin, 5.0e-4);
     // aluminium by its Lamé pair: E = mu (3 lambda + 2 mu) / (lambda + mu) ~ 70 GPa, nu ~ 0.33
-    let al = b.bodies[0].section.material;
+    let al = b.bodies[0].def.section.material;
     assert!(
         (al.young - 70.0e9).abs() < 0.2e9 && (al.poisson - 0.33).abs() < 2e-3,
         "{al:?}"
     );
     // clamped short edges: 2 x 31 nodes; plus the vertically held patch
     let plate = &b.bodies[0];
-    assert_eq!(plate.fixed.iter().filter(|&&f| f == dof::ALL).count(), 62);
-    assert!(plate.fixed.contains(&dof::Z));
+    assert_eq!(
+        plate.def.fixed.iter().filter(|&&f| f == dof::ALL).count(),
+        62
+    );
+    assert!(plate.def.fixed.contains(&dof::Z));
     // the box is kinematic, starting at rest (ramp)
-    assert!(b.bodies[2].kinematic);
-    assert!(b.bodies[2].v.iter().all(|v| v.norm() == 0.0));
+    assert!(b.bodies[2].def.kinematic);
+    assert!(b.bodies[2].state.v.iter().all(|v| v.norm() == 0.0));
 }

@@ -78,12 +78,12 @@ fn imported_mesh_is_found_relative_to_the_scene_and_scaled() {
         .expect("builds");
     let body = &b.bodies[0];
     assert_eq!(
-        (body.tris.len(), body.quads.len(), body.node_count()),
+        (body.def.tris.len(), body.def.quads.len(), body.node_count()),
         (2, 1, 6)
     );
     // scale 0.5: the rectangle becomes 1 x 0.5 m, mass = rho t A
     assert!((body.total_mass() - 7800.0 * 0.01 * 0.5).abs() < 1e-9);
-    assert_eq!(body.x0[4], Vec3::new(1.0, 0.0, 0.0));
+    assert_eq!(body.def.x0[4], Vec3::new(1.0, 0.0, 0.0));
 }
 
 #[test]
@@ -97,7 +97,10 @@ fn element_tri_splits_imported_quads() {
         .expect("valid")
         .build()
         .expect("builds");
-    assert_eq!((b.bodies[0].tris.len(), b.bodies[0].quads.len()), (4, 0));
+    assert_eq!(
+        (b.bodies[0].def.tris.len(), b.bodies[0].def.quads.len()),
+        (4, 0)
+    );
     assert!((b.bodies[0].total_mass() - 7800.0 * 0.01 * 0.5).abs() < 1e-9);
 }
 

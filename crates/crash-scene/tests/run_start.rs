@@ -27,14 +27,14 @@ fn falling_sphere_keeps_its_velocity_plus_gravity_before_contact() {
     let sphere = &run.group.bodies[1];
     let v = sphere.linear_momentum() / sphere.total_mass();
     // half-step velocity v_{n-1/2}: -5 - g (t - h/2)
-    let h = run.group.h_prev;
+    let h = run.clock.last_dt;
     let expect = Vec3::new(0.0, 0.0, -5.0 - 9.81 * (t - 0.5 * h));
     assert!((v - expect).norm() < 1e-9, "{v} vs {expect}");
     // clamped edges did not move
     let plate = &run.group.bodies[0];
     for i in 0..plate.node_count() {
-        if plate.fixed[i] != 0 {
-            assert_eq!(plate.x[i], plate.x0[i]);
+        if plate.def.fixed[i] != 0 {
+            assert_eq!(plate.state.x[i], plate.def.x0[i]);
         }
     }
 }
@@ -54,8 +54,8 @@ fn spinning_free_plate_starts_as_a_rigid_body() {
     // the centrifugal stretch, strain ~ rho w^2 r^2 / E ~ 5e-6, stores energy (observed
     // 4e-6 of the kinetic energy; with the node rotation rates left at zero it is 6e-4)
     assert!(
-        body.energy.internal < 5e-5 * e0,
+        body.state.energy.internal < 5e-5 * e0,
         "{} vs {e0}",
-        body.energy.internal
+        body.state.energy.internal
     );
 }

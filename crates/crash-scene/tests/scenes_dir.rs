@@ -25,7 +25,12 @@ fn every_scene_in_scenes_dir_parses_and_builds() {
         println!("{s}\n");
         assert_eq!(built.bodies.len(), scene.spec.bodies.len());
         for (i, b) in built.bodies.iter().enumerate() {
-            assert_eq!(b.id as usize, i, "{}: ids follow file order", f.display());
+            assert_eq!(
+                b.def.id as usize,
+                i,
+                "{}: ids follow file order",
+                f.display()
+            );
         }
         assert!(s.elements > 0 && built.end_time > 0.0);
     }

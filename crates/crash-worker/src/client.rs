@@ -6,11 +6,11 @@
 //! pool (the other pool threads join by work stealing); see `serve`.
 
 use crate::engine::Engine;
-use crash_proto::msg::{command_from_pb, reply_to_pb};
+use crash_link::wire::{command_from_pb, reply_to_pb};
+use crash_link::{check_version, Command, Reply, PROTOCOL_VERSION};
 use crash_proto::pb::coordinator_client::CoordinatorClient;
 use crash_proto::pb::master_message::Command as PbCommand;
 use crash_proto::pb::{self, worker_message};
-use crash_proto::{Command, Reply, PROTOCOL_VERSION};
 use std::time::{Duration, Instant};
 use thiserror::Error;
 use tokio::sync::mpsc;
@@ -184,14 +184,13 @@ async fn attach(
         Ok(Some(pb::MasterMessage {
             command: Some(PbCommand::Welcome(w)),
         })) => {
-            if w.protocol_version != opts.protocol_version {
-                return Err(WorkerError::Refused {
-                    url: url.into(),
-                    reason: format!(
-                        "protocol version mismatch: the master speaks crash protocol v{}, this worker speaks v{}; run matching versions of crash-master and crash-worker",
-                        w.protocol_version, opts.protocol_version
-                    ),
-                });
+            if opts.protocol_version == PROTOCOL_VERSION {
+                check_version(w.protocol_version, "the master", "worker").map_err(|e| {
+                    WorkerError::Refused {
+                        url: url.into(),
+                        reason: e.to_string(),
+                    }
+                })?;
             }
             tracing::info!(
                 "attached to {url} as worker {} of {}",

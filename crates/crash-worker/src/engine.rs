@@ -9,14 +9,20 @@
 //!
 //! The engine is plain synchronous code: local mode calls `handle` directly, the
 //! worker process calls it on its compute pool, off the communication runtime.
+//!
+//! Time: the engine keeps no clock of its own. Every Step and Load carries the run's
+//! clock; the engine only remembers the clock its bodies are at, to refuse a command
+//! meant for another moment (so a resumed run continues on any set of workers).
 
-use crash_core::{Body, BodyReport, Fault, Group};
-use crash_proto::{Command, GroupTime, Reply, Setup, StepReport};
+use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, Fault, Group};
+use crash_io::FrameBody;
+use crash_link::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
 use rayon::prelude::*;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
+use std::sync::Arc;
 use std::time::Instant;
 
-/// Bodies of one worker and the shared clock of its groups.
+/// Bodies of one worker, grouped, and the definitions it has received.
 #[derive(Debug, Default)]
 pub struct Engine {
     setup: Option<Setup>,
@@ -24,10 +30,13 @@ pub struct Engine {
     groups: Vec<Group>,
     /// Loaded (or left over after an unload) but not yet placed by a Regroup.
     loose: Vec<Body>,
-    time: f64,
-    step: u64,
-    h_prev: f64,
-    /// A fault left the groups at different steps: only Snapshot and Shutdown remain.
+    /// Every definition received, kept after a body leaves (it may come back: then only
+    /// its state travels).
+    defs: BTreeMap<u32, Arc<BodyDef>>,
+    /// The clock the held bodies are at (None: no bodies yet).
+    at: Option<Clock>,
+    /// A fault left the groups at different steps: only Frame, States and Shutdown
+    /// remain.
     broken: bool,
 }
 
@@ -36,16 +45,14 @@ impl Engine {
         Self::default()
     }
 
-    /// Set the clock of an empty engine (a restart: the groups built from the bodies
-    /// loaded next continue at this time, step and last step length).
-    pub fn set_clock(&mut self, time: f64, step: u64, h_prev: f64) -> Result<(), String> {
-        if self.body_count() > 0 {
-            return Err("the clock can only be set before bodies are loaded".into());
-        }
-        self.time = time;
-        self.step = step;
-        self.h_prev = h_prev;
-        Ok(())
+    /// Whether the definition of body `id` is held.
+    pub fn has_definition(&self, id: u32) -> bool {
+        self.defs.contains_key(&id)
+    }
+
+    /// The clock the held bodies are at.
+    pub fn clock(&self) -> Option<Clock> {
+        self.at
     }
 
     /// Number of bodies held.
@@ -57,7 +64,7 @@ impl Engine {
     pub fn layout(&self) -> Vec<Vec<u32>> {
         self.groups
             .iter()
-            .map(|g| g.bodies.iter().map(|b| b.id).collect())
+            .map(|g| g.bodies.iter().map(|b| b.def.id).collect())
             .collect()
     }
 
@@ -72,30 +79,43 @@ impl Engine {
                 self.setup = Some(s);
                 Ok(Reply::Ack)
             }
-            Command::Load(bodies) => self.load(bodies),
-            Command::Unload(ids) => self.unload(&ids),
+            Command::Load { at, bodies } => self.load(at, bodies),
+            Command::Unload { ids, with_def } => self.unload(&ids, &with_def),
             Command::Regroup(layout) => self.regroup(layout),
-            Command::Start => return self.run(|g| g.start()),
-            Command::Step { step, dt } => {
-                if self.step != step {
-                    Err(format!(
-                        "asked for step {step}, but this worker's groups are at step {}",
-                        self.step
-                    ))
+            Command::Start => {
+                if let Err(e) = self.check_clock(&Clock::default()) {
+                    return Reply::Error(e);
+                }
+                self.at = Some(Clock::default());
+                return self.run(|g| g.start());
+            }
+            Command::Step { at, dt } => {
+                if let Err(e) = self.check_clock(&at) {
+                    Err(e)
                 } else if !(dt.is_finite() && dt > 0.0) {
-                    Err(format!("step {step}: invalid time step {dt}"))
+                    Err(format!("step {}: invalid time step {dt}", at.step))
                 } else {
-                    let reply = self.run(|g| g.advance(dt));
-                    self.time += dt;
-                    self.step += 1;
-                    self.h_prev = dt;
+                    let reply = self.run(|g| g.advance(&at, dt));
+                    self.at = Some(at.after(dt));
                     return reply;
                 }
             }
-            Command::Snapshot => Ok(Reply::Snapshot(self.snapshot())),
+            Command::Frame => Ok(Reply::Frame(self.frame())),
+            Command::States => Ok(Reply::States(self.states())),
             Command::Shutdown(_) => Ok(Reply::Ack),
         };
         res.unwrap_or_else(Reply::Error)
+    }
+
+    /// A command for clock `at` fits the held bodies (any clock fits an empty engine).
+    fn check_clock(&self, at: &Clock) -> Result<(), String> {
+        match self.at {
+            Some(c) if self.body_count() > 0 && !c.same_as(at) => Err(format!(
+                "a command for step {} (t = {:e} s) reached bodies at step {} (t = {:e} s)",
+                at.step, at.time, c.step, c.time
+            )),
+            _ => Ok(()),
+        }
     }
 
     fn new_group(&self, bodies: Vec<Body>) -> Result<Group, String> {
@@ -104,9 +124,6 @@ impl Engine {
             .ok_or("bodies arrived before the run setup (gravity, contact)")?;
         let mut g = Group::new(bodies, setup.gravity);
         g.contact = setup.contact;
-        g.time = self.time;
-        g.step = self.step;
-        g.h_prev = self.h_prev;
         Ok(g)
     }
 
@@ -115,17 +132,28 @@ impl Engine {
             .iter()
             .flat_map(|g| g.bodies.iter())
             .chain(&self.loose)
-            .map(|b| b.id)
+            .map(|b| b.def.id)
     }
 
-    fn load(&mut self, bodies: Vec<Body>) -> Result<Reply, String> {
-        let held: std::collections::BTreeSet<u32> = self.ids().collect();
-        for b in &bodies {
+    fn load(&mut self, at: Clock, bodies: Vec<BodyLoad>) -> Result<Reply, String> {
+        self.check_clock(&at)?;
+        let held: BTreeSet<u32> = self.ids().collect();
+        let mut built = Vec::with_capacity(bodies.len());
+        for b in bodies {
             if held.contains(&b.id) {
                 return Err(format!("body {} is already on this worker", b.id));
             }
+            let known = self.defs.get(&b.id).cloned();
+            let body = b
+                .into_body(known.as_ref())
+                .map_err(|e| format!("cannot load: {e}"))?;
+            built.push(body);
         }
-        self.loose.extend(bodies);
+        for b in &built {
+            self.defs.insert(b.def.id, b.def.clone());
+        }
+        self.loose.extend(built);
+        self.at = Some(at);
         Ok(Reply::Ack)
     }
 
@@ -134,28 +162,28 @@ impl Engine {
         let mut all = BTreeMap::new();
         for g in self.groups.drain(..) {
             for b in g.bodies {
-                all.insert(b.id, b);
+                all.insert(b.def.id, b);
             }
         }
         for b in self.loose.drain(..) {
-            all.insert(b.id, b);
+            all.insert(b.def.id, b);
         }
         all
     }
 
-    fn unload(&mut self, ids: &[u32]) -> Result<Reply, String> {
-        let held: std::collections::BTreeSet<u32> = self.ids().collect();
+    fn unload(&mut self, ids: &[u32], with_def: &[u32]) -> Result<Reply, String> {
+        let held: BTreeSet<u32> = self.ids().collect();
         if let Some(id) = ids.iter().find(|id| !held.contains(id)) {
             return Err(format!("cannot unload body {id}: it is not on this worker"));
         }
         // Groups losing members are dissolved; the master sends the new layout next.
         let mut out = Vec::with_capacity(ids.len());
-        let take: std::collections::BTreeSet<u32> = ids.iter().copied().collect();
+        let take: BTreeSet<u32> = ids.iter().copied().collect();
         let mut kept = Vec::new();
         for g in self.groups.drain(..) {
-            if g.bodies.iter().any(|b| take.contains(&b.id)) {
+            if g.bodies.iter().any(|b| take.contains(&b.def.id)) {
                 for b in g.bodies {
-                    if take.contains(&b.id) {
+                    if take.contains(&b.def.id) {
                         out.push(b);
                     } else {
                         self.loose.push(b);
@@ -167,21 +195,30 @@ impl Engine {
         }
         self.groups = kept;
         let (gone, stay): (Vec<Body>, Vec<Body>) =
-            self.loose.drain(..).partition(|b| take.contains(&b.id));
+            self.loose.drain(..).partition(|b| take.contains(&b.def.id));
         self.loose = stay;
         out.extend(gone);
-        out.sort_by_key(|b| b.id);
-        Ok(Reply::Unloaded(out))
+        out.sort_by_key(|b| b.def.id);
+        let with_def: BTreeSet<u32> = with_def.iter().copied().collect();
+        Ok(Reply::Unloaded(
+            out.into_iter()
+                .map(|b| BodyLoad {
+                    id: b.def.id,
+                    def: with_def.contains(&b.def.id).then_some(b.def),
+                    state: b.state,
+                })
+                .collect(),
+        ))
     }
 
     fn regroup(&mut self, layout: Vec<Vec<u32>>) -> Result<Reply, String> {
-        let mut listed = std::collections::BTreeSet::new();
+        let mut listed = BTreeSet::new();
         for id in layout.iter().flatten() {
             if !listed.insert(*id) {
                 return Err(format!("regroup lists body {id} twice"));
             }
         }
-        let held: std::collections::BTreeSet<u32> = self.ids().collect();
+        let held: BTreeSet<u32> = self.ids().collect();
         if listed != held {
             let missing: Vec<u32> = listed.difference(&held).copied().collect();
             let extra: Vec<u32> = held.difference(&listed).copied().collect();
@@ -197,11 +234,11 @@ impl Engine {
         layout.sort_by_key(|g| g.first().copied());
         // Groups whose membership is unchanged are kept as they are (with their
         // contact search caches); the others are rebuilt from their bodies.
-        let wanted: std::collections::BTreeSet<&[u32]> = layout.iter().map(Vec::as_slice).collect();
+        let wanted: BTreeSet<&[u32]> = layout.iter().map(Vec::as_slice).collect();
         let mut keep: BTreeMap<Vec<u32>, Group> = BTreeMap::new();
         let mut rest = Vec::new();
         for g in self.groups.drain(..) {
-            let ids: Vec<u32> = g.bodies.iter().map(|b| b.id).collect();
+            let ids: Vec<u32> = g.bodies.iter().map(|b| b.def.id).collect();
             if wanted.contains(ids.as_slice()) {
                 keep.insert(ids, g);
             } else {
@@ -255,7 +292,7 @@ impl Engine {
             contacts: Vec::new(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
-            let first = g.bodies.first().map_or(0, |b| b.id);
+            let first = g.bodies.first().map_or(0, |b| b.def.id);
             match r {
                 Ok(reports) => {
                     rep.bodies.extend(reports);
@@ -275,16 +312,28 @@ impl Engine {
         Reply::Report(rep)
     }
 
-    /// Copies of every body held, sorted by id.
-    pub fn snapshot(&self) -> Vec<Body> {
-        let mut out: Vec<Body> = self
+    /// Every body held, sorted by id.
+    fn held(&self) -> Vec<&Body> {
+        let mut out: Vec<&Body> = self
             .groups
             .iter()
             .flat_map(|g| g.bodies.iter())
             .chain(&self.loose)
-            .cloned()
             .collect();
-        out.sort_by_key(|b| b.id);
+        out.sort_by_key(|b| b.def.id);
         out
+    }
+
+    /// What an output frame shows of every body held, sorted by id.
+    pub fn frame(&self) -> Vec<FrameBody> {
+        self.held().into_iter().map(FrameBody::capture).collect()
+    }
+
+    /// The state of every body held, sorted by id.
+    pub fn states(&self) -> Vec<(u32, BodyState)> {
+        self.held()
+            .into_iter()
+            .map(|b| (b.def.id, b.state.clone()))
+            .collect()
     }
 }

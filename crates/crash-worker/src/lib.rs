@@ -1,13 +1,16 @@
 //! crash-worker: a worker holds groups of bodies and integrates them.
 //!
-//! [`engine::Engine`] is the compute part (used in-process by the master's local mode);
-//! [`client`] is the network part of a worker process: it dials the master's
-//! `Coordinator` service and answers its commands over one bidirectional stream.
-//! The `crash-worker` binary is built by the crash-master package (both binaries in one
-//! package, so that tests can spawn both).
+//! [`engine::Engine`] is the compute part; [`local::LocalWorker`] runs it inside the
+//! master's process (local mode); [`client`] is the network part of a worker process:
+//! it dials the master's `Coordinator` service and answers its commands over one
+//! bidirectional stream; [`probe`] asks a master's health without attaching. The
+//! `crash-worker` binary is `src/main.rs`.
 
 pub mod client;
 pub mod engine;
+pub mod local;
+pub mod probe;
 
 pub use client::{run, WorkerError, WorkerOptions};
 pub use engine::Engine;
+pub use local::LocalWorker;

@@ -50,22 +50,26 @@ pub fn corner_plate(
 
 /// Nodes whose initial coordinate `axis` is within tol of `value`.
 pub fn nodes_at(b: &Body, axis: usize, value: f64, tol: f64) -> Vec<usize> {
-    (0..b.x.len())
-        .filter(|&i| (b.x0[i][axis] - value).abs() < tol)
+    (0..b.state.x.len())
+        .filter(|&i| (b.def.x0[i][axis] - value).abs() < tol)
         .collect()
 }
 
 /// The node nearest to `p` (initial position).
 pub fn nearest(b: &Body, p: Vec3) -> usize {
-    (0..b.x0.len())
-        .min_by(|&i, &j| (b.x0[i] - p).norm().total_cmp(&(b.x0[j] - p).norm()))
+    (0..b.def.x0.len())
+        .min_by(|&i, &j| {
+            (b.def.x0[i] - p)
+                .norm()
+                .total_cmp(&(b.def.x0[j] - p).norm())
+        })
         .unwrap_or(0)
 }
 
 /// Contact shell of material `mat`.
 pub fn shell(id: u32, mesh: &Mesh, mat: Material, t: f64) -> Result<Body, CoreError> {
     let mut b = body(id, mesh, mat, t)?;
-    b.contact = true;
+    b.def_mut().contact = true;
     Ok(b)
 }
 
@@ -90,7 +94,7 @@ pub fn fixed_plate(id: u32, lx: f64, n: usize, t: f64, z0: f64) -> Result<Body, 
     let mut m = plate(lx, lx, n, n, ElementKind::Quad);
     translate(&mut m, Vec3::new(0.0, 0.0, z0));
     let mut b = shell(id, &m, steel(), t)?;
-    for i in 0..b.x.len() {
+    for i in 0..b.state.x.len() {
         b.fix(i, dof::ALL);
     }
     Ok(b)

@@ -33,13 +33,13 @@ pub fn reissner(level: Level) -> Result<Measurement, CaseError> {
         for &n in &rim {
             c.fix(n, dof::ALL);
         }
-        c.mass_damping = 5000.0;
-        let pole = (0..c.x.len())
-            .min_by(|&a, &b| c.x[a].z.total_cmp(&c.x[b].z))
+        c.def_mut().mass_damping = 5000.0;
+        let pole = (0..c.state.x.len())
+            .min_by(|&a, &b| c.state.x[a].z.total_cmp(&c.state.x[b].z))
             .unwrap_or(0);
         let (gap0, vp) = (5e-5, 0.2);
         let mut p = fixed_plate(1, 0.04, 8, tp, -R - 0.5 * (T + tp) - gap0)?;
-        let all: Vec<usize> = (0..p.x.len()).collect();
+        let all: Vec<usize> = (0..p.state.x.len()).collect();
         p.prescribe(
             &all,
             VelocityProgram {
@@ -51,10 +51,10 @@ pub fn reissner(level: Level) -> Result<Measurement, CaseError> {
         let elements = c.element_count() + p.element_count();
         let end = 2e-4 / 2.0 + (gap0 + 0.52 * T) / vp;
         let mut run = driver(group(vec![c, p], 1e-3), end, level.safety)?;
-        let z0 = run.group.bodies[0].x[pole].z;
+        let z0 = run.group.bodies[0].state.x[pole].z;
         let mut curve = Vec::new();
         run.run(|r| {
-            let w = r.group.bodies[0].x[pole].z - z0;
+            let w = r.group.bodies[0].state.x[pole].z - z0;
             let f = r
                 .group
                 .contact_stats()
@@ -71,7 +71,7 @@ pub fn reissner(level: Level) -> Result<Measurement, CaseError> {
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
-            steps: run.group.step,
+            steps: run.clock.step,
             value: chord,
             notes: vec![],
         })
@@ -115,7 +115,7 @@ pub fn bounce(level: Level) -> Result<Measurement, CaseError> {
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
-            steps: run.group.step,
+            steps: run.clock.step,
             value: duration,
             notes: vec![
                 ("restitution".into(), rebound),
@@ -160,7 +160,7 @@ pub fn spheres_head_on(level: Level) -> Result<Measurement, CaseError> {
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
-            steps: run.group.step,
+            steps: run.clock.step,
             value: -va.x / v0,
             notes: vec![
                 ("momentum drift".into(), drift),
@@ -196,7 +196,7 @@ pub fn sphere_on_plate(level: Level) -> Result<Measurement, CaseError> {
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
-            steps: run.group.step,
+            steps: run.clock.step,
             value: run.ledger.max_error(),
             notes: vec![
                 ("restitution".into(), rebound),

@@ -3,8 +3,10 @@
 //! outcome that must never happen).
 
 use crash_core::contact::PairStats;
-use crash_core::{Body, EnergyTotals};
-use crash_master::{run_local, MasterError, RunInput, RunOptions, RunStats, Sink, SinkError};
+use crash_core::EnergyTotals;
+use crash_io::Frame;
+use crash_master::{run_with, MasterError, RunInput, RunOptions, RunStats, Sink, SinkError};
+use crash_worker::LocalWorker;
 
 /// Final |energy-balance error| above which a run that ended without a fault counts as
 /// a silent blow-up.
@@ -110,11 +112,14 @@ impl Sink for Watch {
         Ok(())
     }
 
-    fn frame(&mut self, step: u64, _time: f64, bodies: &[Body]) -> Result<(), SinkError> {
-        for b in bodies {
+    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
+        for b in &frame.bodies {
             let finite = |v: &[crash_core::Vec3]| v.iter().all(|p| p.iter().all(|c| c.is_finite()));
             if !(finite(&b.x) && finite(&b.v) && finite(&b.w)) {
-                self.flag(format!("non-finite state of body {} at step {step}", b.id));
+                self.flag(format!(
+                    "non-finite state of body {} at step {}",
+                    b.id, frame.step
+                ));
             }
         }
         Ok(())
@@ -129,7 +134,12 @@ impl Sink for Watch {
 /// classify what happened.
 pub fn run_and_classify(input: RunInput, energy_limit: f64) -> Outcome {
     let mut watch = Watch::default();
-    let result = run_local(input, 1, &mut watch, &RunOptions::default());
+    let result = run_with(
+        input,
+        &mut LocalWorker::many(1),
+        &mut watch,
+        &RunOptions::default(),
+    );
     classify(result, &watch, energy_limit)
 }
 

@@ -236,9 +236,9 @@ impl FreePlate {
             Ok(b) => b,
             Err(e) => return refused(e),
         };
-        for i in 0..b.x.len() {
-            let p = b.x0[i];
-            b.v[i] = Vec3::new(
+        for i in 0..b.state.x.len() {
+            let p = b.def.x0[i];
+            b.state.v[i] = Vec3::new(
                 0.0,
                 0.0,
                 0.5 * (std::f64::consts::PI * p.x / lx).cos() * (p.y / ly),

@@ -22,8 +22,8 @@ fn plate_frequency(
     let n = level.mesh as usize;
     let mut b = corner_plate(a, a, (n, n), kind, mat, t)?;
     let tol = 1e-9 * a;
-    for i in 0..b.x.len() {
-        let p = b.x0[i];
+    for i in 0..b.state.x.len() {
+        let p = b.def.x0[i];
         if p.x.abs() < tol || (p.x - a).abs() < tol {
             b.fix(i, dof::X | dof::Y | dof::Z | dof::RX);
         }
@@ -31,7 +31,7 @@ fn plate_frequency(
             b.fix(i, dof::X | dof::Y | dof::Z | dof::RY);
         }
         let v = 1e-3 * (PI * p.x / a).sin() * (PI * p.y / a).sin();
-        b.v[i] = Vec3::new(0.0, 0.0, v);
+        b.state.v[i] = Vec3::new(0.0, 0.0, v);
     }
     let centre = nearest(&b, Vec3::new(a / 2.0, a / 2.0, 0.0));
     let elements = b.element_count();
@@ -39,7 +39,7 @@ fn plate_frequency(
     let mut crossings = Vec::new();
     let mut prev = (0.0, 0.0);
     run.run(|r| {
-        let w = r.group.bodies[0].x[centre].z;
+        let w = r.group.bodies[0].state.x[centre].z;
         let time = r.time();
         if prev.0 > 0.0 && prev.1 * w < 0.0 {
             crossings.push(prev.0 + prev.1 / (prev.1 - w) * (time - prev.0));
@@ -55,7 +55,7 @@ fn plate_frequency(
     Ok(Raw {
         h: a / n as f64,
         elements,
-        steps: run.group.step,
+        steps: run.clock.step,
         value: f,
         notes: vec![],
     })
@@ -118,9 +118,9 @@ pub fn cantilever(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
             b.fix(n, dof::ALL);
         }
         let omega1 = 1.875f64.powi(2) * (e * inertia / (7800.0 * B * T)).sqrt() / (L * L);
-        b.mass_damping = 2.0 * omega1;
+        b.def_mut().mass_damping = 2.0 * omega1;
         let mut tip = nodes_at(&b, 0, L, 1e-9);
-        tip.sort_by(|&i, &j| b.x0[i].y.total_cmp(&b.x0[j].y));
+        tip.sort_by(|&i, &j| b.def.x0[i].y.total_cmp(&b.def.x0[j].y));
         let segs = tip.len() - 1;
         for (k, &node) in tip.iter().enumerate() {
             let w = if k == 0 || k == segs { 0.5 } else { 1.0 } / segs as f64;
@@ -136,11 +136,15 @@ pub fn cantilever(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
         let mut run = driver(group(vec![b]), 0.4, level.safety)?;
         run.run(|_| {})?;
         let b = &run.group.bodies[0];
-        let w = -tip.iter().map(|&i| b.x[i].z - b.x0[i].z).sum::<f64>() / tip.len() as f64;
+        let w = -tip
+            .iter()
+            .map(|&i| b.state.x[i].z - b.def.x0[i].z)
+            .sum::<f64>()
+            / tip.len() as f64;
         Ok(Raw {
             h: L / nx as f64,
             elements,
-            steps: run.group.step,
+            steps: run.clock.step,
             value: w,
             notes: vec![],
         })
@@ -165,7 +169,7 @@ pub fn wave_speed(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
         let nx = level.mesh as usize;
         let ny = (nx / 50).max(1);
         let mut b = corner_plate(1.0, 0.02, (nx, ny), kind, mat, 0.002)?;
-        for i in 0..b.x.len() {
+        for i in 0..b.state.x.len() {
             b.fix(i, dof::Y | dof::Z | dof::ROTATIONS);
         }
         let end = nodes_at(&b, 0, 0.0, 1e-9);
@@ -186,8 +190,8 @@ pub fn wave_speed(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
         run.run(|r| {
             let b = &r.group.bodies[0];
             for (h, set) in hist.iter_mut().zip(&sets) {
-                let v = set.iter().map(|&i| b.v[i].x).sum::<f64>() / set.len().max(1) as f64;
-                h.push((r.time() - 0.5 * r.group.h_prev, v));
+                let v = set.iter().map(|&i| b.state.v[i].x).sum::<f64>() / set.len().max(1) as f64;
+                h.push((r.time() - 0.5 * r.clock.last_dt, v));
             }
         })?;
         let c = match (arrival(&hist[0], 0.5), arrival(&hist[1], 0.5)) {
@@ -197,7 +201,7 @@ pub fn wave_speed(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
         Ok(Raw {
             h: 1.0 / nx as f64,
             elements,
-            steps: run.group.step,
+            steps: run.clock.step,
             value: c,
             notes: vec![],
         })
@@ -227,14 +231,14 @@ pub fn rigid_rotation(kind: ElementKind, level: Level) -> Result<Measurement, Ca
         let mut run = driver(group(vec![b]), end, level.safety)?;
         let mut worst = 0.0f64;
         run.run(|r| {
-            let e = r.group.bodies[0].energy;
+            let e = r.group.bodies[0].state.energy;
             worst = worst.max((e.internal.abs() + e.hourglass.abs()) / e.kinetic);
         })?;
         let dl = (run.group.bodies[0].angular_momentum() - l0).norm() / l0.norm();
         Ok(Raw {
             h: 0.1 / n as f64,
             elements,
-            steps: run.group.step,
+            steps: run.clock.step,
             value: worst,
             notes: vec![("|dL|/|L|".into(), dl)],
         })

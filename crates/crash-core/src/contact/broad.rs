@@ -20,12 +20,12 @@ pub struct BodyBox {
 impl BodyBox {
     /// Box of a body's current positions.
     pub fn of(body: &Body) -> Self {
-        let (lo, hi) = crate::mesh::bounds(&body.x);
+        let (lo, hi) = crate::mesh::bounds(&body.state.x);
         Self {
-            id: body.id,
+            id: body.def.id,
             lo,
             hi,
-            thickness: body.section.thickness,
+            thickness: body.def.section.thickness,
         }
     }
 

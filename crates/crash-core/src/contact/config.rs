@@ -58,7 +58,7 @@ impl ContactConfig {
         if self.margin > 0.0 {
             self.margin
         } else {
-            body.section.thickness
+            body.def.section.thickness
         }
     }
 

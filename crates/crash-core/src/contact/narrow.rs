@@ -27,8 +27,8 @@ pub struct Hit {
 /// Box (lo, hi) beyond which a node cannot touch the segment body: its node box grown
 /// by both half-thicknesses.
 pub fn reach_box(seg_body: &Body, node_body: &Body) -> (Vec3, Vec3) {
-    let (lo, hi) = crate::mesh::bounds(&seg_body.x);
-    let c = 0.5 * (seg_body.section.thickness + node_body.section.thickness);
+    let (lo, hi) = crate::mesh::bounds(&seg_body.state.x);
+    let c = 0.5 * (seg_body.def.section.thickness + node_body.def.section.thickness);
     (lo.add_scalar(-c), hi.add_scalar(c))
 }
 
@@ -49,64 +49,66 @@ fn box_distance(p: &Vec3, nodes: &[u32], x: &[Vec3]) -> f64 {
 /// and segments already within contact distance in the reference configuration, are
 /// excluded.
 pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit> {
-    let c = 0.5 * (nb.section.thickness + sb.section.thickness);
-    let r = 0.5 * nb.section.thickness;
+    let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
+    let r = 0.5 * nb.def.section.thickness;
     let (lo, hi) = reach_box(sb, nb);
     let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] && p[d] <= hi[d]);
-    let chunks: Vec<Vec<Hit>> =
-        nb.x.par_chunks(NODE_CHUNK)
-            .enumerate()
-            .map(|(ci, xs)| {
-                let mut out = Vec::new();
-                let mut cand = Vec::new();
-                for (k, p) in xs.iter().enumerate() {
-                    if !inside(p) {
-                        continue;
-                    }
-                    let i = (ci * NODE_CHUNK + k) as u32;
-                    surf.candidates(p, r, &mut cand);
-                    let mut best: Option<(Projection, u32)> = None;
-                    for &j in &cand {
-                        if self_pass && surf.near_in_topology(i, j) {
-                            continue;
-                        }
-                        let seg = &surf.segments[j as usize];
-                        // cheap lower bound: distance to the segment's node box; skipping
-                        // only strictly worse candidates keeps the (dist, index) choice
-                        let lb = box_distance(p, seg.nodes(), &sb.x);
-                        if lb >= c || best.as_ref().is_some_and(|(b, _)| lb > b.dist) {
-                            continue;
-                        }
-                        let pr = project(p, seg, &sb.x);
-                        let better = match &best {
-                            None => true,
-                            Some((b, bj)) => pr.dist < b.dist || (pr.dist == b.dist && j < *bj),
-                        };
-                        if better {
-                            best = Some((pr, j));
-                        }
-                    }
-                    let Some((proj, j)) = best else { continue };
-                    if proj.dist.is_nan() || proj.dist >= c {
-                        continue;
-                    }
-                    if self_pass {
-                        // already this close at the start: part of the shape, not a contact
-                        let seg = &surf.segments[j as usize];
-                        if project(&nb.x0[i as usize], seg, &sb.x0).dist < c {
-                            continue;
-                        }
-                    }
-                    out.push(Hit {
-                        node: i,
-                        segment: j,
-                        proj,
-                        depth: c - proj.dist,
-                    });
+    let chunks: Vec<Vec<Hit>> = nb
+        .state
+        .x
+        .par_chunks(NODE_CHUNK)
+        .enumerate()
+        .map(|(ci, xs)| {
+            let mut out = Vec::new();
+            let mut cand = Vec::new();
+            for (k, p) in xs.iter().enumerate() {
+                if !inside(p) {
+                    continue;
                 }
-                out
-            })
-            .collect();
+                let i = (ci * NODE_CHUNK + k) as u32;
+                surf.candidates(p, r, &mut cand);
+                let mut best: Option<(Projection, u32)> = None;
+                for &j in &cand {
+                    if self_pass && surf.near_in_topology(i, j) {
+                        continue;
+                    }
+                    let seg = &surf.segments[j as usize];
+                    // cheap lower bound: distance to the segment's node box; skipping
+                    // only strictly worse candidates keeps the (dist, index) choice
+                    let lb = box_distance(p, seg.nodes(), &sb.state.x);
+                    if lb >= c || best.as_ref().is_some_and(|(b, _)| lb > b.dist) {
+                        continue;
+                    }
+                    let pr = project(p, seg, &sb.state.x);
+                    let better = match &best {
+                        None => true,
+                        Some((b, bj)) => pr.dist < b.dist || (pr.dist == b.dist && j < *bj),
+                    };
+                    if better {
+                        best = Some((pr, j));
+                    }
+                }
+                let Some((proj, j)) = best else { continue };
+                if proj.dist.is_nan() || proj.dist >= c {
+                    continue;
+                }
+                if self_pass {
+                    // already this close at the start: part of the shape, not a contact
+                    let seg = &surf.segments[j as usize];
+                    if project(&nb.def.x0[i as usize], seg, &sb.def.x0).dist < c {
+                        continue;
+                    }
+                }
+                out.push(Hit {
+                    node: i,
+                    segment: j,
+                    proj,
+                    depth: c - proj.dist,
+                });
+            }
+            out
+        })
+        .collect();
     chunks.into_iter().flatten().collect()
 }
 
@@ -149,22 +151,22 @@ pub fn forces(
     cfg: &ContactConfig,
     dt_ref: f64,
 ) -> Vec<Push> {
-    let c = 0.5 * (nb.section.thickness + sb.section.thickness);
+    let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     hits.iter()
         .filter_map(|h| {
             let i = h.node as usize;
-            let p = nb.x[i];
+            let p = nb.state.x[i];
             let n = normal(&p, &h.proj, c);
             let seg = &surf.segments[h.segment as usize];
-            let m_star = nb.mass[i].min(surf.seg_mass[h.segment as usize]);
+            let m_star = nb.def.mass[i].min(surf.seg_mass[h.segment as usize]);
             let k = stiffness(cfg, surf, m_star, h.segment, dt_ref);
             let mut fn_ = k * h.depth;
             if cfg.damping_ratio > 0.0 {
                 let mut vs = Vec3::zeros();
                 for (q, &nd) in seg.nodes().iter().enumerate() {
-                    vs += sb.v[nd as usize] * h.proj.weights[q];
+                    vs += sb.state.v[nd as usize] * h.proj.weights[q];
                 }
-                let vn = (nb.v[i] - vs).dot(&n);
+                let vn = (nb.state.v[i] - vs).dot(&n);
                 fn_ -= 2.0 * cfg.damping_ratio * (k * m_star).sqrt() * vn;
             }
             // a penalty pushes, never pulls

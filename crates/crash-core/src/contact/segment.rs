@@ -21,11 +21,11 @@ impl Segment {
 
 /// The segments of a body: its triangles, then its quads (the element order).
 pub fn segments(body: &Body) -> Vec<Segment> {
-    let tris = body.tris.iter().map(|e| Segment {
+    let tris = body.def.tris.iter().map(|e| Segment {
         nodes: [e.nodes[0], e.nodes[1], e.nodes[2], e.nodes[2]],
         count: 3,
     });
-    let quads = body.quads.iter().map(|e| Segment {
+    let quads = body.def.quads.iter().map(|e| Segment {
         nodes: e.nodes,
         count: 4,
     });

@@ -61,15 +61,15 @@ fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
     let index: BTreeMap<u32, usize> = bodies
         .iter()
         .enumerate()
-        .filter(|(_, b)| b.contact)
-        .map(|(k, b)| (b.id, k))
+        .filter(|(_, b)| b.def.contact)
+        .map(|(k, b)| (b.def.id, k))
         .collect();
     let boxes: Vec<BodyBox> = index.values().map(|&k| BodyBox::of(&bodies[k])).collect();
     let mut pairs: Vec<(u32, u32)> = candidate_pairs(&boxes, cfg.margin);
     pairs.extend(
         index
             .iter()
-            .filter(|(_, &k)| bodies[k].self_contact)
+            .filter(|(_, &k)| bodies[k].def.self_contact)
             .map(|(&id, _)| (id, id)),
     );
     pairs.sort_unstable();
@@ -85,7 +85,7 @@ fn ensure_surface<'s>(
     skin: f64,
 ) -> &'s mut Surface {
     let s = surfaces
-        .entry(body.id)
+        .entry(body.def.id)
         .or_insert_with(|| Surface::new(body));
     if !s.fits(body) {
         *s = Surface::new(body);
@@ -115,11 +115,11 @@ pub fn contact_forces(
     let mut dt = vec![f64::INFINITY; bodies.len()];
     state.stats.clear();
     for b in bodies.iter_mut() {
-        if b.contact && cfg.enabled {
-            b.f_contact.clear();
-            b.f_contact.resize(b.x.len(), Vec3::zeros());
-        } else if !b.f_contact.is_empty() {
-            b.f_contact.clear();
+        if b.def.contact && cfg.enabled {
+            b.state.f_contact.clear();
+            b.state.f_contact.resize(b.state.x.len(), Vec3::zeros());
+        } else if !b.state.f_contact.is_empty() {
+            b.state.f_contact.clear();
         }
     }
     if !cfg.enabled {
@@ -134,7 +134,8 @@ pub fn contact_forces(
     }
     for &(ia, ib) in &pairs {
         let (a, b) = (&bodies[ia], &bodies[ib]);
-        let (Some(sa), Some(sb)) = (state.surfaces.get(&a.id), state.surfaces.get(&b.id)) else {
+        let (Some(sa), Some(sb)) = (state.surfaces.get(&a.def.id), state.surfaces.get(&b.def.id))
+        else {
             continue;
         };
         if cfg.penalty == PenaltyKind::Element {
@@ -154,15 +155,15 @@ pub fn contact_forces(
             forces(&search(b, a, sa, false), b, a, sa, cfg, dt_ref)
         };
         let mut st = PairStats {
-            a: a.id,
-            b: b.id,
+            a: a.def.id,
+            b: b.def.id,
             active_nodes: first.len() + second.len(),
             max_penetration: 0.0,
             max_penetration_ratio: 0.0,
             normal_force: 0.0,
             force_on_a: Vec3::zeros(),
         };
-        let thin = a.section.thickness.min(b.section.thickness);
+        let thin = a.def.section.thickness.min(b.def.section.thickness);
         let segs_b: Vec<Segment> = first
             .iter()
             .map(|p| sb.segments[p.hit.segment as usize])
@@ -191,8 +192,8 @@ fn apply(
     node_body_is_a: bool,
 ) {
     for (p, seg) in pushes.iter().zip(segs) {
-        bodies[inode].f_contact[p.hit.node as usize] += p.force;
-        let fc = &mut bodies[iseg].f_contact;
+        bodies[inode].state.f_contact[p.hit.node as usize] += p.force;
+        let fc = &mut bodies[iseg].state.f_contact;
         for (q, &n) in seg.nodes().iter().enumerate() {
             fc[n as usize] -= p.force * p.hit.proj.weights[q];
         }
@@ -219,10 +220,10 @@ pub fn check_moves(
     }
     for (b, &(distance, node)) in bodies.iter().zip(moves) {
         let budget = cfg.step_budget(b);
-        if b.contact && distance > budget {
+        if b.def.contact && distance > budget {
             return Err(Fault::Tunnelling {
                 step,
-                body: b.id,
+                body: b.def.id,
                 node,
                 speed: if h > 0.0 { distance / h } else { f64::INFINITY },
                 distance,
@@ -267,8 +268,8 @@ pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetra
             });
             if let Some(h) = deepest {
                 out.push(Penetration {
-                    node_body: nb.id,
-                    segment_body: sb.id,
+                    node_body: nb.def.id,
+                    segment_body: sb.def.id,
                     node: h.node as usize,
                     segment: h.segment as usize,
                     depth: h.depth,

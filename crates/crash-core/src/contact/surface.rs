@@ -64,8 +64,8 @@ fn node_adjacency(n: usize, segs: &[Segment]) -> (Vec<u32>, Vec<u32>) {
 impl Surface {
     pub fn new(body: &Body) -> Self {
         let segs = segments(body);
-        let ep = body.section.material.plate_modulus();
-        let x0 = &body.x0;
+        let ep = body.def.section.material.plate_modulus();
+        let x0 = &body.def.x0;
         let mut k_unit = Vec::with_capacity(segs.len());
         let mut seg_mass = Vec::with_capacity(segs.len());
         for s in &segs {
@@ -84,7 +84,7 @@ impl Surface {
             let m = s
                 .nodes()
                 .iter()
-                .map(|&n| body.mass[n as usize])
+                .map(|&n| body.def.mass[n as usize])
                 .fold(f64::INFINITY, f64::min);
             seg_mass.push(m);
         }
@@ -94,15 +94,15 @@ impl Surface {
             .map(|(m, k)| m / k)
             .fold(f64::INFINITY, f64::min);
         let inv_k = k_unit.iter().map(|k| 1.0 / k).fold(f64::INFINITY, f64::min);
-        let (adj_start, adj) = node_adjacency(body.x.len(), &segs);
+        let (adj_start, adj) = node_adjacency(body.state.x.len(), &segs);
         Self {
-            node_count: body.x.len(),
+            node_count: body.state.x.len(),
             segments: segs,
             k_unit,
             seg_mass,
             mass_per_k,
             inv_k,
-            min_mass: body.mass.iter().copied().fold(f64::INFINITY, f64::min),
+            min_mass: body.def.mass.iter().copied().fold(f64::INFINITY, f64::min),
             adj_start,
             adj,
             tree: RTree::new(),
@@ -115,7 +115,7 @@ impl Surface {
 
     /// Does this cache still describe `body` (same topology size)?
     pub fn fits(&self, body: &Body) -> bool {
-        self.node_count == body.x.len() && self.segments.len() == body.element_count()
+        self.node_count == body.state.x.len() && self.segments.len() == body.element_count()
     }
 
     /// Rebuild the tree if it is missing, the skin changed or a node moved farther than
@@ -123,16 +123,17 @@ impl Surface {
     pub fn refresh(&mut self, body: &Body, skin: f64) -> bool {
         let moved = || {
             let s2 = skin * skin;
-            body.x.iter().zip(&self.reference).any(|(a, b)| {
+            body.state.x.iter().zip(&self.reference).any(|(a, b)| {
                 let d2 = (a - b).norm_squared();
                 d2.is_nan() || d2 > s2
             })
         };
-        if self.built && self.skin == skin && self.reference.len() == body.x.len() && !moved() {
+        if self.built && self.skin == skin && self.reference.len() == body.state.x.len() && !moved()
+        {
             return false;
         }
-        let pad = 0.5 * body.section.thickness + skin;
-        let x = &body.x;
+        let pad = 0.5 * body.def.section.thickness + skin;
+        let x = &body.state.x;
         let entries: Vec<Entry> = self
             .segments
             .iter()

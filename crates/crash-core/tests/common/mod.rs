@@ -5,7 +5,7 @@ use crash_core::shapes::{plate, ElementKind};
 use crash_core::{Body, Material, Section, Stabilization, Vec3};
 
 pub fn steel() -> Material {
-    Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid material")
+    Material::steel()
 }
 
 pub fn body(mesh: &crash_core::Mesh, mat: Material, t: f64) -> Body {
@@ -32,8 +32,8 @@ pub fn corner_plate(
 
 /// Nodes whose coordinate `axis` is within tol of `value`.
 pub fn nodes_at(b: &Body, axis: usize, value: f64, tol: f64) -> Vec<usize> {
-    (0..b.x.len())
-        .filter(|&i| (b.x0[i][axis] - value).abs() < tol)
+    (0..b.state.x.len())
+        .filter(|&i| (b.def.x0[i][axis] - value).abs() < tol)
         .collect()
 }
 

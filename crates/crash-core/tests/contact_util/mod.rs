@@ -6,7 +6,7 @@ use crash_core::shapes::{icosphere, plate, ElementKind};
 use crash_core::{dof, Body, Group, Material, Mesh, Section, Stabilization, Vec3};
 
 pub fn steel() -> Material {
-    Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid steel")
+    Material::steel()
 }
 
 pub fn shell(id: u32, mesh: &Mesh, t: f64) -> Body {
@@ -18,7 +18,7 @@ pub fn shell(id: u32, mesh: &Mesh, t: f64) -> Body {
         Stabilization::default(),
     )
     .expect("valid body");
-    b.contact = true;
+    b.def_mut().contact = true;
     b
 }
 
@@ -36,7 +36,7 @@ pub fn fixed_plate(id: u32, lx: f64, n: usize, t: f64, z0: f64) -> Body {
     let mut m = plate(lx, lx, n, n, ElementKind::Quad);
     m.transform(&nalgebra::Matrix3::identity(), Vec3::new(0.0, 0.0, z0));
     let mut b = shell(id, &m, t);
-    for i in 0..b.x.len() {
+    for i in 0..b.state.x.len() {
         b.fix(i, dof::ALL);
     }
     b

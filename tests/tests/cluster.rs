@@ -3,11 +3,11 @@
 //! with a clear message (bounded waits everywhere, children killed on drop).
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
-mod common;
-
-use common::procs::{master, out_dir, worker};
-use common::{bits, input, rows, rows as rows_of, scene_path};
-use crash_master::{run_local, CostModel, RecordSink, RunOptions};
+use crash_master::{CostModel, RecordSink, RunOptions};
+use crash_tests::fixtures::test_scene;
+use crash_tests::procs::{master, out_dir, worker};
+use crash_tests::runs::run_local;
+use crash_tests::runs::{bits, input, rows, rows as rows_of};
 use std::path::Path;
 use std::time::Duration;
 
@@ -67,7 +67,7 @@ type RunFiles = (
 
 fn remote(scene: &str, threads: usize, tag: &str) -> RunFiles {
     let out = out_dir(tag);
-    let (mut m, url) = master(&scene_path(scene), 2, &out, &["--estimated-costs"]);
+    let (mut m, url) = master(&test_scene(scene), 2, &out, &["--estimated-costs"]);
     let mut w1 = worker(&url, threads, &[]);
     let mut w2 = worker(&url, threads, &[]);
     let status = m.wait(RUN_TIMEOUT);
@@ -139,7 +139,7 @@ fn two_worker_smoke_with_migration_over_the_wire() {
 #[test]
 fn protocol_version_mismatch_is_refused_clearly_on_both_sides() {
     let out = out_dir("version");
-    let (mut m, url) = master(&scene_path("two-spheres-tiny.toml"), 1, &out, &[]);
+    let (mut m, url) = master(&test_scene("two-spheres-tiny.toml"), 1, &out, &[]);
     let mut w = worker(&url, 1, &["--protocol-version", "999"]);
     let status = w.wait(Duration::from_secs(60));
     assert!(!status.success());
@@ -147,7 +147,7 @@ fn protocol_version_mismatch_is_refused_clearly_on_both_sides() {
     assert!(
         wlog.contains("refused this worker: protocol version mismatch")
             && wlog.contains("v999")
-            && wlog.contains(&format!("v{}", crash_proto::PROTOCOL_VERSION)),
+            && wlog.contains(&format!("v{}", crash_link::PROTOCOL_VERSION)),
         "worker said:\n{wlog}"
     );
     m.expect_line("protocol version mismatch", Duration::from_secs(10));
@@ -165,15 +165,15 @@ fn long_run(
     tag: &str,
     extra: &[&str],
 ) -> (
-    common::procs::Proc,
-    common::procs::Proc,
-    common::procs::Proc,
+    crash_tests::procs::Proc,
+    crash_tests::procs::Proc,
+    crash_tests::procs::Proc,
     std::path::PathBuf,
 ) {
     let out = out_dir(tag);
     let mut args = vec!["--end-time", "1.0"];
     args.extend_from_slice(extra);
-    let (m, url) = master(&scene_path("ten-spheres-tiny.toml"), 2, &out, &args);
+    let (m, url) = master(&test_scene("ten-spheres-tiny.toml"), 2, &out, &args);
     let w1 = worker(&url, 1, &[]);
     let w2 = worker(&url, 1, &[]);
     m.expect_line("workers attached", Duration::from_secs(60));
@@ -247,7 +247,7 @@ fn workers_exit_with_a_clear_message_when_the_master_dies() {
 #[test]
 fn a_fault_in_a_worker_process_ends_the_run_with_the_drivers_message() {
     let out = out_dir("fault");
-    let text = std::fs::read_to_string(scene_path("two-spheres-tiny.toml"))
+    let text = std::fs::read_to_string(test_scene("two-spheres-tiny.toml"))
         .unwrap()
         .replace(
             "penalty_scale = 0.1",
@@ -300,11 +300,11 @@ fn workers_started_before_the_master_attach_when_it_comes_up() {
     std::thread::sleep(Duration::from_millis(1500));
     let out = out_dir("early");
     let listen = format!("127.0.0.1:{port}");
-    let mut m = common::procs::Proc::spawn(
+    let mut m = crash_tests::procs::Proc::spawn(
         "crash-master",
-        common::procs::MASTER,
+        &crash_tests::procs::master_bin(),
         &[
-            scene_path("two-spheres-tiny.toml").to_str().unwrap(),
+            test_scene("two-spheres-tiny.toml").to_str().unwrap(),
             "--listen",
             &listen,
             "--workers",

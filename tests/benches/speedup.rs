@@ -3,22 +3,21 @@
 //! x 1 thread, and 1 worker x 2 threads, each run `REPS` times; prints the median wall
 //! time of the run (summary.json `wall_time_s`: from the first command to the last
 //! frame, without process start-up) and the speed-up over 1 x 1.
-//! Run: cargo bench -p crash-master --bench speedup
+//! Run: cargo bench -p crash-tests --bench speedup
 #![allow(clippy::unwrap_used)]
 
 use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 
-const MASTER: &str = env!("CARGO_BIN_EXE_crash-master");
-const WORKER: &str = env!("CARGO_BIN_EXE_crash-worker");
+use crash_tests::procs::{master_bin, worker_bin};
 const END_TIME: &str = "1e-3";
 const REPS: usize = 3;
 
 /// Wall time of the run [s] and its compute stage (slowest worker per step) [s].
 fn run(scene: &Path, workers: usize, threads: usize, out: &Path) -> (f64, f64) {
     let _ = std::fs::remove_dir_all(out);
-    let mut m = Command::new(MASTER)
+    let mut m = Command::new(master_bin())
         .args([
             scene.to_str().unwrap(),
             "--listen",
@@ -45,7 +44,7 @@ fn run(scene: &Path, workers: usize, threads: usize, out: &Path) -> (f64, f64) {
     };
     let mut ws: Vec<_> = (0..workers)
         .map(|_| {
-            Command::new(WORKER)
+            Command::new(worker_bin())
                 .args([
                     "--master",
                     &format!("http://{addr}"),
@@ -80,8 +79,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() {
     // cargo bench passes --bench; any other argument filters nothing here
-    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/ten-spheres-three-plates-small.toml");
+    let scene = crash_tests::fixtures::scene("ten-spheres-three-plates-small.toml");
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("speedup-run");
     let mut base = None;
     for (workers, threads) in [(1, 1), (2, 1), (1, 2)] {

@@ -1,11 +1,11 @@
 //! Restart from a checkpoint continues a run bit-identically (local workers).
 #![allow(clippy::unwrap_used)]
 
-mod common;
-
-use common::procs::{master, out_dir, worker};
-use common::{input, rows, scene_path};
-use crash_master::{resume_local, run_local, CostModel, MasterError, RecordSink, RunOptions};
+use crash_master::{CostModel, MasterError, RecordSink, RunOptions};
+use crash_tests::fixtures::test_scene;
+use crash_tests::procs::{master, out_dir, worker};
+use crash_tests::runs::run_local;
+use crash_tests::runs::{input, resume_local, rows};
 use std::time::Duration;
 
 fn opts(every: u64) -> RunOptions {
@@ -35,7 +35,7 @@ fn resumed_runs_match_the_uninterrupted_run_bit_for_bit() {
     for (k, ck) in full.checkpoints.iter().enumerate() {
         crash_io::write_checkpoint(&path, ck).unwrap();
         let ck: crash_master::MasterCheckpoint = crash_io::read_checkpoint(&path).unwrap();
-        let s = ck.step as usize;
+        let s = ck.clock.step as usize;
         let workers = 1 + k % 2;
         let mut rest = RecordSink::default();
         let st = resume_local(
@@ -95,7 +95,7 @@ fn checkpoint_of_another_scene_is_refused() {
 #[test]
 fn remote_checkpoint_resumes_locally_to_the_same_final_state() {
     let out = out_dir("restart-remote");
-    let scene = scene_path("two-spheres-tiny.toml");
+    let scene = test_scene("two-spheres-tiny.toml");
     let (mut m, url) = master(
         &scene,
         2,
@@ -109,7 +109,7 @@ fn remote_checkpoint_resumes_locally_to_the_same_final_state() {
     }
     let remote = crash_io::read_summary(out.join("summary.json")).unwrap();
     let r = crash_master::read_restart(&out.join(crash_master::RESTART_FILE)).unwrap();
-    assert!(r.master.step >= 300 && r.master.step < remote.steps);
+    assert!(r.master.clock.step >= 300 && r.master.clock.step < remote.steps);
     let mut rest = RecordSink::default();
     let st = resume_local(
         input("two-spheres-tiny.toml"),

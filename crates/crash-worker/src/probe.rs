@@ -13,7 +13,7 @@ use tonic_health::pb::health_client::HealthClient;
 use tonic_health::pb::HealthCheckRequest;
 
 /// The service whose health the master reports.
-pub const SERVICE: &str = crash_proto::pb::coordinator_server::SERVICE_NAME;
+pub const SERVICE: &str = crash_link::HEALTH_SERVICE;
 
 /// Ask the master at `url` whether it serves `crash.v1.Coordinator`. Ok when it
 /// answers SERVING within `timeout`; otherwise the reason (unreachable, no answer,

@@ -48,7 +48,7 @@ fn main() -> ExitCode {
             5.0
         };
         let timeout = Duration::from_secs_f64(secs);
-        return match crash_master::health::probe(url, timeout) {
+        return match crash_worker::probe::probe(url, timeout) {
             Ok(()) => {
                 eprintln!("crash-worker: the master at {url} is serving");
                 ExitCode::SUCCESS

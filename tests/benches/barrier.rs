@@ -6,14 +6,14 @@
 #![allow(clippy::unwrap_used)]
 
 use crash_core::shapes::{plate, ElementKind};
-use crash_core::{Body, Material, Section, Stabilization, Vec3};
-use crash_master::{Cluster, RemoteOptions, WorkerLink};
-use crash_proto::{Command, Reply, Setup};
+use crash_core::{Body, Clock, Material, Section, Stabilization, Vec3};
+use crash_link::{BodyLoad, Command, Reply, Setup, WorkerLink};
+use crash_master::{Cluster, RemoteOptions};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::time::{Duration, Instant};
 
 fn body(id: u32) -> Body {
-    let s = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).unwrap(), 0.001);
+    let s = Section::new(Material::steel(), 0.001);
     Body::new(
         id,
         "b",
@@ -25,7 +25,7 @@ fn body(id: u32) -> Body {
 }
 
 fn heavy(id: u32) -> Body {
-    let s = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).unwrap(), 0.001);
+    let s = Section::new(Material::steel(), 0.001);
     Body::new(
         id,
         "h",
@@ -57,7 +57,10 @@ fn cluster_with(n: usize, make: fn(u32) -> Body) -> Cluster {
     for (i, l) in c.links_mut().iter_mut().enumerate() {
         for cmd in [
             Command::Setup(setup),
-            Command::Load(vec![make(i as u32)]),
+            Command::Load {
+                at: Clock::default(),
+                bodies: vec![BodyLoad::whole(make(i as u32))],
+            },
             Command::Regroup(vec![vec![i as u32]]),
             Command::Start,
         ] {
@@ -85,7 +88,7 @@ fn echo_worker(url: String) {
         let (tx, rx) = tokio::sync::mpsc::unbounded_channel();
         tx.send(pb::WorkerMessage {
             reply: Some(pb::worker_message::Reply::Hello(pb::Hello {
-                protocol_version: crash_proto::PROTOCOL_VERSION,
+                protocol_version: crash_link::PROTOCOL_VERSION,
                 threads: 1,
                 host: "echo".into(),
                 pid: 0,
@@ -123,7 +126,11 @@ fn echo(c: &mut Criterion) {
     c.bench_function("stream_round_trip", |b| {
         b.iter(|| {
             let l = &mut cl.links_mut()[0];
-            l.send(Command::Step { step: 0, dt: 1e-9 }).unwrap();
+            l.send(Command::Step {
+                at: Clock::default(),
+                dt: 1e-9,
+            })
+            .unwrap();
             let Reply::Report(_) = l.recv().unwrap() else {
                 panic!("not a report")
             };
@@ -136,21 +143,25 @@ fn barrier(c: &mut Criterion) {
     g.measurement_time(Duration::from_secs(5));
     for n in [1usize, 2, 4] {
         let mut cl = cluster(n);
-        let mut step = 0u64;
+        let mut clock = Clock::default();
         g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter_custom(|iters| {
                 let t = Instant::now();
                 for _ in 0..iters {
                     let links = cl.links_mut();
                     for l in links.iter_mut() {
-                        l.send(Command::Step { step, dt: 1e-9 }).unwrap();
+                        l.send(Command::Step {
+                            at: clock,
+                            dt: 1e-9,
+                        })
+                        .unwrap();
                     }
                     for l in links.iter_mut() {
                         let Reply::Report(_) = l.recv().unwrap() else {
                             panic!("not a report")
                         };
                     }
-                    step += 1;
+                    clock = clock.after(1e-9);
                 }
                 t.elapsed()
             })
@@ -166,19 +177,23 @@ fn barrier(c: &mut Criterion) {
 /// compute time is the overhead when compute separates the messages.
 fn loaded(c: &mut Criterion) {
     let mut cl = cluster_with(1, heavy);
-    let mut step = 0u64;
+    let mut clock = Clock::default();
     let mut compute = 0u64;
     let mut n = 0u64;
     c.bench_function("barrier_step_3600_quads/1", |b| {
         b.iter(|| {
             let l = &mut cl.links_mut()[0];
-            l.send(Command::Step { step, dt: 1e-8 }).unwrap();
+            l.send(Command::Step {
+                at: clock,
+                dt: 1e-8,
+            })
+            .unwrap();
             let Reply::Report(r) = l.recv().unwrap() else {
                 panic!("not a report")
             };
             compute += r.compute_ns;
             n += 1;
-            step += 1;
+            clock = clock.after(1e-8);
         })
     });
     println!(

@@ -1,6 +1,5 @@
 //! Child processes of the cluster tests: killed on drop, stderr collected, every wait
 //! bounded.
-#![allow(dead_code, clippy::unwrap_used)]
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -9,10 +8,40 @@ use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-pub const MASTER: &str = env!("CARGO_BIN_EXE_crash-master");
-pub const WORKER: &str = env!("CARGO_BIN_EXE_crash-worker");
+/// A release binary of the workspace, next to the running test executable
+/// (`target/release/deps/..` -> `target/release/NAME`).
+pub fn bin(name: &str) -> String {
+    let exe = std::env::current_exe().unwrap();
+    let dir = exe
+        .parent()
+        .and_then(|d| {
+            if d.ends_with("deps") {
+                d.parent()
+            } else {
+                Some(d)
+            }
+        })
+        .unwrap()
+        .to_path_buf();
+    let path = dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is missing: build the workspace first (cargo build --release --workspace)",
+        path.display()
+    );
+    path.to_string_lossy().into_owned()
+}
+
+pub fn master_bin() -> String {
+    bin("crash-master")
+}
+
+pub fn worker_bin() -> String {
+    bin("crash-worker")
+}
 
 /// A child process whose stderr is collected line by line.
+#[allow(missing_debug_implementations)]
 pub struct Proc {
     pub name: String,
     child: Child,
@@ -121,9 +150,15 @@ impl Drop for Proc {
     }
 }
 
-/// A fresh directory under the target's test tmp dir.
+/// A fresh directory under the target dir's `tmp/`.
 pub fn out_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+    let exe = std::env::current_exe().unwrap();
+    let target = exe
+        .ancestors()
+        .find(|a| a.file_name().is_some_and(|n| n == "target"))
+        .map_or_else(std::env::temp_dir, Path::to_path_buf);
+    let d = target
+        .join("tmp")
         .join(format!("cluster-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
@@ -145,7 +180,7 @@ pub fn master(scene: &Path, workers: usize, out: &Path, extra: &[&str]) -> (Proc
         "60",
     ];
     args.extend_from_slice(extra);
-    let m = Proc::spawn("crash-master", MASTER, &args);
+    let m = Proc::spawn("crash-master", &master_bin(), &args);
     let line = m.expect_line("listening on", Duration::from_secs(60));
     let addr = line.rsplit(' ').next().unwrap().trim().to_string();
     (m, format!("http://{addr}"))
@@ -155,5 +190,5 @@ pub fn worker(url: &str, threads: usize, extra: &[&str]) -> Proc {
     let t = threads.to_string();
     let mut args = vec!["--master", url, "--threads", &t, "--connect-timeout", "30"];
     args.extend_from_slice(extra);
-    Proc::spawn("crash-worker", WORKER, &args)
+    Proc::spawn("crash-worker", &worker_bin(), &args)
 }

@@ -1,16 +1,20 @@
-//! Round trips through the wire format must be bit-exact.
+//! Round trips through the wire format (crash-proto's bodies, reports and faults;
+//! crash-link's commands and replies) must be bit-exact.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_core::body::NodalLoad;
 use crash_core::shapes::{icosphere, plate, ElementKind};
 use crash_core::{
-    dof, hash::state_hash, Body, BodyReport, Fault, Group, Material, Section, Stabilization, Vec3,
-    VelocityProgram,
+    dof, hash::state_hash, Body, BodyReport, Clock, Fault, Group, Material, Section, Stabilization,
+    Vec3, VelocityProgram,
 };
-use crash_proto::msg::{command_from_pb, command_to_pb, reply_to_pb, report_from_pb};
+use crash_link::wire::{
+    command_from_pb, command_to_pb, reply_from_pb, reply_to_pb, report_from_pb,
+};
+use crash_link::{BodyLoad, Command, GroupTime, Reply, StepReport};
 use crash_proto::pb::worker_message::Reply as PbReply;
 use crash_proto::report::{fault_from_pb, fault_to_pb};
-use crash_proto::{body_from_pb, body_to_pb, Command, Reply, StepReport};
+use crash_proto::{body_from_pb, body_to_pb};
 use prost::Message;
 
 fn steel() -> Section {
@@ -45,9 +49,9 @@ fn evolved_bodies() -> Vec<Body> {
         t0: 0.0,
         t1: 2e-5,
     });
-    p.mass_damping = 3.0;
-    p.contact = true;
-    p.self_contact = true;
+    p.def_mut().mass_damping = 3.0;
+    p.def_mut().contact = true;
+    p.def_mut().self_contact = true;
     let mut s = Body::new(
         1,
         "ball",
@@ -63,12 +67,14 @@ fn evolved_bodies() -> Vec<Body> {
     );
     let mut g = Group::new(vec![p, s], Vec3::new(0.0, 0.0, -9.81));
     g.start().unwrap();
+    let mut clock = Clock::default();
     for _ in 0..25 {
-        g.advance(2e-7).unwrap();
+        g.advance(&clock, 2e-7).unwrap();
+        clock = clock.after(2e-7);
     }
     for b in &mut g.bodies {
         // Contact forces are written by the contact stage; give them non-trivial bits.
-        b.f_contact = (0..b.x.len())
+        b.state.f_contact = (0..b.state.x.len())
             .map(|i| Vec3::new(i as f64 * 0.1, -1e-300, 3.0))
             .collect();
     }
@@ -84,8 +90,8 @@ fn body_round_trip_keeps_every_field_bit_exact() {
     for b in evolved_bodies() {
         let bytes = body_to_pb(&b).encode_to_vec();
         let back = body_from_pb(&crash_proto::pb::Body::decode(bytes.as_slice()).unwrap()).unwrap();
-        assert_eq!(json(&b), json(&back), "body {}", b.name);
-        assert!(!b.hourglass.is_empty() || b.name == "ball");
+        assert_eq!(json(&b), json(&back), "body {}", b.def.name);
+        assert!(!b.state.hourglass.is_empty() || b.def.name == "ball");
     }
 }
 
@@ -98,15 +104,16 @@ fn migrated_bodies_continue_bit_identically() {
         .collect();
     let mut a = Group::new(bodies, Vec3::new(0.0, 0.0, -9.81));
     let mut b = Group::new(copies, Vec3::new(0.0, 0.0, -9.81));
-    for g in [&mut a, &mut b] {
-        g.time = 25.0 * 2e-7;
-        g.step = 25;
-        g.h_prev = 2e-7;
-    }
+    let mut clock = Clock {
+        step: 25,
+        time: 25.0 * 2e-7,
+        last_dt: 2e-7,
+    };
     for _ in 0..40 {
-        let ra = a.advance(2.1e-7).unwrap();
-        let rb = b.advance(2.1e-7).unwrap();
+        let ra = a.advance(&clock, 2.1e-7).unwrap();
+        let rb = b.advance(&clock, 2.1e-7).unwrap();
         assert_eq!(ra, rb);
+        clock = clock.after(2.1e-7);
     }
     assert_eq!(state_hash(&a.bodies), state_hash(&b.bodies));
 }
@@ -182,10 +189,10 @@ fn every_fault_variant_round_trips() {
 #[test]
 fn step_report_round_trips_bit_exact() {
     let mut g = Group::new(evolved_bodies(), Vec3::zeros());
-    let bodies: Vec<BodyReport> = g.advance(1e-7).unwrap();
+    let bodies: Vec<BodyReport> = g.advance(&Clock::default(), 1e-7).unwrap();
     let rep = StepReport {
         bodies,
-        groups: vec![crash_proto::GroupTime {
+        groups: vec![GroupTime {
             first: 0,
             nanos: 12345,
         }],
@@ -217,26 +224,48 @@ fn step_report_round_trips_bit_exact() {
 #[test]
 fn commands_round_trip() {
     let bodies = evolved_bodies();
+    let at = Clock {
+        step: 41,
+        time: 8.2e-6,
+        last_dt: 1.9e-7,
+    };
+    let loads = || {
+        bodies
+            .iter()
+            .cloned()
+            .map(BodyLoad::whole)
+            .collect::<Vec<_>>()
+    };
     let cmds = [
         Command::Regroup(vec![vec![0, 3, 9], vec![1], vec![2, 4]]),
-        Command::Step {
-            step: 41,
-            dt: 1.234e-7,
+        Command::Step { at, dt: 1.234e-7 },
+        Command::Unload {
+            ids: vec![5, 2],
+            with_def: vec![2],
         },
-        Command::Unload(vec![5, 2]),
-        Command::Load(bodies.clone()),
+        Command::Load {
+            at,
+            bodies: loads(),
+        },
+        Command::Frame,
+        Command::States,
         Command::Shutdown("done".into()),
     ];
     for c in cmds {
-        let bytes = command_to_pb(&c).encode_to_vec();
+        let bytes = command_to_pb(&c, |_| false).encode_to_vec();
         let back =
             command_from_pb(&crash_proto::pb::MasterMessage::decode(bytes.as_slice()).unwrap())
                 .unwrap();
         match (&c, &back) {
-            (Command::Load(a), Command::Load(b)) => {
+            (Command::Load { at: ta, bodies: a }, Command::Load { at: tb, bodies: b }) => {
+                assert!(ta.same_as(tb));
                 assert_eq!(a.len(), b.len());
                 for (x, y) in a.iter().zip(b) {
-                    assert_eq!(json(x), json(y));
+                    let (x, y) = (
+                        x.clone().into_body(None).unwrap(),
+                        y.clone().into_body(None).unwrap(),
+                    );
+                    assert_eq!(json(&x), json(&y));
                 }
             }
             _ => assert_eq!(format!("{c:?}"), format!("{back:?}")),
@@ -245,8 +274,59 @@ fn commands_round_trip() {
 }
 
 #[test]
+fn a_definition_the_worker_holds_is_not_sent_again() {
+    let bodies = evolved_bodies();
+    let load = Command::Load {
+        at: Clock::default(),
+        bodies: bodies.iter().cloned().map(BodyLoad::whole).collect(),
+    };
+    let first = command_to_pb(&load, |_| false).encode_to_vec().len();
+    let again = command_to_pb(&load, |_| true).encode_to_vec().len();
+    let defs: usize = bodies
+        .iter()
+        .map(|b| crash_proto::def_to_pb(&b.def).encode_to_vec().len())
+        .sum();
+    assert!(
+        again + defs <= first,
+        "states only: {again} bytes, with definitions {first} (definitions {defs})"
+    );
+    let back = command_from_pb(&command_to_pb(&load, |_| true)).unwrap();
+    let Command::Load { bodies: b, .. } = back else {
+        panic!("not a load")
+    };
+    // joined with the definitions held, the states give back the same bodies
+    for (orig, l) in bodies.iter().zip(b) {
+        assert!(l.def.is_none());
+        let body = l.into_body(Some(&orig.def)).unwrap();
+        assert_eq!(json(orig), json(&body));
+    }
+}
+
+#[test]
+fn frames_and_states_round_trip_bit_exact() {
+    let bodies = evolved_bodies();
+    let frame: Vec<crash_io::FrameBody> = bodies.iter().map(crash_io::FrameBody::capture).collect();
+    let msg = reply_to_pb(&Reply::Frame(frame.clone()));
+    let back = reply_from_pb(
+        &crash_proto::pb::WorkerMessage::decode(msg.encode_to_vec().as_slice()).unwrap(),
+    )
+    .unwrap();
+    let Reply::Frame(got) = back else {
+        panic!("not a frame")
+    };
+    assert_eq!(got, frame);
+    let states: Vec<(u32, crash_core::BodyState)> =
+        bodies.iter().map(|b| (b.def.id, b.state.clone())).collect();
+    let msg = reply_to_pb(&Reply::States(states.clone()));
+    let Reply::States(got) = reply_from_pb(&msg).unwrap() else {
+        panic!("not states")
+    };
+    assert_eq!(got, states);
+}
+
+#[test]
 fn regroup_with_inconsistent_sizes_is_refused() {
-    let mut m = command_to_pb(&Command::Regroup(vec![vec![0, 1], vec![2]]));
+    let mut m = command_to_pb(&Command::Regroup(vec![vec![0, 1], vec![2]]), |_| false);
     if let Some(crash_proto::pb::master_message::Command::Regroup(r)) = m.command.as_mut() {
         r.sizes[1] = 5;
     }

@@ -3,14 +3,16 @@
 //! (or the master gone) is a failure.
 #![allow(clippy::unwrap_used)]
 
-mod common;
-
-use common::procs::{master, out_dir, worker, Proc, WORKER};
-use common::scene_path;
+use crash_tests::fixtures::test_scene;
+use crash_tests::procs::{master, out_dir, worker, Proc};
 use std::time::Duration;
 
 fn probe(url: &str) -> (bool, String) {
-    let mut p = Proc::spawn("probe", WORKER, &["--probe", url, "--probe-timeout", "5"]);
+    let mut p = Proc::spawn(
+        "probe",
+        &crash_tests::procs::worker_bin(),
+        &["--probe", url, "--probe-timeout", "5"],
+    );
     let ok = p.wait(Duration::from_secs(30)).success();
     (ok, p.log())
 }
@@ -18,7 +20,7 @@ fn probe(url: &str) -> (bool, String) {
 #[test]
 fn probe_succeeds_against_a_running_master_and_fails_against_nothing() {
     let out = out_dir("probe");
-    let (mut m, url) = master(&scene_path("two-spheres-tiny.toml"), 1, &out, &[]);
+    let (mut m, url) = master(&test_scene("two-spheres-tiny.toml"), 1, &out, &[]);
     // waiting for its worker: serving
     let (ok, log) = probe(&url);
     assert!(ok, "{log}");

@@ -3,10 +3,9 @@
 //! the workers again; the results stay bit-identical to one worker.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
-mod common;
-
-use common::{driver_reference, input, rows};
-use crash_master::{run_local, CostModel, Migration, RecordSink, RunOptions};
+use crash_master::{CostModel, Migration, RecordSink, RunOptions};
+use crash_tests::runs::run_local;
+use crash_tests::runs::{driver_reference, input, rows};
 
 #[test]
 fn colliding_bodies_join_one_worker_and_spread_again_after_separation() {

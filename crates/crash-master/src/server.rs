@@ -1,5 +1,7 @@
-//! Worker processes over gRPC: the master serves `crash.v1.Coordinator`, each worker
-//! dials in and keeps one bidirectional stream open for the whole run.
+//! The master's gRPC server: it serves `crash.v1.Coordinator` (and grpc.health.v1),
+//! each worker dials in, says Hello and keeps one bidirectional stream open for the
+//! whole run; `Cluster::accept` turns the attached workers into links
+//! (`remote_link::RemoteWorker`).
 //!
 //! Threads: one current-thread tokio runtime, owned by the master's thread and driven
 //! only while the master waits for replies (`RemoteWorker::recv` blocks on it). The
@@ -8,15 +10,12 @@
 //! the kernel) keeps connections alive while the master is busy between steps.
 
 use crate::error::MasterError;
-use crate::link::{LinkError, WorkerLink};
-use crash_core::Body;
-use crash_proto::msg::{command_to_pb, report_from_pb};
+use crate::remote_link::{Outbound, RemoteWorker};
+use crash_link::{check_version, HEALTH_SERVICE, PROTOCOL_VERSION};
 use crash_proto::pb::coordinator_server::{Coordinator, CoordinatorServer};
 use crash_proto::pb::worker_message::Reply as PbReply;
-use crash_proto::pb::{self, failure, master_message};
-use crash_proto::report::fault_from_pb;
-use crash_proto::{apply_state, Command, Reply, PROTOCOL_VERSION};
-use std::collections::BTreeMap;
+use crash_proto::pb::{self, master_message};
+use std::collections::BTreeSet;
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -44,8 +43,6 @@ impl Default for RemoteOptions {
         }
     }
 }
-
-type Outbound = mpsc::UnboundedSender<Result<pb::MasterMessage, Status>>;
 
 /// A worker that said a valid Hello.
 struct Attached {
@@ -82,13 +79,9 @@ impl Coordinator for Service {
             }
         };
         let who = format!("worker {}:{} at {peer}", hello.host, hello.pid);
-        if hello.protocol_version != PROTOCOL_VERSION {
-            let msg = format!(
-                "protocol version mismatch: {who} speaks crash protocol v{}, this master speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker",
-                hello.protocol_version
-            );
-            tracing::error!("refused {who}: {msg}");
-            return Err(Status::failed_precondition(msg));
+        if let Err(e) = check_version(hello.protocol_version, &who, "master") {
+            tracing::error!("refused {who}: {e}");
+            return Err(Status::failed_precondition(e.to_string()));
         }
         let (outbound, rx) = mpsc::unbounded_channel();
         let sender = self.attach.lock().ok().and_then(|g| g.clone());
@@ -160,8 +153,7 @@ impl Cluster {
         // grpc.health.v1.Health: SERVING for the coordinator while this cluster lives
         let (reporter, health) = tonic_health::server::health_reporter();
         rt.block_on(
-            reporter
-                .set_service_status(crate::health::SERVICE, tonic_health::ServingStatus::Serving),
+            reporter.set_service_status(HEALTH_SERVICE, tonic_health::ServingStatus::Serving),
         );
         let (stop, stopped) = oneshot::channel::<()>();
         let incoming = TcpListenerStream::new(listener);
@@ -259,7 +251,7 @@ impl Cluster {
                 threads: a.hello.threads,
                 tx: Some(a.outbound),
                 inbound: a.inbound,
-                mirror: BTreeMap::new(),
+                sent: BTreeSet::new(),
                 timeout: self.opts.reply_timeout,
             });
         }
@@ -277,133 +269,5 @@ impl Drop for Cluster {
         if let Some(s) = self.stop.take() {
             let _ = s.send(());
         }
-    }
-}
-
-/// A worker process seen from the master. Keeps a copy of the definition of every
-/// body it sent (the mirror): snapshots and unloads then travel as states only.
-pub struct RemoteWorker {
-    rt: Arc<Runtime>,
-    index: usize,
-    peer: String,
-    threads: u32,
-    tx: Option<Outbound>,
-    inbound: Streaming<pb::WorkerMessage>,
-    mirror: BTreeMap<u32, Body>,
-    timeout: Duration,
-}
-
-impl std::fmt::Debug for RemoteWorker {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("RemoteWorker")
-            .field("index", &self.index)
-            .field("peer", &self.peer)
-            .field("threads", &self.threads)
-            .field("bodies", &self.mirror.len())
-            .finish()
-    }
-}
-
-impl RemoteWorker {
-    pub fn threads(&self) -> u32 {
-        self.threads
-    }
-
-    fn recv_within(&mut self, timeout: Duration) -> Result<Reply, LinkError> {
-        // the timer must be created inside the runtime
-        let inbound = &mut self.inbound;
-        let msg = match self
-            .rt
-            .block_on(async { tokio::time::timeout(timeout, inbound.message()).await })
-        {
-            Err(_) => {
-                return Err(LinkError::Timeout(format!(
-                    "no reply within {:.1} s",
-                    timeout.as_secs_f64()
-                )))
-            }
-            Ok(Err(s)) => return Err(LinkError::Lost(format!("{}: {}", s.code(), s.message()))),
-            Ok(Ok(None)) => return Err(LinkError::Lost("the worker closed its stream".into())),
-            Ok(Ok(Some(m))) => m,
-        };
-        self.decode(msg).map_err(LinkError::Protocol)
-    }
-
-    fn decode(&mut self, msg: pb::WorkerMessage) -> Result<Reply, String> {
-        Ok(match msg.reply.ok_or("empty reply")? {
-            PbReply::Ack(_) => Reply::Ack,
-            PbReply::Report(r) => Reply::Report(report_from_pb(&r).map_err(|e| e.to_string())?),
-            PbReply::Unloaded(b) => {
-                let mut out = Vec::with_capacity(b.states.len());
-                for s in &b.states {
-                    let mut body = self
-                        .mirror
-                        .remove(&s.id)
-                        .ok_or_else(|| format!("unloaded body {} was never sent", s.id))?;
-                    apply_state(&mut body, s).map_err(|e| e.to_string())?;
-                    out.push(body);
-                }
-                Reply::Unloaded(out)
-            }
-            PbReply::Snapshot(b) => {
-                let mut out = Vec::with_capacity(b.states.len());
-                for s in &b.states {
-                    let body = self
-                        .mirror
-                        .get_mut(&s.id)
-                        .ok_or_else(|| format!("snapshot of body {} that was never sent", s.id))?;
-                    apply_state(body, s).map_err(|e| e.to_string())?;
-                    out.push(body.clone());
-                }
-                Reply::Snapshot(out)
-            }
-            PbReply::Failure(f) => match f.kind.ok_or("empty failure")? {
-                failure::Kind::Fault(fault) => Reply::Fault {
-                    group_first: f.group_first,
-                    fault: fault_from_pb(&fault).map_err(|e| e.to_string())?,
-                },
-                failure::Kind::Error(e) => Reply::Error(e),
-            },
-            PbReply::Hello(_) => return Err("a second Hello".into()),
-        })
-    }
-}
-
-impl WorkerLink for RemoteWorker {
-    fn send(&mut self, cmd: Command) -> Result<(), LinkError> {
-        let msg = command_to_pb(&cmd);
-        if let Command::Load(bodies) = cmd {
-            for b in bodies {
-                self.mirror.insert(b.id, b);
-            }
-        }
-        self.tx
-            .as_ref()
-            .ok_or_else(|| LinkError::Lost("already shut down".into()))?
-            .send(Ok(msg))
-            .map_err(|_| LinkError::Lost("the connection is closed".into()))
-    }
-
-    fn recv(&mut self) -> Result<Reply, LinkError> {
-        self.recv_within(self.timeout)
-    }
-
-    fn peer(&self) -> String {
-        self.peer.clone()
-    }
-
-    fn close(&mut self, reason: &str) {
-        if self.send(Command::Shutdown(reason.into())).is_ok() {
-            let _ = self.recv_within(Duration::from_secs(2));
-        }
-        // ending the response stream lets the worker exit
-        self.tx = None;
-        let inbound = &mut self.inbound;
-        self.rt.block_on(async {
-            let _ = tokio::time::timeout(Duration::from_millis(500), async {
-                while let Ok(Some(_)) = inbound.message().await {}
-            })
-            .await;
-        });
     }
 }

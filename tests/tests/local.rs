@@ -2,10 +2,9 @@
 //! single-process core driver, whatever the number of workers.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
-mod common;
-
-use common::{driver_reference, input, rows};
-use crash_master::{run_local, CostModel, RecordSink, RunOptions};
+use crash_master::{CostModel, RecordSink, RunOptions};
+use crash_tests::runs::run_local;
+use crash_tests::runs::{driver_reference, input, rows};
 
 const SCENE: &str = "ten-spheres-tiny.toml";
 
@@ -59,7 +58,7 @@ fn local_workers_match_the_core_driver_bit_for_bit() {
 /// a tiny contact margin).
 #[test]
 fn a_fault_in_a_worker_is_the_drivers_fault() {
-    let text = std::fs::read_to_string(common::scene_path("two-spheres-tiny.toml"))
+    let text = std::fs::read_to_string(crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
         .unwrap()
         .replace(
             "penalty_scale = 0.1",

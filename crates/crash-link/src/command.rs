@@ -1,0 +1,124 @@
+//! The commands a master sends and the replies a worker gives (exactly one per command).
+
+use crash_core::contact::{ContactConfig, PairStats};
+use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Fault, Vec3};
+use crash_io::FrameBody;
+use std::sync::Arc;
+
+/// Run-wide parameters every group needs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Setup {
+    pub gravity: Vec3,
+    pub contact: ContactConfig,
+}
+
+/// A body handed to or from a worker: its state, and its definition when the receiver
+/// may lack it (`None`: the receiver already holds the definition of body `id`).
+#[derive(Debug, Clone)]
+pub struct BodyLoad {
+    pub id: u32,
+    pub def: Option<Arc<BodyDef>>,
+    pub state: BodyState,
+}
+
+impl BodyLoad {
+    /// A whole body (definition included).
+    pub fn whole(b: Body) -> Self {
+        Self {
+            id: b.def.id,
+            def: Some(b.def),
+            state: b.state,
+        }
+    }
+
+    /// Join with a definition (the carried one, else `known`), checking that they fit.
+    pub fn into_body(self, known: Option<&Arc<BodyDef>>) -> Result<Body, CoreError> {
+        let def = match (self.def, known) {
+            (Some(d), _) => d,
+            (None, Some(d)) => d.clone(),
+            (None, None) => {
+                return Err(CoreError::Other {
+                    body: format!("body {}", self.id),
+                    what: "its state arrived without a definition, and none is held".into(),
+                })
+            }
+        };
+        if def.id != self.id {
+            return Err(CoreError::Other {
+                body: def.name.clone(),
+                what: format!("the state of body {} came with this definition", self.id),
+            });
+        }
+        Body::from_parts(def, self.state)
+    }
+}
+
+/// What the master tells a worker. Every command gets exactly one [`Reply`].
+#[derive(Debug, Clone)]
+pub enum Command {
+    Setup(Setup),
+    /// Take these bodies; their states are at clock `at`.
+    Load {
+        at: Clock,
+        bodies: Vec<BodyLoad>,
+    },
+    /// Give these bodies back and forget them; include the definition of the ids in
+    /// `with_def` (their next worker lacks it).
+    Unload {
+        ids: Vec<u32>,
+        with_def: Vec<u32>,
+    },
+    /// The groups the worker integrates from now on (each sorted by id, the groups by
+    /// their smallest id); every body held appears exactly once.
+    Regroup(Vec<Vec<u32>>),
+    /// Forces of the initial configuration.
+    Start,
+    /// Take the step of length `dt` that starts at clock `at`.
+    Step {
+        at: Clock,
+        dt: f64,
+    },
+    /// What an output frame shows of every body held.
+    Frame,
+    /// The state of every body held (a checkpoint).
+    States,
+    Shutdown(String),
+}
+
+/// Compute time of one group in one step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GroupTime {
+    /// Smallest body id of the group.
+    pub first: u32,
+    pub nanos: u64,
+}
+
+/// A worker's answer to Start or Step.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepReport {
+    pub bodies: Vec<BodyReport>,
+    pub groups: Vec<GroupTime>,
+    /// Wall time the worker spent on the command.
+    pub compute_ns: u64,
+    /// Contact statistics of the worker's groups, group after group.
+    pub contacts: Vec<PairStats>,
+}
+
+#[derive(Debug, Clone)]
+pub enum Reply {
+    Ack,
+    Report(StepReport),
+    /// The unloaded bodies, sorted by id.
+    Unloaded(Vec<BodyLoad>),
+    /// Frame data of every body held, sorted by id.
+    Frame(Vec<FrameBody>),
+    /// (id, state) of every body held, sorted by id.
+    States(Vec<(u32, BodyState)>),
+    /// A physical fault in the group whose smallest body id is `group_first`.
+    Fault {
+        group_first: u32,
+        fault: Fault,
+    },
+    /// The command could not be carried out (a protocol or bookkeeping error).
+    Error(String),
+}

@@ -1,0 +1,40 @@
+//! How the master talks to a worker: one trait for in-process and remote workers.
+//!
+//! `send` queues a command, `recv` returns the replies in order (exactly one per
+//! command). The master sends a step to every worker before it waits for any reply,
+//! so remote workers compute concurrently.
+
+use crate::command::{Command, Reply};
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum LinkError {
+    /// The worker is gone (connection closed or reset).
+    #[error("disconnected: {0}")]
+    Lost(String),
+    /// No reply within the timeout.
+    #[error("stopped answering: no reply within {seconds:.1} s")]
+    Timeout { seconds: f64 },
+    /// A reply that breaks the protocol.
+    #[error("protocol error: {0}")]
+    Protocol(String),
+    /// The worker could not carry out a command (its own words).
+    #[error("refused a command: {0}")]
+    Refused(String),
+}
+
+pub trait WorkerLink {
+    fn send(&mut self, cmd: Command) -> Result<(), LinkError>;
+    fn recv(&mut self) -> Result<Reply, LinkError>;
+    /// Where the worker is, for messages.
+    fn peer(&self) -> String;
+    /// Whether the worker holds the definition of body `id` (a body moving there then
+    /// travels as its state only).
+    fn has_definition(&self, id: u32) -> bool;
+    /// Tell the worker to stop (best effort: it may be gone; must not block long).
+    fn close(&mut self, reason: &str) {
+        if self.send(Command::Shutdown(reason.into())).is_ok() {
+            let _ = self.recv();
+        }
+    }
+}

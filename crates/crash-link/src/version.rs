@@ -1,0 +1,47 @@
+//! The handshake rule: master and worker speak the same protocol version or refuse
+//! each other with a message that names both.
+
+use thiserror::Error;
+
+/// Version of the master <-> worker protocol. Raise it whenever a message changes
+/// meaning. v2: bodies split into definition and state, the clock in Step and Load,
+/// frames and states requested apart.
+pub const PROTOCOL_VERSION: u32 = 2;
+
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]
+pub struct VersionError {
+    pub peer: String,
+    pub theirs: u32,
+    pub me: &'static str,
+}
+
+/// Accept a peer that speaks `theirs`. `peer` and `me` name the two ends in the error.
+pub fn check_version(theirs: u32, peer: &str, me: &'static str) -> Result<(), VersionError> {
+    if theirs == PROTOCOL_VERSION {
+        Ok(())
+    } else {
+        Err(VersionError {
+            peer: peer.to_string(),
+            theirs,
+            me,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_different_version_is_refused_naming_both() {
+        assert!(check_version(PROTOCOL_VERSION, "w", "master").is_ok());
+        let e = check_version(PROTOCOL_VERSION + 1, "worker a:1", "master").expect_err("refused");
+        let s = e.to_string();
+        assert!(
+            s.contains(&format!("v{}", PROTOCOL_VERSION + 1))
+                && s.contains(&format!("v{PROTOCOL_VERSION}")),
+            "{s}"
+        );
+    }
+}

@@ -1,0 +1,389 @@
+//! Commands and replies <-> generated wire messages, at the network edge. Bodies travel
+//! as a state plus, when the receiver lacks it, a definition (crash-proto's body
+//! conversions); the clock travels in Step and Load.
+
+use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
+use crash_core::contact::{ContactConfig, PenaltyKind};
+use crash_core::{Clock, Vec3};
+use crash_io::FrameBody;
+use crash_proto::pb;
+use crash_proto::pb::master_message::Command as PbCommand;
+use crash_proto::pb::worker_message::Reply as PbReply;
+use crash_proto::report::{
+    contacts_from_pb, contacts_to_pb, fault_from_pb, fault_to_pb, reports_from_pb, reports_to_pb,
+};
+use crash_proto::{def_from_pb, def_to_pb, state_from_pb, state_to_pb, vec3_to_pb, ProtoError};
+
+fn contact_to_pb(c: &ContactConfig) -> pb::ContactConfig {
+    pb::ContactConfig {
+        enabled: c.enabled,
+        margin: c.margin,
+        penalty_scale: c.penalty_scale,
+        penalty: match c.penalty {
+            PenaltyKind::Soft => "soft",
+            PenaltyKind::Element => "element",
+        }
+        .into(),
+        damping_ratio: c.damping_ratio,
+    }
+}
+
+fn contact_from_pb(c: &pb::ContactConfig) -> Result<ContactConfig, ProtoError> {
+    Ok(ContactConfig {
+        enabled: c.enabled,
+        margin: c.margin,
+        penalty_scale: c.penalty_scale,
+        penalty: match c.penalty.as_str() {
+            "soft" => PenaltyKind::Soft,
+            "element" => PenaltyKind::Element,
+            other => {
+                return Err(ProtoError::Invalid(format!(
+                    "unknown penalty kind '{other}'"
+                )))
+            }
+        },
+        damping_ratio: c.damping_ratio,
+    })
+}
+
+fn clock_to_pb(c: &Clock) -> pb::Clock {
+    pb::Clock {
+        step: c.step,
+        time: c.time,
+        last_dt: c.last_dt,
+    }
+}
+
+fn clock_from_pb(c: Option<&pb::Clock>) -> Result<Clock, ProtoError> {
+    let c = c.ok_or(ProtoError::Missing("clock"))?;
+    Ok(Clock {
+        step: c.step,
+        time: c.time,
+        last_dt: c.last_dt,
+    })
+}
+
+/// A body load; `with_def`: send the definition if the load carries one.
+pub fn load_to_pb(b: &BodyLoad, with_def: bool) -> pb::BodyLoad {
+    pb::BodyLoad {
+        def: b.def.as_ref().filter(|_| with_def).map(|d| def_to_pb(d)),
+        state: Some(state_to_pb(b.id, &b.state)),
+    }
+}
+
+pub fn load_from_pb(p: &pb::BodyLoad) -> Result<BodyLoad, ProtoError> {
+    let s = p
+        .state
+        .as_ref()
+        .ok_or(ProtoError::Missing("body_load.state"))?;
+    let state = state_from_pb(s)?;
+    let def = match &p.def {
+        Some(d) => {
+            if d.id != s.id {
+                return Err(ProtoError::Invalid(format!(
+                    "body definition {} carries the state of body {}",
+                    d.id, s.id
+                )));
+            }
+            Some(def_from_pb(d)?.def)
+        }
+        None => None,
+    };
+    Ok(BodyLoad {
+        id: s.id,
+        def,
+        state,
+    })
+}
+
+fn pack3(v: &[Vec3]) -> Vec<f64> {
+    v.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+}
+
+fn unpack3(id: u32, field: &'static str, d: &[f64]) -> Result<Vec<Vec3>, ProtoError> {
+    if d.len() % 3 != 0 {
+        return Err(ProtoError::Invalid(format!(
+            "frame of body {id}: '{field}' is not whole triples"
+        )));
+    }
+    Ok(d.chunks_exact(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect())
+}
+
+fn frame_body_to_pb(b: &FrameBody) -> pb::FrameBody {
+    pb::FrameBody {
+        id: b.id,
+        name: b.name.clone(),
+        thickness: b.thickness,
+        x: pack3(&b.x),
+        x0: pack3(&b.x0),
+        v: pack3(&b.v),
+        w: pack3(&b.w),
+        tris: b.tris.iter().flatten().copied().collect(),
+        quads: b.quads.iter().flatten().copied().collect(),
+        von_mises_top: b.von_mises_top.clone(),
+        von_mises_bottom: b.von_mises_bottom.clone(),
+        n: b.n.iter().flatten().copied().collect(),
+        m: b.m.iter().flatten().copied().collect(),
+        f_contact: pack3(&b.f_contact),
+    }
+}
+
+fn frame_body_from_pb(p: &pb::FrameBody) -> Result<FrameBody, ProtoError> {
+    let id = p.id;
+    let bad = |what: &str| ProtoError::Invalid(format!("frame of body {id}: {what}"));
+    let x = unpack3(id, "x", &p.x)?;
+    let nn = x.len() as u32;
+    let x0 = unpack3(id, "x0", &p.x0)?;
+    let v = unpack3(id, "v", &p.v)?;
+    let w = unpack3(id, "w", &p.w)?;
+    let f_contact = unpack3(id, "f_contact", &p.f_contact)?;
+    if x0.len() != x.len() || v.len() != x.len() || w.len() != x.len() || f_contact.len() != x.len()
+    {
+        return Err(bad("nodal arrays differ in length"));
+    }
+    if p.tris.len() % 3 != 0 || p.quads.len() % 4 != 0 {
+        return Err(bad("connectivity is not whole elements"));
+    }
+    if p.tris.iter().chain(&p.quads).any(|&n| n >= nn) {
+        return Err(bad("connectivity names a node out of range"));
+    }
+    let ne = p.tris.len() / 3 + p.quads.len() / 4;
+    if p.von_mises_top.len() != ne
+        || p.von_mises_bottom.len() != ne
+        || p.n.len() != 3 * ne
+        || p.m.len() != 3 * ne
+    {
+        return Err(bad("element arrays do not match the elements"));
+    }
+    Ok(FrameBody {
+        id,
+        name: p.name.clone(),
+        thickness: p.thickness,
+        x,
+        x0,
+        v,
+        w,
+        tris: p.tris.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        quads: p
+            .quads
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect(),
+        von_mises_top: p.von_mises_top.clone(),
+        von_mises_bottom: p.von_mises_bottom.clone(),
+        n: p.n.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        m: p.m.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        f_contact,
+    })
+}
+
+fn wrap(c: PbCommand) -> pb::MasterMessage {
+    pb::MasterMessage { command: Some(c) }
+}
+
+/// Encode a command. `has_def(id)`: the worker already holds that definition (a Load
+/// then carries the state only).
+pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::MasterMessage {
+    wrap(match cmd {
+        Command::Setup(s) => PbCommand::Setup(pb::Setup {
+            gravity: Some(vec3_to_pb(&s.gravity)),
+            contact: Some(contact_to_pb(&s.contact)),
+        }),
+        Command::Load { at, bodies } => PbCommand::Load(pb::Load {
+            at: Some(clock_to_pb(at)),
+            bodies: bodies
+                .iter()
+                .map(|b| load_to_pb(b, !has_def(b.id)))
+                .collect(),
+        }),
+        Command::Unload { ids, with_def } => PbCommand::Unload(pb::Unload {
+            ids: ids.clone(),
+            with_def: with_def.clone(),
+        }),
+        Command::Regroup(groups) => PbCommand::Regroup(pb::Regroup {
+            members: groups.iter().flatten().copied().collect(),
+            sizes: groups.iter().map(|g| g.len() as u32).collect(),
+        }),
+        Command::Start => PbCommand::Start(pb::Start {}),
+        Command::Step { at, dt } => PbCommand::Step(pb::Step {
+            at: Some(clock_to_pb(at)),
+            dt: *dt,
+        }),
+        Command::Frame => PbCommand::Frame(pb::FrameRequest {}),
+        Command::States => PbCommand::States(pb::StatesRequest {}),
+        Command::Shutdown(reason) => PbCommand::Shutdown(pb::Shutdown {
+            reason: reason.clone(),
+        }),
+    })
+}
+
+/// Decode a command on the worker. `Welcome` is part of the handshake, not a command.
+pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
+    Ok(
+        match m
+            .command
+            .as_ref()
+            .ok_or(ProtoError::Missing("master_message.command"))?
+        {
+            PbCommand::Welcome(_) => {
+                return Err(ProtoError::Invalid(
+                    "a second Welcome in one session".into(),
+                ))
+            }
+            PbCommand::Setup(s) => {
+                let g = s
+                    .gravity
+                    .as_ref()
+                    .ok_or(ProtoError::Missing("setup.gravity"))?;
+                let c = s
+                    .contact
+                    .as_ref()
+                    .ok_or(ProtoError::Missing("setup.contact"))?;
+                Command::Setup(Setup {
+                    gravity: Vec3::new(g.x, g.y, g.z),
+                    contact: contact_from_pb(c)?,
+                })
+            }
+            PbCommand::Load(l) => Command::Load {
+                at: clock_from_pb(l.at.as_ref())?,
+                bodies: l
+                    .bodies
+                    .iter()
+                    .map(load_from_pb)
+                    .collect::<Result<_, _>>()?,
+            },
+            PbCommand::Unload(u) => Command::Unload {
+                ids: u.ids.clone(),
+                with_def: u.with_def.clone(),
+            },
+            PbCommand::Regroup(r) => {
+                let total: u64 = r.sizes.iter().map(|&s| s as u64).sum();
+                if total != r.members.len() as u64 {
+                    return Err(ProtoError::Invalid(format!(
+                        "regroup: group sizes add up to {total}, but {} members were sent",
+                        r.members.len()
+                    )));
+                }
+                let mut groups = Vec::with_capacity(r.sizes.len());
+                let mut at = 0;
+                for &s in &r.sizes {
+                    groups.push(r.members[at..at + s as usize].to_vec());
+                    at += s as usize;
+                }
+                Command::Regroup(groups)
+            }
+            PbCommand::Start(_) => Command::Start,
+            PbCommand::Step(s) => Command::Step {
+                at: clock_from_pb(s.at.as_ref())?,
+                dt: s.dt,
+            },
+            PbCommand::Frame(_) => Command::Frame,
+            PbCommand::States(_) => Command::States,
+            PbCommand::Shutdown(s) => Command::Shutdown(s.reason.clone()),
+        },
+    )
+}
+
+/// Encode a worker's reply. Unloaded bodies carry a definition only where the master
+/// asked for it (the engine leaves the others out).
+pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
+    let reply = match r {
+        Reply::Ack => PbReply::Ack(pb::Ack {}),
+        Reply::Report(rep) => PbReply::Report(pb::Report {
+            bodies: Some(reports_to_pb(&rep.bodies)),
+            group_first: rep.groups.iter().map(|g| g.first).collect(),
+            group_nanos: rep.groups.iter().map(|g| g.nanos).collect(),
+            compute_nanos: rep.compute_ns,
+            contacts: Some(contacts_to_pb(&rep.contacts)),
+        }),
+        Reply::Unloaded(bodies) => PbReply::Unloaded(pb::BodyLoads {
+            bodies: bodies.iter().map(|b| load_to_pb(b, true)).collect(),
+        }),
+        Reply::Frame(bodies) => PbReply::Frame(pb::Frame {
+            bodies: bodies.iter().map(frame_body_to_pb).collect(),
+        }),
+        Reply::States(states) => PbReply::States(pb::States {
+            states: states.iter().map(|(id, s)| state_to_pb(*id, s)).collect(),
+        }),
+        Reply::Fault { group_first, fault } => PbReply::Failure(pb::Failure {
+            kind: Some(pb::failure::Kind::Fault(fault_to_pb(fault))),
+            group_first: *group_first,
+        }),
+        Reply::Error(e) => PbReply::Failure(pb::Failure {
+            kind: Some(pb::failure::Kind::Error(e.clone())),
+            group_first: 0,
+        }),
+    };
+    pb::WorkerMessage { reply: Some(reply) }
+}
+
+/// Decode a worker's reply on the master. `Hello` belongs to the handshake.
+pub fn reply_from_pb(msg: &pb::WorkerMessage) -> Result<Reply, ProtoError> {
+    Ok(
+        match msg
+            .reply
+            .as_ref()
+            .ok_or(ProtoError::Missing("worker_message.reply"))?
+        {
+            PbReply::Ack(_) => Reply::Ack,
+            PbReply::Report(r) => Reply::Report(report_from_pb(r)?),
+            PbReply::Unloaded(b) => Reply::Unloaded(
+                b.bodies
+                    .iter()
+                    .map(load_from_pb)
+                    .collect::<Result<_, _>>()?,
+            ),
+            PbReply::Frame(f) => Reply::Frame(
+                f.bodies
+                    .iter()
+                    .map(frame_body_from_pb)
+                    .collect::<Result<_, _>>()?,
+            ),
+            PbReply::States(s) => Reply::States(
+                s.states
+                    .iter()
+                    .map(|p| Ok((p.id, state_from_pb(p)?)))
+                    .collect::<Result<_, ProtoError>>()?,
+            ),
+            PbReply::Failure(f) => {
+                match f.kind.as_ref().ok_or(ProtoError::Missing("failure.kind"))? {
+                    pb::failure::Kind::Fault(fault) => Reply::Fault {
+                        group_first: f.group_first,
+                        fault: fault_from_pb(fault)?,
+                    },
+                    pb::failure::Kind::Error(e) => Reply::Error(e.clone()),
+                }
+            }
+            PbReply::Hello(_) => return Err(ProtoError::Invalid("a second Hello".into())),
+        },
+    )
+}
+
+/// Decode a step report.
+pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
+    if r.group_first.len() != r.group_nanos.len() {
+        return Err(ProtoError::Invalid(
+            "report: group columns differ in length".into(),
+        ));
+    }
+    Ok(StepReport {
+        bodies: reports_from_pb(
+            r.bodies
+                .as_ref()
+                .ok_or(ProtoError::Missing("report.bodies"))?,
+        )?,
+        groups: r
+            .group_first
+            .iter()
+            .zip(&r.group_nanos)
+            .map(|(&first, &nanos)| GroupTime { first, nanos })
+            .collect(),
+        compute_ns: r.compute_nanos,
+        contacts: match &r.contacts {
+            Some(c) => contacts_from_pb(c)?,
+            None => Vec::new(),
+        },
+    })
+}

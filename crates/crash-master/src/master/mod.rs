@@ -1,0 +1,178 @@
+//! The master: one loop for every mode, split by job.
+//!
+//! - `time_loop`: start, one global step, the end (dt rule, energy ledger, guards);
+//! - `barrier`: commands out to every worker, replies back in body-id order;
+//! - `placement`: MEIM update, groups onto workers, migration of bodies;
+//! - `output`: frames gathered from the workers when one is due;
+//! - `resume`: the loop's state into a checkpoint and back.
+//!
+//! The master keeps one small record per body (`BodyInfo`) and the reports of the last
+//! step; it holds no nodal data between output times.
+
+use crate::error::MasterError;
+use crate::input::{RunInput, RunOptions};
+use crate::meim::Meim;
+use crate::pairs::PairSearch;
+use crate::stats::RunStats;
+use crash_core::contact::{ContactConfig, PairStats};
+use crash_core::{Body, BodyReport, Clock, EnergyLedger, RunConfig, Vec3};
+use crash_link::WorkerLink;
+
+mod barrier;
+mod output;
+mod placement;
+mod resume;
+mod time_loop;
+
+/// What the master keeps per body (index = position in the sorted id list).
+#[derive(Debug, Clone, Copy)]
+struct BodyInfo {
+    id: u32,
+    thickness: f64,
+    /// In the MEIM (contact on for the scene and the body).
+    meshes: bool,
+    /// Extra inflation of the MEIM box over the contact search box.
+    extra: f64,
+    /// Largest move per step the margin argument allows.
+    allowed: f64,
+    estimate: f64,
+}
+
+/// Relative tolerance of the end-time and output-time comparisons (as the driver).
+const TIME_EPS: f64 = 1e-12;
+
+pub(crate) struct Master<'a, L: WorkerLink> {
+    links: &'a mut [L],
+    opts: RunOptions,
+    cfg: RunConfig,
+    contact: ContactConfig,
+    gravity: Vec3,
+    output_interval: f64,
+    info: Vec<BodyInfo>,
+    cost: Vec<f64>,
+    measured: Vec<Option<f64>>,
+    worker_of: Vec<Option<usize>>,
+    layout: Vec<Vec<Vec<u32>>>,
+    meim: Meim,
+    search: PairSearch,
+    scene_hash: u64,
+    /// The run's one clock.
+    clock: Clock,
+    next_dt: f64,
+    dt0: f64,
+    ledger: EnergyLedger,
+    reports: Vec<BodyReport>,
+    contacts: Vec<PairStats>,
+    frames: u64,
+    last_frame_step: Option<u64>,
+    pub(crate) stats: RunStats,
+}
+
+impl<'a, L: WorkerLink> Master<'a, L> {
+    pub(crate) fn new(
+        links: &'a mut [L],
+        input: &RunInput,
+        opts: RunOptions,
+    ) -> Result<Self, MasterError> {
+        if links.is_empty() {
+            return Err(MasterError::Input("a run needs at least one worker".into()));
+        }
+        if input.bodies.is_empty() {
+            return Err(MasterError::Input("the scene has no bodies".into()));
+        }
+        if !(opts.margin_factor >= 1.0 && opts.margin_factor.is_finite()) {
+            return Err(MasterError::Input(format!(
+                "margin factor {} must be finite and >= 1",
+                opts.margin_factor
+            )));
+        }
+        let mut ids: Vec<u32> = input.bodies.iter().map(|b| b.def.id).collect();
+        ids.sort_unstable();
+        if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+            return Err(MasterError::Input(format!(
+                "two bodies have the id {}",
+                w[0]
+            )));
+        }
+        let mut sorted: Vec<&Body> = input.bodies.iter().collect();
+        sorted.sort_by_key(|b| b.def.id);
+        let c = input.contact;
+        let info: Vec<BodyInfo> = sorted
+            .iter()
+            .map(|b| {
+                let m = c.margin_for(b);
+                let meshes = c.enabled && b.def.contact;
+                BodyInfo {
+                    id: b.def.id,
+                    thickness: b.def.section.thickness,
+                    meshes,
+                    extra: 0.5 * (opts.margin_factor - 1.0) * m,
+                    allowed: 0.5 * (opts.margin_factor - 1.0) * m,
+                    estimate: 1.0
+                        + if b.def.kinematic {
+                            0.0
+                        } else {
+                            b.element_count() as f64
+                        }
+                        + if meshes { b.node_count() as f64 } else { 0.0 },
+                }
+            })
+            .collect();
+        let n = info.len();
+        // Verlet skin of the level-i search: the MEIM margin of the widest body
+        let skin = sorted
+            .iter()
+            .filter(|b| c.enabled && b.def.contact)
+            .map(|b| opts.margin_factor * c.margin_for(b))
+            .fold(0.0, f64::max);
+        Ok(Self {
+            links,
+            opts,
+            cfg: input.config,
+            contact: c,
+            gravity: input.gravity,
+            output_interval: input.output_interval,
+            cost: info.iter().map(|i| i.estimate).collect(),
+            measured: vec![None; n],
+            worker_of: vec![None; n],
+            layout: Vec::new(),
+            meim: Meim::new(&ids, opts.split_after),
+            search: PairSearch::new(c.margin, skin),
+            info,
+            scene_hash: input.scene_hash,
+            clock: Clock::default(),
+            next_dt: 0.0,
+            dt0: 0.0,
+            ledger: EnergyLedger::default(),
+            reports: Vec::with_capacity(n),
+            contacts: Vec::new(),
+            frames: 0,
+            last_frame_step: None,
+            stats: RunStats::default(),
+        })
+    }
+
+    fn index(&self, id: u32) -> Option<usize> {
+        let i = id as usize;
+        if self.info.get(i).is_some_and(|b| b.id == id) {
+            return Some(i);
+        }
+        self.info.binary_search_by_key(&id, |b| b.id).ok()
+    }
+
+    /// Steps taken so far.
+    pub(crate) fn steps(&self) -> u64 {
+        self.clock.step
+    }
+
+    /// Best-effort shutdown of every worker (some may be gone).
+    pub(crate) fn shutdown(&mut self, reason: &str) {
+        for l in self.links.iter_mut() {
+            l.close(reason);
+        }
+    }
+}
+
+fn ns(t: std::time::Instant) -> u64 {
+    t.elapsed().as_nanos() as u64
+}

@@ -1,0 +1,216 @@
+//! Placement: the MEIM from the reported boxes, its groups onto workers (balanced,
+//! sticky), and migration of the bodies whose group changed worker. A moving body
+//! travels as its state; its definition goes along only to a worker that lacks it.
+
+use super::Master;
+use crate::assign::assign;
+use crate::error::MasterError;
+use crate::input::CostModel;
+use crate::stats::Migration;
+use crash_core::contact::BodyBox;
+use crash_core::{BodyReport, Vec3};
+use crash_link::{BodyLoad, Command, Reply, WorkerLink};
+
+impl<L: WorkerLink> Master<'_, L> {
+    /// The MEIM box of a body: its contact search box grown by the extra margin.
+    pub(super) fn inflate(&self, mut b: BodyBox) -> BodyBox {
+        if let Some(i) = self.index(b.id) {
+            let e = Vec3::repeat(self.info[i].extra);
+            b.lo -= e;
+            b.hi += e;
+        }
+        b
+    }
+
+    pub(super) fn box_of(&self, r: &BodyReport) -> BodyBox {
+        let thickness = self.index(r.id).map_or(0.0, |i| self.info[i].thickness);
+        self.inflate(BodyBox {
+            id: r.id,
+            lo: r.lo,
+            hi: r.hi,
+            thickness,
+        })
+    }
+
+    /// Level-i search over the contact bodies (MEIM boxes) and the MEIM update.
+    pub(super) fn update_meim(&mut self, boxes: &[BodyBox]) -> bool {
+        let pairs = if self.contact.enabled {
+            let meshes: Vec<BodyBox> = boxes
+                .iter()
+                .filter(|b| self.index(b.id).is_some_and(|i| self.info[i].meshes))
+                .copied()
+                .collect();
+            self.search.pairs(&meshes)
+        } else {
+            Vec::new()
+        };
+        let changed = self.meim.update(self.clock.step, &pairs);
+        self.stats.max_groups = self.stats.max_groups.max(self.meim.group_count());
+        changed
+    }
+
+    fn owned_groups(&self) -> Vec<Vec<u32>> {
+        self.meim.groups().iter().map(|g| g.to_vec()).collect()
+    }
+
+    /// Cost per body index under the chosen model.
+    fn costs(&self) -> Vec<f64> {
+        match self.opts.cost {
+            CostModel::Estimated => self.cost.clone(),
+            CostModel::Measured => {
+                // unmeasured bodies: their estimate at the mean measured ns per unit
+                let (mut t, mut e) = (0.0, 0.0);
+                for (m, i) in self.measured.iter().zip(&self.info) {
+                    if let Some(m) = m {
+                        t += m;
+                        e += i.estimate;
+                    }
+                }
+                let per = if e > 0.0 { t / e } else { 1.0 };
+                self.measured
+                    .iter()
+                    .zip(&self.info)
+                    .map(|(m, i)| m.unwrap_or(i.estimate * per))
+                    .collect()
+            }
+        }
+    }
+
+    /// Worker per body index for `groups` (ids).
+    fn place(&self, groups: &[Vec<u32>]) -> Vec<usize> {
+        let idx: Vec<Vec<usize>> = groups
+            .iter()
+            .map(|g| g.iter().filter_map(|&id| self.index(id)).collect())
+            .collect();
+        let to = assign(
+            &idx,
+            &self.costs(),
+            &self.worker_of,
+            self.links.len(),
+            self.opts.balance_tolerance,
+            true,
+        );
+        let mut out = vec![0; self.info.len()];
+        for (g, &w) in idx.iter().zip(&to) {
+            for &b in g {
+                out[b] = w;
+            }
+        }
+        out
+    }
+
+    fn layouts(&self, groups: &[Vec<u32>], placement: &[usize]) -> Vec<Vec<Vec<u32>>> {
+        let mut lay: Vec<Vec<Vec<u32>>> = vec![Vec::new(); self.links.len()];
+        for g in groups {
+            if let Some(i) = g.first().and_then(|&id| self.index(id)) {
+                lay[placement[i]].push(g.clone());
+            }
+        }
+        lay
+    }
+
+    /// Place the current MEIM groups on workers from scratch (start, resume) and hand
+    /// out `bodies`: the loads for each worker.
+    pub(super) fn place_all(
+        &mut self,
+        bodies: impl Iterator<Item = BodyLoad>,
+    ) -> Vec<Vec<BodyLoad>> {
+        let groups = self.owned_groups();
+        let placement = self.place(&groups);
+        let mut per_worker: Vec<Vec<BodyLoad>> =
+            (0..self.links.len()).map(|_| Vec::new()).collect();
+        for b in bodies {
+            let Some(i) = self.index(b.id) else { continue };
+            self.worker_of[i] = Some(placement[i]);
+            per_worker[placement[i]].push(b);
+        }
+        self.layout = self.layouts(&groups, &placement);
+        per_worker
+    }
+
+    /// Reassign groups; move bodies whose worker changed (state, exact bits; the
+    /// definition only to a worker that lacks it); send the new layouts.
+    pub(super) fn migrate(&mut self, groups_changed: bool) -> Result<(), MasterError> {
+        let groups = self.owned_groups();
+        let placement = self.place(&groups);
+        let layout = self.layouts(&groups, &placement);
+        if !groups_changed && layout == self.layout {
+            return Ok(());
+        }
+        let nw = self.links.len();
+        let mut unload: Vec<Vec<u32>> = vec![Vec::new(); nw];
+        let mut with_def: Vec<Vec<u32>> = vec![Vec::new(); nw];
+        let mut moves = Vec::new();
+        for (i, &to) in placement.iter().enumerate() {
+            if let Some(from) = self.worker_of[i] {
+                if from != to {
+                    let id = self.info[i].id;
+                    unload[from].push(id);
+                    if !self.links[to].has_definition(id) {
+                        with_def[from].push(id);
+                    }
+                    moves.push(Migration {
+                        step: self.clock.step,
+                        body: id,
+                        from,
+                        to,
+                    });
+                }
+            }
+        }
+        let mut load: Vec<Vec<BodyLoad>> = (0..nw).map(|_| Vec::new()).collect();
+        if !moves.is_empty() {
+            let cmds = unload
+                .iter()
+                .zip(with_def)
+                .map(|(ids, with_def)| {
+                    if ids.is_empty() {
+                        Vec::new()
+                    } else {
+                        vec![Command::Unload {
+                            ids: ids.clone(),
+                            with_def,
+                        }]
+                    }
+                })
+                .collect();
+            for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+                for reply in r {
+                    let Reply::Unloaded(bodies) = reply else {
+                        return Err(self.bad_reply(w, "Unload"));
+                    };
+                    for b in bodies {
+                        let Some(i) = self.index(b.id) else {
+                            return Err(self.bad_reply(w, "Unload"));
+                        };
+                        load[placement[i]].push(b);
+                    }
+                }
+            }
+        }
+        let at = self.clock;
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for (w, bodies) in load.into_iter().enumerate() {
+            if !bodies.is_empty() {
+                cmds[w].push(Command::Load { at, bodies });
+            }
+            if layout[w] != self.layout[w] || !cmds[w].is_empty() || !unload[w].is_empty() {
+                cmds[w].push(Command::Regroup(layout[w].clone()));
+            }
+        }
+        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+            if r.iter().any(|x| !matches!(x, Reply::Ack)) {
+                return Err(self.bad_reply(w, "Load/Regroup"));
+            }
+        }
+        for (i, &w) in placement.iter().enumerate() {
+            self.worker_of[i] = Some(w);
+        }
+        if !moves.is_empty() {
+            tracing::debug!("step {}: {} bodies migrated", self.clock.step, moves.len());
+        }
+        self.stats.migrations.extend(moves);
+        self.layout = layout;
+        Ok(())
+    }
+}

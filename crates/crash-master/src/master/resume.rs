@@ -1,0 +1,118 @@
+//! The loop's state into a checkpoint, and a run continued from one on any set of
+//! workers (the clock travels with the loads and every step).
+
+use super::Master;
+use crate::checkpoint::MasterCheckpoint;
+use crate::error::MasterError;
+use crate::meim::Meim;
+use crash_core::Body;
+use crash_link::{BodyLoad, Command, Reply, WorkerLink};
+
+impl<L: WorkerLink> Master<'_, L> {
+    /// The state after the current step (body states gathered from the workers).
+    pub(crate) fn checkpoint(&mut self) -> Result<MasterCheckpoint, MasterError> {
+        let nw = self.links.len();
+        let replies = self.exchange((0..nw).map(|_| vec![Command::States]).collect())?;
+        let mut states = Vec::with_capacity(self.info.len());
+        for (w, mut r) in replies.into_iter().enumerate() {
+            match r.pop() {
+                Some(Reply::States(s)) => states.extend(s),
+                _ => return Err(self.bad_reply(w, "States")),
+            }
+        }
+        states.sort_by_key(|s| s.0);
+        if !states
+            .iter()
+            .map(|s| s.0)
+            .eq(self.info.iter().map(|i| i.id))
+        {
+            return Err(MasterError::Incomplete {
+                step: self.clock.step,
+                what: "checkpoint states",
+                got: states.len(),
+                expected: self.info.len(),
+            });
+        }
+        Ok(MasterCheckpoint {
+            scene_hash: self.scene_hash,
+            clock: self.clock,
+            next_dt: self.next_dt,
+            dt0: self.dt0,
+            ledger: self.ledger.clone(),
+            edges: self.meim.edge_states(),
+            frames: self.frames,
+            last_frame_step: self.last_frame_step,
+            stats: self.stats.clone(),
+            states,
+        })
+    }
+
+    /// Continue from a checkpoint instead of `start`: restore the loop's state, place
+    /// the restored groups and load each body (the scene's definition with the
+    /// checkpoint's state) onto its worker at the checkpoint's clock. Nothing is written
+    /// to the sink (its files already hold the rows and frames up to the checkpoint).
+    pub(crate) fn resume(
+        &mut self,
+        ck: MasterCheckpoint,
+        bodies: Vec<Body>,
+    ) -> Result<(), MasterError> {
+        if ck.scene_hash != self.scene_hash {
+            return Err(MasterError::Input(format!(
+                "the checkpoint belongs to another scene (scene hash {:016x}, this scene {:016x})",
+                ck.scene_hash, self.scene_hash
+            )));
+        }
+        let ids: Vec<u32> = self.info.iter().map(|i| i.id).collect();
+        let ck_ids: Vec<u32> = ck.states.iter().map(|s| s.0).collect();
+        if ck_ids != ids {
+            return Err(MasterError::Input(format!(
+                "the checkpoint holds bodies {ck_ids:?}, the scene {ids:?}"
+            )));
+        }
+        let c = ck.clock;
+        if !(c.time.is_finite() && ck.next_dt > 0.0 && ck.next_dt.is_finite()) {
+            return Err(MasterError::Input(format!(
+                "the checkpoint's clock is invalid (t = {}, next dt = {})",
+                c.time, ck.next_dt
+            )));
+        }
+        let mut defs = bodies;
+        defs.sort_by_key(|b| b.def.id);
+        let mut loads = Vec::with_capacity(defs.len());
+        for (b, (id, state)) in defs.into_iter().zip(ck.states) {
+            let body = Body::from_parts(b.def, state).map_err(|e| {
+                MasterError::Input(format!("the checkpoint's state of body {id}: {e}"))
+            })?;
+            loads.push(BodyLoad::whole(body));
+        }
+        self.clock = c;
+        self.next_dt = ck.next_dt;
+        self.dt0 = ck.dt0;
+        self.ledger = ck.ledger;
+        self.meim = Meim::restore(&ids, self.opts.split_after, &ck.edges);
+        self.frames = ck.frames;
+        self.last_frame_step = ck.last_frame_step;
+        self.stats = ck.stats;
+        // the Verlet list starts empty: the first update does a full search
+        let per_worker = self.place_all(loads.into_iter());
+        let setup = self.setup();
+        let at = self.clock;
+        let cmds = per_worker
+            .into_iter()
+            .zip(&self.layout)
+            .map(|(bs, lay)| {
+                vec![
+                    Command::Setup(setup),
+                    Command::Load { at, bodies: bs },
+                    Command::Regroup(lay.clone()),
+                ]
+            })
+            .collect();
+        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+            if r.iter().any(|x| !matches!(x, Reply::Ack)) {
+                return Err(self.bad_reply(w, "Setup/Load/Regroup"));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,206 @@
+//! The global time loop: start, one step, the end. Per step: Step{clock, dt} to every
+//! worker, the barrier, global dt = safety x min stable dt (the core driver's rules, on
+//! the reports in body-id order), MEIM update, migration, output.
+
+use super::{ns, Master, TIME_EPS};
+use crate::error::MasterError;
+use crate::input::CostModel;
+use crate::sink::Sink;
+use crash_core::contact::BodyBox;
+use crash_core::driver::{check_runaway, choose_dt};
+use crash_core::{Body, Clock, EnergyTotals, Fault};
+use crash_link::{BodyLoad, Command, Reply, Setup, WorkerLink};
+use std::time::Instant;
+
+impl<L: WorkerLink> Master<'_, L> {
+    pub(super) fn setup(&self) -> Setup {
+        Setup {
+            gravity: self.gravity,
+            contact: self.contact,
+        }
+    }
+
+    /// Bodies onto workers (each body's definition and state move to its worker: the
+    /// master keeps none), forces of the initial configuration, first dt.
+    pub(crate) fn start(
+        &mut self,
+        bodies: Vec<Body>,
+        sink: &mut dyn Sink,
+    ) -> Result<(), MasterError> {
+        let t0 = Instant::now();
+        let boxes: Vec<BodyBox> = bodies
+            .iter()
+            .map(|b| self.inflate(BodyBox::of(b)))
+            .collect();
+        self.update_meim(&boxes);
+        let per_worker = self.place_all(bodies.into_iter().map(BodyLoad::whole));
+        self.stats.stages.meim_ns += ns(t0);
+        let t1 = Instant::now();
+        let setup = self.setup();
+        let at = self.clock;
+        let cmds = per_worker
+            .into_iter()
+            .zip(&self.layout)
+            .map(|(bs, lay)| {
+                vec![
+                    Command::Setup(setup),
+                    Command::Load { at, bodies: bs },
+                    Command::Regroup(lay.clone()),
+                    Command::Start,
+                ]
+            })
+            .collect();
+        let replies = self.exchange(cmds)?;
+        self.stats.stages.migration_ns += ns(t1);
+        let mut reports = Vec::with_capacity(replies.len());
+        for (w, mut r) in replies.into_iter().enumerate() {
+            match r.pop() {
+                Some(Reply::Report(rep)) => reports.push(rep),
+                _ => return Err(self.bad_reply(w, "Start")),
+            }
+        }
+        self.gather(reports)?;
+        let energy = self
+            .ledger
+            .update(EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)));
+        self.next_dt = self.choose_dt()?;
+        self.dt0 = self.next_dt;
+        self.stats.dt_min = f64::INFINITY;
+        sink.energy(0, 0.0, &energy).map_err(MasterError::sink)?;
+        sink.contact_stats(0, 0.0, &self.contacts)
+            .map_err(MasterError::sink)?;
+        sink.contacts(0, 0.0, &self.meim.pairs())
+            .map_err(MasterError::sink)?;
+        self.output(sink, true)?;
+        Ok(())
+    }
+
+    /// The core's rule (`crash_core::driver::choose_dt`), shared by every loop.
+    fn choose_dt(&self) -> Result<f64, Fault> {
+        choose_dt(&self.cfg, &self.reports, self.dt0, self.clock.step)
+    }
+
+    pub(crate) fn finished(&self) -> bool {
+        self.clock.time >= self.cfg.end_time * (1.0 - TIME_EPS)
+    }
+
+    /// One global step (the last one shortened to land on the end time).
+    pub(crate) fn step(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        let _span = tracing::debug_span!("step", step = self.clock.step).entered();
+        let mut h = self.next_dt;
+        let left = self.cfg.end_time - self.clock.time;
+        if left < h && left > 0.0 {
+            h = left;
+        }
+        self.stats.dt_min = self.stats.dt_min.min(h);
+        self.stats.dt_max = self.stats.dt_max.max(h);
+        let t0 = Instant::now();
+        let at = self.clock;
+        let reps = {
+            let _s = tracing::debug_span!("barrier").entered();
+            self.reports_of(|| Command::Step { at, dt: h }, "Step")?
+        };
+        let wall = ns(t0);
+        let slowest = reps
+            .iter()
+            .map(|r| r.compute_ns)
+            .max()
+            .unwrap_or(0)
+            .min(wall);
+        self.stats.stages.compute_ns += slowest;
+        self.stats.stages.barrier_ns += wall - slowest;
+        self.clock = self.clock.after(h);
+
+        let t1 = Instant::now();
+        let _s = tracing::debug_span!("meim").entered();
+        self.gather(reps)?;
+        let energy = self
+            .ledger
+            .update(EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)));
+        self.runaway(&energy)?;
+        self.next_dt = self.choose_dt()?;
+        self.check_margin()?;
+        let (step, time) = (self.clock.step, self.clock.time);
+        sink.energy(step, time, &energy)
+            .map_err(MasterError::sink)?;
+        sink.contact_stats(step, time, &self.contacts)
+            .map_err(MasterError::sink)?;
+        let boxes: Vec<BodyBox> = self.reports.iter().map(|r| self.box_of(r)).collect();
+        let changed = self.update_meim(&boxes);
+        if changed {
+            self.stats.group_changes += 1;
+            sink.contacts(step, time, &self.meim.pairs())
+                .map_err(MasterError::sink)?;
+        }
+        let periodic = self.opts.cost == CostModel::Measured
+            && self.opts.rebalance_interval > 0
+            && step.is_multiple_of(self.opts.rebalance_interval);
+        self.stats.stages.meim_ns += ns(t1);
+        drop(_s);
+        if changed || periodic {
+            let _s = tracing::debug_span!("migration").entered();
+            let t2 = Instant::now();
+            self.migrate(changed)?;
+            self.stats.stages.migration_ns += ns(t2);
+        }
+        self.output(sink, false)
+    }
+
+    /// The core's runaway guard (`crash_core::driver::check_runaway`).
+    fn runaway(&mut self, energy: &EnergyTotals) -> Result<(), Fault> {
+        check_runaway(
+            &self.cfg,
+            &mut self.ledger,
+            energy,
+            &self.reports,
+            self.clock.step,
+        )
+    }
+
+    /// The margin argument, checked: no contact body may move more in one step than
+    /// the MEIM inflation beyond the contact search box allows.
+    fn check_margin(&self) -> Result<(), MasterError> {
+        for (r, inf) in self.reports.iter().zip(&self.info) {
+            if inf.meshes && r.max_move > inf.allowed {
+                return Err(MasterError::Margin {
+                    step: self.clock.step,
+                    body: r.id,
+                    moved: r.max_move,
+                    allowed: inf.allowed,
+                    margin: 2.0 * inf.allowed
+                        / (self.opts.margin_factor - 1.0).max(f64::MIN_POSITIVE),
+                    factor: self.opts.margin_factor,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Final frame (the state hash) and statistics.
+    pub(crate) fn finish(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        self.output(sink, true)?;
+        self.stats.steps = self.clock.step;
+        self.stats.time = self.clock.time;
+        self.stats.workers = self.links.len();
+        self.stats.max_energy_error = self.ledger.max_error();
+        self.stats.final_groups = self
+            .meim
+            .groups()
+            .iter()
+            .map(|g| {
+                let w = g
+                    .first()
+                    .and_then(|&id| self.index(id))
+                    .and_then(|i| self.worker_of[i])
+                    .unwrap_or(0);
+                (g.to_vec(), w)
+            })
+            .collect();
+        Ok(())
+    }
+
+    /// The clock after the last step taken.
+    pub(crate) fn clock(&self) -> Clock {
+        self.clock
+    }
+}

@@ -1,0 +1,107 @@
+//! One worker process seen from the master: a `WorkerLink` over the worker's open
+//! bidirectional stream. It remembers which body definitions it has sent (ids only),
+//! so a body moving back travels as its state; it keeps no body data.
+
+use crash_link::wire::{command_to_pb, reply_from_pb};
+use crash_link::{Command, LinkError, Reply, WorkerLink};
+use crash_proto::pb;
+use std::collections::BTreeSet;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::runtime::Runtime;
+use tonic::Status;
+use tonic::Streaming;
+
+pub(crate) type Outbound = tokio::sync::mpsc::UnboundedSender<Result<pb::MasterMessage, Status>>;
+
+/// A worker process seen from the master.
+pub struct RemoteWorker {
+    pub(crate) rt: Arc<Runtime>,
+    pub(crate) index: usize,
+    pub(crate) peer: String,
+    pub(crate) threads: u32,
+    pub(crate) tx: Option<Outbound>,
+    pub(crate) inbound: Streaming<pb::WorkerMessage>,
+    /// Ids of the body definitions this worker has received.
+    pub(crate) sent: BTreeSet<u32>,
+    pub(crate) timeout: Duration,
+}
+
+impl std::fmt::Debug for RemoteWorker {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RemoteWorker")
+            .field("index", &self.index)
+            .field("peer", &self.peer)
+            .field("threads", &self.threads)
+            .field("definitions", &self.sent.len())
+            .finish()
+    }
+}
+
+impl RemoteWorker {
+    pub fn threads(&self) -> u32 {
+        self.threads
+    }
+
+    fn recv_within(&mut self, timeout: Duration) -> Result<Reply, LinkError> {
+        // the timer must be created inside the runtime
+        let inbound = &mut self.inbound;
+        let msg = match self
+            .rt
+            .block_on(async { tokio::time::timeout(timeout, inbound.message()).await })
+        {
+            Err(_) => {
+                return Err(LinkError::Timeout {
+                    seconds: timeout.as_secs_f64(),
+                })
+            }
+            Ok(Err(s)) => return Err(LinkError::Lost(format!("{}: {}", s.code(), s.message()))),
+            Ok(Ok(None)) => return Err(LinkError::Lost("the worker closed its stream".into())),
+            Ok(Ok(Some(m))) => m,
+        };
+        reply_from_pb(&msg).map_err(|e| LinkError::Protocol(e.to_string()))
+    }
+}
+
+impl WorkerLink for RemoteWorker {
+    fn send(&mut self, cmd: Command) -> Result<(), LinkError> {
+        let msg = command_to_pb(&cmd, |id| self.sent.contains(&id));
+        if let Command::Load { bodies, .. } = &cmd {
+            self.sent
+                .extend(bodies.iter().filter(|b| b.def.is_some()).map(|b| b.id));
+        }
+        drop(cmd);
+        self.tx
+            .as_ref()
+            .ok_or_else(|| LinkError::Lost("already shut down".into()))?
+            .send(Ok(msg))
+            .map_err(|_| LinkError::Lost("the connection is closed".into()))
+    }
+
+    fn recv(&mut self) -> Result<Reply, LinkError> {
+        self.recv_within(self.timeout)
+    }
+
+    fn peer(&self) -> String {
+        self.peer.clone()
+    }
+
+    fn has_definition(&self, id: u32) -> bool {
+        self.sent.contains(&id)
+    }
+
+    fn close(&mut self, reason: &str) {
+        if self.send(Command::Shutdown(reason.into())).is_ok() {
+            let _ = self.recv_within(Duration::from_secs(2));
+        }
+        // ending the response stream lets the worker exit
+        self.tx = None;
+        let inbound = &mut self.inbound;
+        self.rt.block_on(async {
+            let _ = tokio::time::timeout(Duration::from_millis(500), async {
+                while let Ok(Some(_)) = inbound.message().await {}
+            })
+            .await;
+        });
+    }
+}
