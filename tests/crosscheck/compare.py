@@ -65,6 +65,14 @@ def compare(ref, run, label, tol_pos, tol_energy, tol_contact, tol_time=1e-12):
     de = np.abs(ea[:, cols] - eb[:, cols]).max() / scale
     worst = ENERGY_COLS[int(np.argmax(np.abs(ea[:, cols] - eb[:, cols]).max(axis=0)))]
     r.check("energy", de, tol_energy, f"largest energy {scale:.4g} J, worst column {worst}")
+    # each column against its own largest value (columns above 1e-3 of the largest energy)
+    own = []
+    for c, name in zip(cols, ENERGY_COLS):
+        m = np.abs(ea[:, c]).max()
+        if m > 1e-3 * scale:
+            own.append((np.abs(ea[:, c] - eb[:, c]).max() / m, name))
+    worst_own = max(own)
+    r.check("energy per column", worst_own[0], tol_energy, f"worst {worst_own[1]}, each against its own largest value")
     bi = he.index("balance_error")
     r.check("balance_error", np.abs(ea[:, bi] - eb[:, bi]).max(), tol_energy)
 
