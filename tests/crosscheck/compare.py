@@ -7,6 +7,9 @@ and returns the number of failures. Quantities:
   steps      number of energy records and frames, and their times (relative 1e-12)
   mesh       cells identical, initial positions (x - displacement) equal to 1e-14 of the size
   positions  max |x_a - x_b| over every node of every frame / largest |displacement| (ref)
+  membrane N, bending M   the frames' element resultants / their largest value (ref): the
+             deformation itself, which rigid motion cannot hide (N: 100 x the position
+             tolerance, as it is the positions' Green strain, amplified by ~1/strain)
   energy     max |E_a - E_b| over every record and column / largest energy of the run (ref);
              the balance_error column (already relative) compared absolutely
   contact    max |F_a - F_b| of contacts.csv normal forces (rows matched by record time and
@@ -91,6 +94,15 @@ def compare(ref, run, label, tol_pos, tol_energy, tol_contact, tol_time=1e-12):
     dmax = max(np.linalg.norm(f[("PointData", "displacement")], axis=1).max() for f in frames_a)
     dx = max(np.abs(a[("Points", "Points")] - b[("Points", "Points")]).max() for a, b in zip(frames_a, frames_b))
     r.check("positions", dx / dmax, tol_pos, f"largest displacement {dmax:.4g} m")
+
+    # element resultants of the frames: the deformation itself, whatever the rigid motion
+    # (N comes from the Green strain of the positions, (f.f - 1)/2: position round-off
+    # reaches it amplified by ~1/strain, hence 100 x the position tolerance)
+    for key, name, tol in ((("CellData", "membrane_N"), "membrane N", 100.0 * tol_pos),
+                           (("CellData", "bending_M"), "bending M", tol_pos)):
+        smax = max(np.abs(f[key]).max() for f in frames_a)
+        ds = max(np.abs(a[key] - b[key]).max() for a, b in zip(frames_a, frames_b))
+        r.check(name, ds / smax if smax > 0 else ds, tol, f"largest |{name.split()[1]}| {smax:.4g}, frames")
 
     fmax = max(np.abs(f[("PointData", "contact_force")]).max() for f in frames_a)
     ca = os.path.join(ref, "contacts.csv")
