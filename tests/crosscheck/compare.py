@@ -14,7 +14,8 @@ and returns the number of failures. Quantities:
              the balance_error column (already relative) compared absolutely
   contact    max |F_a - F_b| of contacts.csv normal forces (rows matched by record time and
              pair, a missing row counting as 0) / largest normal force (ref); and the nodal
-             contact_force of every frame / largest nodal contact force (ref)
+             contact_force of every frame / largest nodal contact force (ref); the
+             max_penetration column likewise
 """
 
 import argparse
@@ -114,9 +115,6 @@ def compare(ref, run, label, tol_pos, tol_energy, tol_contact, tol_time=1e-12):
         _, ra = read_csv(ca)
         _, rb = read_csv(os.path.join(run, "contacts.csv"))
 
-        def table(rows):
-            return {(int(round(t / tmax * 1e12)), int(a), int(b)): f for t, a, b, f, _ in rows}
-
         # rows are keyed by record time; times agree to round-off, so index by the record
         times = ea[:, 0]
         key = lambda rows: {(int(np.argmin(np.abs(times - t))), int(a), int(b)): (f, p)
@@ -127,6 +125,10 @@ def compare(ref, run, label, tol_pos, tol_energy, tol_contact, tol_time=1e-12):
         only = len(set(ta) ^ set(tb))
         r.check("contact force history", diff / fscale, tol_contact,
                 f"{len(ta)} rows, largest total force {fscale:.4g} N, {only} rows in one run only")
+        pscale = max(abs(v[1]) for v in ta.values()) if ta else 1.0
+        pdiff = max(abs(ta.get(k, (0.0, 0.0))[1] - tb.get(k, (0.0, 0.0))[1]) for k in set(ta) | set(tb))
+        r.check("penetration history", pdiff / pscale, tol_contact,
+                f"largest penetration {pscale:.4g} m")
     return r
 
 

@@ -2,8 +2,9 @@
 
 Rank 0 keeps the time loop, the energy ledger, the MEIM and the placement, and is also
 worker 0; every rank integrates the groups placed on it. Per step: rank 0 broadcasts the
-control message (step length, migrations, frame request) -- the barrier -- and gathers
-every rank's body reports. Bodies move between ranks (their whole state, pickled exact
+control message (migrations, frame request, stop) and the step length -- the barrier --
+and gathers every rank's body reports (point-to-point messages in rank order; waiting
+ranks poll with short sleeps). Bodies move between ranks (their whole state, pickled exact
 float64 arrays) when the groups change. Every rank builds every body's definition from
 the scene file; only the owner's copy has a live state."""
 
@@ -200,6 +201,39 @@ class Master:
         return self.time >= self.sc.end_time * (1.0 - TIME_EPS)
 
 
+# Waiting ranks poll with short sleeps instead of MPI's busy wait, so that idle ranks
+# leave the (shared) cores to the ranks that compute.
+POLL_SLEEP = 5e-5
+TAG_BCAST, TAG_GATHER, TAG_MOVE = 11, 12, 1000
+
+
+def _wait(comm, source, tag):
+    while not comm.iprobe(source=source, tag=tag):
+        wall.sleep(POLL_SLEEP)
+
+
+def bcast(comm, obj):
+    """Rank 0's object to every rank (the per-step barrier)."""
+    if comm.Get_rank() == 0:
+        for r in range(1, comm.Get_size()):
+            comm.send(obj, dest=r, tag=TAG_BCAST)
+        return obj
+    _wait(comm, 0, TAG_BCAST)
+    return comm.recv(source=0, tag=TAG_BCAST)
+
+
+def gather(comm, obj):
+    """Every rank's object to rank 0, in rank order (None elsewhere)."""
+    if comm.Get_rank() != 0:
+        comm.send(obj, dest=0, tag=TAG_GATHER)
+        return None
+    out = [obj]
+    for r in range(1, comm.Get_size()):
+        _wait(comm, r, TAG_GATHER)
+        out.append(comm.recv(source=r, tag=TAG_GATHER))
+    return out
+
+
 def _merge(gathered):
     reps, stats, faults = [], [], []
     for g in gathered:
@@ -230,13 +264,13 @@ def main(scene_path, out, end_time=None, comm=None):
         for g, r in layout:
             for i in g:
                 master.rank_of[i] = r
-    layout = comm.bcast(layout, root=0)
+    layout = bcast(comm, layout)
     worker.regroup(layout, rank)
     try:
         mine = ("ok",) + worker.start()
     except Fault as f:
         mine = ("fault", str(f))
-    gathered = comm.gather(mine, root=0)
+    gathered = gather(comm, mine)
     ctrl = None
     if rank == 0:
         reps, stats, faults = _merge(gathered)
@@ -254,22 +288,23 @@ def main(scene_path, out, end_time=None, comm=None):
             status = 1
             ctrl = dict(stop=True, frame=False, moves=None, layout=None)
     while True:
-        ctrl = comm.bcast(ctrl, root=0)
+        ctrl = bcast(comm, ctrl)
         # migration: the whole state of each moved body, exact bits
         if ctrl["moves"]:
             reqs = []
             for i, (src, dst) in sorted(ctrl["moves"].items()):
                 if src == rank:
-                    reqs.append(comm.isend(worker.defs[i].state(), dest=dst, tag=i))
+                    reqs.append(comm.isend(worker.defs[i].state(), dest=dst, tag=TAG_MOVE + i))
             for i, (src, dst) in sorted(ctrl["moves"].items()):
                 if dst == rank:
-                    worker.defs[i].set_state(comm.recv(source=src, tag=i))
+                    _wait(comm, src, TAG_MOVE + i)
+                    worker.defs[i].set_state(comm.recv(source=src, tag=TAG_MOVE + i))
             for q in reqs:
                 q.wait()
         if ctrl["layout"] is not None:
             worker.regroup(ctrl["layout"], rank)
         if ctrl["frame"]:
-            snaps = comm.gather(worker.snapshot(), root=0)
+            snaps = gather(comm, worker.snapshot())
             if rank == 0:
                 master.writer.frame(master.time, master.step,
                                     frame_bodies(sc, [s for part in snaps for s in part]))
@@ -283,12 +318,12 @@ def main(scene_path, out, end_time=None, comm=None):
             left = sc.end_time - master.time
             if left < h and left > 0.0:
                 h = left
-        h = comm.bcast(h, root=0)
+        h = bcast(comm, h)
         try:
             mine = ("ok",) + worker.step(h)
         except Fault as f:
             mine = ("fault", str(f))
-        gathered = comm.gather(mine, root=0)
+        gathered = gather(comm, mine)
         if rank != 0:
             continue
         reps, stats, faults = _merge(gathered)
@@ -335,5 +370,5 @@ def main(scene_path, out, end_time=None, comm=None):
         import json
         with open(f"{out}/summary.json", "w") as f:
             json.dump(summary, f, indent=1)
-    status = comm.bcast(status, root=0)
+    status = bcast(comm, status)
     return status
