@@ -67,6 +67,8 @@ if [ ! -x "$crash" ]; then
 fi
 
 # ---- the scenes ----
+limit=""
+if command -v timeout >/dev/null 2>&1; then limit="timeout 900"; fi
 scenes="${CROSSCHECK_SCENES:-$(cd "$here/scenes" && ls *.toml | sed 's/\.toml$//')}"
 first_rank="${ranks%% *}"
 for s in $scenes; do
@@ -83,7 +85,10 @@ for s in $scenes; do
     fi
     for n in $ranks; do
         start=$SECONDS
-        if ! PYTHONPATH="$here" "$mpiexec" -n "$n" "$py" -m xcheck run "$toml" --out "$dir/py-$n" >"$dir/py-$n.log" 2>&1; then
+        # python -m mpi4py: an uncaught exception on any rank aborts the whole job (no
+        # rank left waiting); the timeout is a last guard against a hang in CI
+        if ! PYTHONPATH="$here" $limit "$mpiexec" -n "$n" "$py" -m mpi4py -m xcheck run "$toml" \
+            --out "$dir/py-$n" >"$dir/py-$n.log" 2>&1; then
             line FAIL "$s ($n ranks): harness run failed (see $dir/py-$n.log)"
             continue
         fi

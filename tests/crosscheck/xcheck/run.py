@@ -358,8 +358,8 @@ def main(scene_path, out, end_time=None, comm=None):
         except Fault as f:
             print(f"crosscheck: {f}", file=sys.stderr)
             status = 1
-            ctrl["stop"] = True
-            ctrl["frame"] = master.last_frame_step != master.step
+            ctrl["stop"] = True     # like crash: the frames written so far stay, no new one
+            ctrl["frame"] = False
     if rank == 0:
         master.writer.close()
         summary = dict(steps=master.step, time=master.time, ranks=nranks,
