@@ -10,6 +10,10 @@ export CARGO_TERM_COLOR=never
 cargo build --release --workspace --all-targets
 cargo test --release --workspace --no-fail-fast -- --test-threads 2
 
+# The independent cross-check (docs/crosscheck.md): the documented equations written
+# again in Python (numpy + mpi4py from wheels, in .venv-crosscheck/), on 2 MPI ranks.
+CROSSCHECK_RANKS=2 bash tests/crosscheck/run.sh
+
 if [ -x deploy/compose-smoke.sh ]; then
   if docker info >/dev/null 2>&1; then
     # --no-build: the image takes the binaries built above (a `cargo build -p` here

@@ -13,7 +13,9 @@ use serde::Serialize;
 use std::path::Path;
 
 pub const MAGIC: &[u8; 8] = b"CRASHCKP";
-pub const VERSION: u32 = 1;
+/// Layout version of the payload. 2: body states apart from definitions, the run's
+/// clock (`crash_core::Clock`).
+pub const VERSION: u32 = 2;
 const HEADER: usize = 8 + 4 + 8 + 8;
 
 fn checksum(b: &[u8]) -> u64 {

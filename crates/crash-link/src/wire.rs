@@ -101,7 +101,7 @@ fn pack3(v: &[Vec3]) -> Vec<f64> {
 }
 
 fn unpack3(id: u32, field: &'static str, d: &[f64]) -> Result<Vec<Vec3>, ProtoError> {
-    if d.len() % 3 != 0 {
+    if !d.len().is_multiple_of(3) {
         return Err(ProtoError::Invalid(format!(
             "frame of body {id}: '{field}' is not whole triples"
         )));
@@ -143,7 +143,7 @@ fn frame_body_from_pb(p: &pb::FrameBody) -> Result<FrameBody, ProtoError> {
     {
         return Err(bad("nodal arrays differ in length"));
     }
-    if p.tris.len() % 3 != 0 || p.quads.len() % 4 != 0 {
+    if !p.tris.len().is_multiple_of(3) || !p.quads.len().is_multiple_of(4) {
         return Err(bad("connectivity is not whole elements"));
     }
     if p.tris.iter().chain(&p.quads).any(|&n| n >= nn) {

@@ -239,7 +239,10 @@ pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
             .ok_or(ProtoError::Missing("body.section"))?,
     )?;
     let stab = stab_from_pb(d.stab.as_ref().ok_or(ProtoError::Missing("body.stab"))?);
-    if d.x0.len() % 3 != 0 || d.tri_nodes.len() % 3 != 0 || d.quad_nodes.len() % 4 != 0 {
+    if !d.x0.len().is_multiple_of(3)
+        || !d.tri_nodes.len().is_multiple_of(3)
+        || !d.quad_nodes.len().is_multiple_of(4)
+    {
         return Err(ProtoError::Invalid(format!(
             "body {id}: node or connectivity arrays are not whole triples/quadruples"
         )));
@@ -303,7 +306,7 @@ pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
         b.def.gather_slot.len(),
         1,
     )?;
-    if d.programs.len() % PROGRAM != 0 {
+    if !d.programs.len().is_multiple_of(PROGRAM) {
         return Err(ProtoError::Invalid(format!(
             "body {id}: programs not whole"
         )));
@@ -396,7 +399,7 @@ fn validate_indices(b: &Body) -> Result<(), ProtoError> {
 pub fn state_from_pb(s: &pb::BodyState) -> Result<BodyState, ProtoError> {
     let id = s.id;
     let whole = |field: &'static str, d: &[f64], stride: usize| -> Result<usize, ProtoError> {
-        if d.len() % stride == 0 {
+        if d.len().is_multiple_of(stride) {
             Ok(d.len() / stride)
         } else {
             Err(ProtoError::Invalid(format!(
