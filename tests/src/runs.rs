@@ -50,7 +50,7 @@ pub fn rows(s: &RecordSink) -> Vec<[u64; 8]> {
 
 /// The single-process reference: the core driver on one group of all bodies.
 pub fn driver_reference(input: &RunInput) -> (Vec<[u64; 8]>, u64) {
-    let mut g = Group::new(input.bodies.clone(), input.gravity);
+    let mut g = Group::new(input.bodies.all().unwrap(), input.gravity);
     g.contact = input.contact;
     let mut run = Run::new(g, input.config).unwrap();
     let mut rows = vec![bits(0.0, &run.energy)];

@@ -257,7 +257,7 @@ fn a_fault_in_a_worker_process_ends_the_run_with_the_drivers_message() {
     let scene = out.join("fast.toml");
     std::fs::write(&scene, &text).unwrap();
     let inp = input_from(&scene);
-    let mut g = crash_core::Group::new(inp.bodies.clone(), inp.gravity);
+    let mut g = crash_core::Group::new(inp.bodies.all().unwrap(), inp.gravity);
     g.contact = inp.contact;
     let expected = crash_core::driver::Run::new(g, inp.config)
         .unwrap()

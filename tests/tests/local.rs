@@ -67,7 +67,7 @@ fn a_fault_in_a_worker_is_the_drivers_fault() {
         .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [400.0, 0.0, 0.0]");
     let scene = crash_scene::parse(&text, "fast.toml").unwrap();
     let inp = crash_master::RunInput::from_built(scene.build().unwrap());
-    let mut g = crash_core::Group::new(inp.bodies.clone(), inp.gravity);
+    let mut g = crash_core::Group::new(inp.bodies.all().unwrap(), inp.gravity);
     g.contact = inp.contact;
     let expected = crash_core::driver::Run::new(g, inp.config)
         .unwrap()

@@ -247,7 +247,7 @@ fn commands_round_trip() {
             at,
             bodies: loads(),
         },
-        Command::Frame,
+        Command::Frame(vec![1, 0]),
         Command::States,
         Command::Shutdown("done".into()),
     ];

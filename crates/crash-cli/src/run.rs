@@ -7,7 +7,7 @@ use crate::progress::Progress;
 use anyhow::Context;
 use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
-use crash_io::Frame;
+use crash_io::FrameBody;
 use crash_master::{
     read_restart, resume_with, run_with, FileSink, MasterCheckpoint, MasterError, RunInput,
     RunOptions, RunStats, Sink, SinkError, RESTART_FILE,
@@ -89,8 +89,16 @@ impl Sink for CliSink {
         self.files.checkpoint(state)
     }
 
-    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
-        self.files.frame(frame)
+    fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError> {
+        self.files.frame_begin(step, time)
+    }
+
+    fn frame_body(&mut self, body: &FrameBody) -> Result<(), SinkError> {
+        self.files.frame_body(body)
+    }
+
+    fn frame_end(&mut self) -> Result<(), SinkError> {
+        self.files.frame_end()
     }
 
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
@@ -197,7 +205,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     eprintln!(
         "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {} worker(s), writing {}",
         input.name,
-        input.bodies.len(),
+        input.briefs.len(),
         input.size().elements,
         input.config.end_time,
         args.workers.max(1),

@@ -47,8 +47,20 @@ pub fn state_hash<'a>(bodies: impl IntoIterator<Item = &'a Body>) -> u64 {
 pub fn state_hash_of<'a>(
     bodies: impl IntoIterator<Item = (u32, &'a [Vec3], &'a [Vec3], &'a [Vec3])>,
 ) -> u64 {
-    let mut h = Fnv::default();
+    let mut h = StateHasher::default();
     for (id, x, v, w) in bodies {
+        h.add(id, x, v, w);
+    }
+    h.finish()
+}
+
+/// The state hash fed one body at a time (in id order), e.g. while a frame streams by.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StateHasher(Fnv);
+
+impl StateHasher {
+    pub fn add(&mut self, id: u32, x: &[Vec3], v: &[Vec3], w: &[Vec3]) {
+        let h = &mut self.0;
         h.u64(id as u64);
         for i in 0..x.len() {
             for d in 0..3 {
@@ -58,5 +70,8 @@ pub fn state_hash_of<'a>(
             }
         }
     }
-    h.finish()
+
+    pub fn finish(&self) -> u64 {
+        self.0.finish()
+    }
 }

@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod body;
+pub mod brief;
 pub mod clock;
 pub mod contact;
 pub mod driver;
@@ -28,6 +29,7 @@ pub mod shapes;
 pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use body::{dof, Body, BodyDef, BodyEnergy, BodyState, NodalLoad, VelocityProgram};
+pub use brief::BodyBrief;
 pub use clock::Clock;
 pub use driver::{Run, RunConfig};
 pub use element::Stabilization;

@@ -3,11 +3,13 @@
 //! still leaves a valid series. Restart keeps the frames up to the restart time and
 //! continues the numbering.
 
-use crate::atomic::write_atomic;
+use crate::atomic::{temp_path, write_atomic};
 use crate::error::{AtPath, IoError};
-use crate::frame::Frame;
-use crate::vtu::{write_vtu, Encoding};
+use crate::frame::{Frame, FrameBody};
+use crate::vtu::{write_vtu_footer, write_vtu_header, write_vtu_piece, Encoding};
 use roxmltree::Document;
+use std::fs::File;
+use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 /// Name of the collection file inside the output directory.
@@ -30,6 +32,17 @@ pub struct SeriesWriter {
     encoding: Encoding,
     entries: Vec<PvdEntry>,
     next_index: u64,
+    /// The frame being written body by body.
+    open: Option<OpenFrame>,
+}
+
+#[derive(Debug)]
+struct OpenFrame {
+    time: f64,
+    file: String,
+    path: PathBuf,
+    tmp: PathBuf,
+    w: BufWriter<File>,
 }
 
 fn frame_file(index: u64) -> String {
@@ -105,6 +118,7 @@ impl SeriesWriter {
             encoding: Encoding::default(),
             entries: Vec::new(),
             next_index: 0,
+            open: None,
         })
     }
 
@@ -134,6 +148,7 @@ impl SeriesWriter {
             encoding: Encoding::default(),
             entries: keep,
             next_index,
+            open: None,
         })
     }
 
@@ -146,28 +161,74 @@ impl SeriesWriter {
     /// Write one frame and rewrite the .pvd. A frame at or before the last listed time
     /// replaces the listed frames from that time on. Returns the .vtu path.
     pub fn write(&mut self, frame: &Frame) -> Result<PathBuf, IoError> {
-        if !frame.time.is_finite() {
-            return Err(IoError::Invalid(format!(
-                "frame at step {} has a non-finite time {}",
-                frame.step, frame.time
-            )));
+        self.begin_frame(frame.time, frame.step)?;
+        for b in &frame.bodies {
+            self.frame_body(b)?;
         }
-        let mut replaced = Vec::new();
-        if self.entries.last().is_some_and(|e| e.time >= frame.time) {
-            let (keep, drop): (Vec<_>, Vec<_>) =
-                self.entries.drain(..).partition(|e| e.time < frame.time);
-            self.entries = keep;
-            replaced = drop;
+        self.end_frame()
+    }
+
+    /// Start a frame that arrives body by body (`frame_body`, then `end_frame`): the
+    /// .vtu is written as a temporary file and takes its name only when complete.
+    pub fn begin_frame(&mut self, time: f64, step: u64) -> Result<(), IoError> {
+        if !time.is_finite() {
+            return Err(IoError::Invalid(format!(
+                "frame at step {step} has a non-finite time {time}"
+            )));
         }
         let file = frame_file(self.next_index);
         let path = self.dir.join(&file);
-        let enc = self.encoding;
-        write_atomic(&path, |w| write_vtu(w, frame, enc))?;
-        self.next_index += 1;
-        self.entries.push(PvdEntry {
-            time: frame.time,
+        let tmp = temp_path(&path);
+        let mut w = BufWriter::new(File::create(&tmp).at(&tmp)?);
+        write_vtu_header(&mut w, time, step).at(&tmp)?;
+        self.open = Some(OpenFrame {
+            time,
             file,
+            path,
+            tmp,
+            w,
         });
+        Ok(())
+    }
+
+    /// One body of the frame begun last (bodies in id order).
+    pub fn frame_body(&mut self, body: &FrameBody) -> Result<(), IoError> {
+        let enc = self.encoding;
+        let f = self
+            .open
+            .as_mut()
+            .ok_or_else(|| IoError::Invalid("a frame body arrived outside a frame".into()))?;
+        write_vtu_piece(&mut f.w, body, enc).at(&f.tmp)
+    }
+
+    /// Finish the frame begun last: close and rename its .vtu, list it in the .pvd.
+    pub fn end_frame(&mut self) -> Result<PathBuf, IoError> {
+        let OpenFrame {
+            time,
+            file,
+            path,
+            tmp,
+            mut w,
+        } = self
+            .open
+            .take()
+            .ok_or_else(|| IoError::Invalid("end of a frame that was not begun".into()))?;
+        write_vtu_footer(&mut w).at(&tmp)?;
+        let f = w
+            .into_inner()
+            .map_err(|e| IoError::io(&tmp, e.into_error()))?;
+        f.sync_all().at(&tmp)?;
+        drop(f);
+        std::fs::rename(&tmp, &path).at(&path)?;
+        let mut replaced = Vec::new();
+        if self.entries.last().is_some_and(|e| e.time >= time) {
+            let (keep, drop): (Vec<_>, Vec<_>) =
+                self.entries.drain(..).partition(|e| e.time < time);
+            self.entries = keep;
+            replaced = drop;
+        }
+        self.next_index += 1;
+        self.entries.push(PvdEntry { time, file });
         write_pvd(&self.pvd_path(), &self.entries)?;
         remove_frames(&self.dir, &replaced)?;
         Ok(path)

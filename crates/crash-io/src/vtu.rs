@@ -2,7 +2,7 @@
 //! quads VTK_QUAD, f64 everywhere so values survive exactly (ascii uses the shortest
 //! round-trip form; binary is base64 of the raw little-endian bytes).
 
-use crate::frame::Frame;
+use crate::frame::{Frame, FrameBody};
 use base64::Engine;
 use crash_core::Vec3;
 use std::io::{self, Write};
@@ -133,11 +133,20 @@ fn data_array(
     writeln!(w, "        </DataArray>")
 }
 
-/// Write `frame` as a .vtu document.
+/// Write `frame` as a .vtu document: one `Piece` per body, so a frame can also be
+/// written body by body as the bodies arrive (`write_vtu_header`, `write_vtu_piece`,
+/// `write_vtu_footer`).
 pub fn write_vtu(w: &mut dyn Write, frame: &Frame, enc: Encoding) -> io::Result<()> {
+    write_vtu_header(w, frame.time, frame.step)?;
+    for b in &frame.bodies {
+        write_vtu_piece(w, b, enc)?;
+    }
+    write_vtu_footer(w)
+}
+
+/// The start of a .vtu document: the grid and its time and step.
+pub fn write_vtu_header(w: &mut dyn Write, time: f64, step: u64) -> io::Result<()> {
     use names::*;
-    let np = frame.node_count();
-    let nc = frame.element_count();
     writeln!(w, r#"<?xml version="1.0"?>"#)?;
     writeln!(
         w,
@@ -148,19 +157,32 @@ pub fn write_vtu(w: &mut dyn Write, frame: &Frame, enc: Encoding) -> io::Result<
     writeln!(
         w,
         r#"      <DataArray type="Float64" Name="{TIME}" NumberOfTuples="1" format="ascii">{:e}</DataArray>"#,
-        frame.time
+        time
     )?;
     writeln!(
         w,
         r#"      <DataArray type="Int64" Name="{STEP}" NumberOfTuples="1" format="ascii">{}</DataArray>"#,
-        frame.step
+        step
     )?;
-    writeln!(w, "    </FieldData>")?;
+    writeln!(w, "    </FieldData>")
+}
+
+/// The end of a .vtu document.
+pub fn write_vtu_footer(w: &mut dyn Write) -> io::Result<()> {
+    writeln!(w, "  </UnstructuredGrid>")?;
+    writeln!(w, "</VTKFile>")
+}
+
+/// One body as one `Piece`.
+pub fn write_vtu_piece(w: &mut dyn Write, body: &FrameBody, enc: Encoding) -> io::Result<()> {
+    use names::*;
+    let bodies = std::slice::from_ref(body);
+    let np = body.x.len();
+    let nc = body.element_count();
     writeln!(
         w,
         r#"    <Piece NumberOfPoints="{np}" NumberOfCells="{nc}">"#
     )?;
-    let bodies = &frame.bodies;
 
     writeln!(
         w,
@@ -269,7 +291,5 @@ pub fn write_vtu(w: &mut dyn Write, frame: &Frame, enc: Encoding) -> io::Result<
         Values::U8(Box::new(types.into_iter())),
     )?;
     writeln!(w, "      </Cells>")?;
-    writeln!(w, "    </Piece>")?;
-    writeln!(w, "  </UnstructuredGrid>")?;
-    writeln!(w, "</VTKFile>")
+    writeln!(w, "    </Piece>")
 }

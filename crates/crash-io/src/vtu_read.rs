@@ -33,6 +33,7 @@ impl Array {
     }
 }
 
+#[derive(Clone, Copy)]
 struct Reader<'a> {
     path: &'a Path,
     header64: bool,
@@ -155,10 +156,24 @@ pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
         .remove(names::STEP)
         .map(|a| a.ints())
         .and_then(|v| v.first().copied());
-    let piece = grid
-        .children()
-        .find(|c| c.has_tag_name("Piece"))
-        .ok_or_else(|| r.err("no Piece element"))?;
+    let mut frame_bodies = Vec::new();
+    for piece in grid.children().filter(|c| c.has_tag_name("Piece")) {
+        frame_bodies.extend(piece_bodies(&r, piece)?);
+    }
+    if frame_bodies.is_empty() && grid.children().all(|c| !c.has_tag_name("Piece")) {
+        return Err(r.err("no Piece element"));
+    }
+    Ok(Frame::from_bodies(
+        time.unwrap_or(0.0),
+        step.unwrap_or(0).max(0) as u64,
+        frame_bodies,
+    ))
+}
+
+/// The bodies of one `Piece` (crash writes one per body; a piece holding several bodies,
+/// as older files do, is split by the point body ids).
+fn piece_bodies(r: &Reader, piece: Node) -> Result<Vec<FrameBody>, IoError> {
+    let r = *r;
     let count = |a: &str| -> Result<usize, IoError> {
         piece
             .attribute(a)
@@ -272,7 +287,7 @@ pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
             }
         }
     }
-    let frame_bodies = bodies
+    let frame_bodies: Vec<FrameBody> = bodies
         .into_iter()
         .map(|(mut b, _, _, tris, quads)| {
             let order: Vec<usize> = tris
@@ -296,9 +311,5 @@ pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
             b
         })
         .collect();
-    Ok(Frame::from_bodies(
-        time.unwrap_or(0.0),
-        step.unwrap_or(0).max(0) as u64,
-        frame_bodies,
-    ))
+    Ok(frame_bodies)
 }

@@ -31,38 +31,49 @@ fn check_with_vtkio(path: &std::path::Path, frame: &Frame) {
     let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
         panic!("not an unstructured grid")
     };
-    assert_eq!(pieces.len(), 1);
-    let Piece::Inline(p) = &pieces[0] else {
-        panic!("piece not inline")
-    };
-    let np: usize = frame.bodies.iter().map(|b| b.x.len()).sum();
-    let nt: usize = frame.bodies.iter().map(|b| b.tris.len()).sum();
-    let nq: usize = frame.bodies.iter().map(|b| b.quads.len()).sum();
-    assert_eq!(p.num_points(), np);
-    assert_eq!(p.cells.types.len(), nt + nq);
-    let tri = p
-        .cells
-        .types
-        .iter()
-        .filter(|t| **t == CellType::Triangle)
-        .count();
-    let quad = p
-        .cells
-        .types
-        .iter()
-        .filter(|t| **t == CellType::Quad)
-        .count();
-    assert_eq!((tri, quad), (nt, nq), "triangles and quads kept as such");
-    // Bodies are written in id order: sphere (id 1, triangles) first.
+    // one piece per body, in id order: sphere (id 1, triangles) first
+    assert_eq!(pieces.len(), frame.bodies.len());
     assert_eq!(frame.bodies[0].id, 1);
-    assert_eq!(p.cells.types[0], CellType::Triangle);
-    assert_eq!(p.cells.types[nt + nq - 1], CellType::Quad);
+    let piece = |k: usize| {
+        let Piece::Inline(p) = &pieces[k] else {
+            panic!("piece not inline")
+        };
+        p
+    };
+    for (k, b) in frame.bodies.iter().enumerate() {
+        let p = piece(k);
+        assert_eq!(p.num_points(), b.x.len());
+        let (nt, nq) = (b.tris.len(), b.quads.len());
+        assert_eq!(p.cells.types.len(), nt + nq);
+        let tri = p
+            .cells
+            .types
+            .iter()
+            .filter(|t| **t == CellType::Triangle)
+            .count();
+        let quad = p
+            .cells
+            .types
+            .iter()
+            .filter(|t| **t == CellType::Quad)
+            .count();
+        assert_eq!((tri, quad), (nt, nq), "triangles and quads kept as such");
+        let fc = f64s(attr(&p.data.point, "contact_force"));
+        assert_eq!(fc.len(), 3 * b.x.len());
+    }
+    let (b0, b1) = (&frame.bodies[0], &frame.bodies[1]);
+    let (p0, p1) = (piece(0), piece(1));
+    assert_eq!(p0.cells.types[0], CellType::Triangle);
+    assert_eq!(p1.cells.types[b1.quads.len() - 1], CellType::Quad);
 
     // Exact values: points, a connectivity entry of the second body, stresses, ids.
-    let pts = f64s(&p.points);
-    let (b0, b1) = (&frame.bodies[0], &frame.bodies[1]);
+    let (pts0, pts1) = (f64s(&p0.points), f64s(&p1.points));
     let n0 = b0.x.len();
-    for (i, q) in [(0usize, b0.x[0]), (n0 - 1, b0.x[n0 - 1]), (n0 + 5, b1.x[5])] {
+    for (pts, i, q) in [
+        (&pts0, 0usize, b0.x[0]),
+        (&pts0, n0 - 1, b0.x[n0 - 1]),
+        (&pts1, 5, b1.x[5]),
+    ] {
         assert_eq!(
             [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]],
             [q.x, q.y, q.z]
@@ -71,38 +82,39 @@ fn check_with_vtkio(path: &std::path::Path, frame: &Frame) {
     let VertexNumbers::XML {
         connectivity,
         offsets,
-    } = &p.cells.cell_verts
+    } = &p1.cells.cell_verts
     else {
         panic!("xml cells")
     };
-    let c = b0.tris.len();
-    assert_eq!(offsets[c] as usize, 3 * c + 4);
-    let q0: Vec<u64> = b1.quads[0]
-        .iter()
-        .map(|&n| (n as usize + n0) as u64)
-        .collect();
-    assert_eq!(&connectivity[3 * c..3 * c + 4], &q0[..]);
-    let vm = f64s(attr(&p.data.cell, "von_mises_top"));
-    assert_eq!(vm[7], b0.von_mises_top[7]);
-    assert_eq!(vm[c + 3], b1.von_mises_top[3]);
+    assert_eq!(offsets[0] as usize, 4);
+    let q0: Vec<u64> = b1.quads[0].iter().map(|&n| n as u64).collect();
+    assert_eq!(&connectivity[0..4], &q0[..]);
+    let vm0 = f64s(attr(&p0.data.cell, "von_mises_top"));
+    assert_eq!(vm0[7], b0.von_mises_top[7]);
+    let vm1 = f64s(attr(&p1.data.cell, "von_mises_top"));
+    assert_eq!(vm1[3], b1.von_mises_top[3]);
     assert!(b1.von_mises_top[3] > 0.0, "the plate is stressed");
-    let vb = f64s(attr(&p.data.cell, "von_mises_bottom"));
-    assert_eq!(vb[c + 3], b1.von_mises_bottom[3]);
-    let mm = f64s(attr(&p.data.cell, "bending_M"));
-    assert_eq!(mm[3 * (c + 2) + 1], b1.m[2][1]);
-    let th = f64s(attr(&p.data.cell, "thickness"));
-    assert_eq!((th[0], th[c]), (0.001, 0.002));
-    let cid = f64s(attr(&p.data.cell, "body_id"));
-    assert_eq!((cid[0], cid[c]), (1.0, 3.0));
-    let pid = f64s(attr(&p.data.point, "body_id"));
-    assert_eq!((pid[0], pid[n0]), (1.0, 3.0));
-    let u = f64s(attr(&p.data.point, "displacement"));
-    assert_eq!(u[3 * n0 + 2], b1.x[0].z - b1.x0[0].z);
-    assert!(u[3 * n0 + 2] != 0.0, "the plate has moved");
-    let v = f64s(attr(&p.data.point, "velocity"));
+    let vb = f64s(attr(&p1.data.cell, "von_mises_bottom"));
+    assert_eq!(vb[3], b1.von_mises_bottom[3]);
+    let mm = f64s(attr(&p1.data.cell, "bending_M"));
+    assert_eq!(mm[3 * 2 + 1], b1.m[2][1]);
+    let (th0, th1) = (
+        f64s(attr(&p0.data.cell, "thickness")),
+        f64s(attr(&p1.data.cell, "thickness")),
+    );
+    assert_eq!((th0[0], th1[0]), (0.001, 0.002));
+    let (c0, c1) = (
+        f64s(attr(&p0.data.cell, "body_id")),
+        f64s(attr(&p1.data.cell, "body_id")),
+    );
+    assert_eq!((c0[0], c1[0]), (1.0, 3.0));
+    let pid = f64s(attr(&p1.data.point, "body_id"));
+    assert_eq!(pid[0], 3.0);
+    let u = f64s(attr(&p1.data.point, "displacement"));
+    assert_eq!(u[2], b1.x[0].z - b1.x0[0].z);
+    assert!(u[2] != 0.0, "the plate has moved");
+    let v = f64s(attr(&p0.data.point, "velocity"));
     assert_eq!(v[4], b0.v[1].y);
-    let fc = f64s(attr(&p.data.point, "contact_force"));
-    assert_eq!(fc.len(), 3 * np);
 }
 
 #[test]

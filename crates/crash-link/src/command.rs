@@ -78,8 +78,8 @@ pub enum Command {
         at: Clock,
         dt: f64,
     },
-    /// What an output frame shows of every body held.
-    Frame,
+    /// What an output frame shows of these bodies (held by the worker).
+    Frame(Vec<u32>),
     /// The state of every body held (a checkpoint).
     States,
     Shutdown(String),
@@ -110,7 +110,7 @@ pub enum Reply {
     Report(StepReport),
     /// The unloaded bodies, sorted by id.
     Unloaded(Vec<BodyLoad>),
-    /// Frame data of every body held, sorted by id.
+    /// Frame data of the bodies asked for, in the order asked.
     Frame(Vec<FrameBody>),
     /// (id, state) of every body held, sorted by id.
     States(Vec<(u32, BodyState)>),

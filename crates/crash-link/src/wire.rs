@@ -211,7 +211,7 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
             at: Some(clock_to_pb(at)),
             dt: *dt,
         }),
-        Command::Frame => PbCommand::Frame(pb::FrameRequest {}),
+        Command::Frame(ids) => PbCommand::Frame(pb::FrameRequest { ids: ids.clone() }),
         Command::States => PbCommand::States(pb::StatesRequest {}),
         Command::Shutdown(reason) => PbCommand::Shutdown(pb::Shutdown {
             reason: reason.clone(),
@@ -279,7 +279,7 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                 at: clock_from_pb(s.at.as_ref())?,
                 dt: s.dt,
             },
-            PbCommand::Frame(_) => Command::Frame,
+            PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
             PbCommand::States(_) => Command::States,
             PbCommand::Shutdown(s) => Command::Shutdown(s.reason.clone()),
         },

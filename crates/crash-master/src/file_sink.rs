@@ -10,7 +10,7 @@ use crate::stats::RunStats;
 use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
 use crash_io::{
-    hash_hex, write_summary, ContactHistory, ContactRow, EnergyHistory, Frame, Indicators,
+    hash_hex, write_summary, ContactHistory, ContactRow, EnergyHistory, FrameBody, Indicators,
     SeriesWriter, Summary, CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
 };
 use serde::{Deserialize, Serialize};
@@ -176,8 +176,18 @@ impl Sink for FileSink {
         Ok(())
     }
 
-    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
-        self.series.write(frame)?;
+    fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError> {
+        self.series.begin_frame(time, step)?;
+        Ok(())
+    }
+
+    fn frame_body(&mut self, body: &FrameBody) -> Result<(), SinkError> {
+        self.series.frame_body(body)?;
+        Ok(())
+    }
+
+    fn frame_end(&mut self) -> Result<(), SinkError> {
+        self.series.end_frame()?;
         self.energy.flush()?;
         self.contacts.flush()?;
         Ok(())

@@ -1,13 +1,53 @@
 //! What a distributed run needs: the bodies and run parameters (filled from
 //! `crash_scene::Built`) and the master's own options.
 
+use crate::error::MasterError;
 use crash_core::contact::ContactConfig;
-use crash_core::{Body, RunConfig, Vec3};
+use crash_core::{Body, BodyBrief, RunConfig, Vec3};
+
+/// Where the bodies come from when the master hands them to workers, one at a time.
+#[derive(Debug, Clone)]
+pub enum BodySource {
+    /// Bodies built already (local runs, tests): moved to their workers as they are.
+    Built(Vec<Option<Body>>),
+    /// A planned scene: each body is built when it is handed over and dropped once
+    /// sent, so the master never holds the model.
+    Scene(Box<crash_scene::Scene>),
+}
+
+impl BodySource {
+    /// Every body (copies of built ones; a scene's built anew), for reference runs.
+    pub fn all(&self) -> Result<Vec<Body>, MasterError> {
+        match self {
+            BodySource::Built(bodies) => Ok(bodies.iter().flatten().cloned().collect()),
+            BodySource::Scene(scene) => scene
+                .build()
+                .map(|b| b.bodies)
+                .map_err(|e| MasterError::Input(e.to_string())),
+        }
+    }
+
+    /// Body `id` (ids 0..n; a built body can be taken once).
+    pub fn take(&mut self, id: u32) -> Result<Body, MasterError> {
+        match self {
+            BodySource::Built(bodies) => bodies
+                .iter_mut()
+                .find(|b| b.as_ref().is_some_and(|b| b.def.id == id))
+                .and_then(Option::take)
+                .ok_or_else(|| MasterError::Input(format!("body {id} is not in the input"))),
+            BodySource::Scene(scene) => scene
+                .body(id as usize)
+                .map_err(|e| MasterError::Input(e.to_string())),
+        }
+    }
+}
 
 #[derive(Debug, Clone)]
 pub struct RunInput {
     pub name: String,
-    pub bodies: Vec<Body>,
+    /// What the master keeps of each body (no nodal data).
+    pub briefs: Vec<BodyBrief>,
+    pub bodies: BodySource,
     pub gravity: Vec3,
     pub contact: ContactConfig,
     /// End time, safety factor, runaway limit, dt floor (the core driver's rules).
@@ -26,24 +66,42 @@ pub struct RunSize {
 }
 
 impl RunInput {
-    pub fn size(&self) -> RunSize {
-        RunSize {
-            bodies: self.bodies.len(),
-            nodes: self.bodies.iter().map(Body::node_count).sum(),
-            elements: self.bodies.iter().map(Body::element_count).sum(),
-        }
-    }
-
+    /// From bodies built in this process (`crash run`, tests).
     pub fn from_built(b: crash_scene::Built) -> Self {
         let config = b.run_config();
         Self {
             name: b.name,
-            bodies: b.bodies,
+            briefs: b.bodies.iter().map(BodyBrief::of).collect(),
+            bodies: BodySource::Built(b.bodies.into_iter().map(Some).collect()),
             gravity: b.gravity,
             contact: b.contact,
             config,
             output_interval: b.output_interval,
             scene_hash: b.scene_hash,
+        }
+    }
+
+    /// From a planned scene: bodies are built one at a time as they are handed to
+    /// workers (`crash-master`: its memory does not grow with the model).
+    pub fn from_plan(scene: crash_scene::Scene, plan: crash_scene::Plan) -> Self {
+        let config = plan.run_config();
+        Self {
+            name: plan.name,
+            briefs: plan.briefs,
+            bodies: BodySource::Scene(Box::new(scene)),
+            gravity: plan.gravity,
+            contact: plan.contact,
+            config,
+            output_interval: plan.output_interval,
+            scene_hash: plan.scene_hash,
+        }
+    }
+
+    pub fn size(&self) -> RunSize {
+        RunSize {
+            bodies: self.briefs.len(),
+            nodes: self.briefs.iter().map(|b| b.nodes).sum(),
+            elements: self.briefs.iter().map(|b| b.elements).sum(),
         }
     }
 }

@@ -28,7 +28,7 @@ pub use checkpoint::MasterCheckpoint;
 pub use error::MasterError;
 pub use file_sink::FileSink;
 pub use file_sink::{read_restart, RestartFile, RESTART_FILE};
-pub use input::{CostModel, RunInput, RunOptions, RunSize};
+pub use input::{BodySource, CostModel, RunInput, RunOptions, RunSize};
 pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions};
 pub use sink::{EnergyRecord, RecordSink, Sink, SinkError};
@@ -80,11 +80,11 @@ fn drive<L: WorkerLink>(
             return Err(e);
         }
     };
-    let bodies = input.bodies;
+    let RunInput { bodies, briefs, .. } = input;
     let every = opts.checkpoint_every;
     let result = (|| {
         match resume {
-            None => m.start(bodies, sink)?,
+            None => m.start(bodies, &briefs, sink)?,
             Some(state) => m.resume(state, bodies)?,
         }
         while !m.finished() {

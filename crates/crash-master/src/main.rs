@@ -82,7 +82,10 @@ fn run(args: Args) -> anyhow::Result<()> {
         end_time: args.end_time,
         output_interval: args.output_interval,
     })?;
-    let input = RunInput::from_built(scene.build()?);
+    // planned, not built: each body is built when it is handed to its worker, so the
+    // master's memory does not grow with the model
+    let plan = scene.plan()?;
+    let input = RunInput::from_plan(scene, plan);
     let restart = match &args.resume {
         Some(path) => Some(read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?),
         None => None,

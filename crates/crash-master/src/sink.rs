@@ -5,8 +5,9 @@ use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
+use crash_core::hash::StateHasher;
 use crash_core::EnergyTotals;
-use crash_io::Frame;
+use crash_io::FrameBody;
 
 pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
 
@@ -33,8 +34,11 @@ pub trait Sink {
     fn checkpoint(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
         Ok(())
     }
-    /// Every body (sorted by id, gathered from every worker) at an output time.
-    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError>;
+    /// A frame at an output time begins; its bodies follow in id order (`frame_body`),
+    /// then `frame_end`.
+    fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError>;
+    fn frame_body(&mut self, body: &FrameBody) -> Result<(), SinkError>;
+    fn frame_end(&mut self) -> Result<(), SinkError>;
     /// The run ended: normally (`error` None, the final frame was written) or not (the
     /// frames written so far are the last complete ones).
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError>;
@@ -60,6 +64,8 @@ pub struct RecordSink {
     pub last_hash: Option<u64>,
     /// Every checkpoint handed over.
     pub checkpoints: Vec<MasterCheckpoint>,
+    /// The frame being received (step, time, hash so far).
+    open: Option<(u64, f64, StateHasher)>,
     pub finished: Option<Result<RunStats, String>>,
 }
 
@@ -95,10 +101,21 @@ impl Sink for RecordSink {
         Ok(())
     }
 
-    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
-        let h = frame.state_hash();
-        self.frames.push((frame.step, frame.time, h));
-        self.last_hash = Some(h);
+    fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError> {
+        self.open = Some((step, time, StateHasher::default()));
+        Ok(())
+    }
+
+    fn frame_body(&mut self, b: &FrameBody) -> Result<(), SinkError> {
+        let (_, _, h) = self.open.as_mut().ok_or("a frame body outside a frame")?;
+        h.add(b.id, &b.x, &b.v, &b.w);
+        Ok(())
+    }
+
+    fn frame_end(&mut self) -> Result<(), SinkError> {
+        let (step, time, h) = self.open.take().ok_or("the end of a frame never begun")?;
+        self.frames.push((step, time, h.finish()));
+        self.last_hash = Some(h.finish());
         Ok(())
     }
 

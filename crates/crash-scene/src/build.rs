@@ -6,7 +6,7 @@ use crate::context::Ctx;
 use crate::error::{ErrorKind, SceneError};
 use crate::globals::finite_vec;
 use crate::margin::default_margin;
-use crate::overlap::check_initial_overlap;
+use crate::overlap::{check_initial_overlap, Penetration};
 use crate::schema::BodySpec;
 use crate::select::{dofs, select};
 use crate::shape::{shape, Shape};
@@ -121,7 +121,7 @@ fn non_negative(ctx: &Ctx, key: &str, v: Option<f64>, unit: &str) -> Result<f64,
     }
 }
 
-fn body(
+pub(crate) fn body(
     scene: &Scene,
     ctx: &Ctx,
     i: usize,
@@ -269,24 +269,7 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
         contact.margin = default_margin(&bodies, g.gravity, g.end_time, g.safety);
     }
     if let Some(p) = check_initial_overlap(&bodies, &contact) {
-        let (a, b) = (
-            &bodies[p.node_body as usize],
-            &bodies[p.segment_body as usize],
-        );
-        let later = p.node_body.max(p.segment_body) as usize;
-        let key = match scene.spec.bodies[later].position {
-            Some(_) => format!("bodies[{later}].position"),
-            None => format!("bodies[{later}]"),
-        };
-        let gap = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-        return Err(ctx.key_error(
-            ErrorKind::Geometry,
-            &key,
-            format!(
-                "bodies \"{}\" and \"{}\" interpenetrate at t = 0: {} node(s) of \"{}\" lie closer to \"{}\" than the half-thickness sum {:.4e} m (node {} by {:.4e} m, at element {}); move them apart",
-                a.def.name, b.def.name, p.nodes, a.def.name, b.def.name, gap, p.node, p.depth, p.segment
-            ),
-        ));
+        return Err(overlap_error(scene, ctx, &p));
     }
     Ok(Built {
         name: scene.name.clone(),
@@ -301,4 +284,24 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
         scene_hash: hash.finish(),
         info,
     })
+}
+
+/// The error for two bodies that interpenetrate at t = 0, located at the later body.
+pub(crate) fn overlap_error(scene: &Scene, ctx: &Ctx, p: &Penetration) -> SceneError {
+    let spec = |id: u32| &scene.spec.bodies[id as usize];
+    let (a, b) = (spec(p.node_body), spec(p.segment_body));
+    let later = p.node_body.max(p.segment_body) as usize;
+    let key = match scene.spec.bodies[later].position {
+        Some(_) => format!("bodies[{later}].position"),
+        None => format!("bodies[{later}]"),
+    };
+    let gap = 0.5 * (a.thickness + b.thickness);
+    ctx.key_error(
+        ErrorKind::Geometry,
+        &key,
+        format!(
+            "bodies \"{}\" and \"{}\" interpenetrate at t = 0: {} node(s) of \"{}\" lie closer to \"{}\" than the half-thickness sum {:.4e} m (node {} by {:.4e} m, at element {}); move them apart",
+            a.name, b.name, p.nodes, a.name, b.name, gap, p.node, p.depth, p.segment
+        ),
+    )
 }

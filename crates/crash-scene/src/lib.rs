@@ -12,6 +12,7 @@ pub mod globals;
 pub mod margin;
 pub mod msh;
 pub mod overlap;
+pub mod plan;
 pub mod schema;
 pub mod select;
 pub mod shape;
@@ -21,6 +22,7 @@ pub mod summary;
 pub use build::{BodyInfo, Built};
 pub use error::{ErrorKind, SceneError};
 pub use overlap::{check_initial_overlap, Penetration};
+pub use plan::Plan;
 pub use summary::{BodySummary, Summary};
 
 use context::Ctx;

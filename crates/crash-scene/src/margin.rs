@@ -72,17 +72,52 @@ pub fn max_speed(b: &Body) -> f64 {
     v0.max(vp)
 }
 
+/// What the default margin needs of one body (so that a planner need not keep it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MarginInputs {
+    pub contact: bool,
+    pub min_length: f64,
+    pub dt_estimate: f64,
+    pub max_speed: f64,
+}
+
+impl MarginInputs {
+    pub fn of(b: &Body) -> Self {
+        Self {
+            contact: b.def.contact,
+            min_length: min_length(b),
+            dt_estimate: dt_estimate(b),
+            max_speed: max_speed(b),
+        }
+    }
+}
+
 /// The default contact margin of a set of bodies (see the module docs).
 pub fn default_margin(bodies: &[Body], gravity: Vec3, end_time: f64, safety: f64) -> f64 {
-    let contact: Vec<&Body> = bodies.iter().filter(|b| b.def.contact).collect();
+    let inputs: Vec<MarginInputs> = bodies.iter().map(MarginInputs::of).collect();
+    default_margin_of(&inputs, gravity, end_time, safety)
+}
+
+/// The default contact margin from each body's inputs.
+pub fn default_margin_of(
+    bodies: &[MarginInputs],
+    gravity: Vec3,
+    end_time: f64,
+    safety: f64,
+) -> f64 {
+    let contact: Vec<&MarginInputs> = bodies.iter().filter(|b| b.contact).collect();
     if contact.is_empty() {
         return 0.0;
     }
     let h = contact
         .iter()
-        .map(|b| min_length(b))
+        .map(|b| b.min_length)
         .fold(f64::INFINITY, f64::min);
-    let dt = safety * bodies.iter().map(dt_estimate).fold(f64::INFINITY, f64::min);
-    let v = contact.iter().map(|b| max_speed(b)).fold(0.0, f64::max) + gravity.norm() * end_time;
+    let dt = safety
+        * bodies
+            .iter()
+            .map(|b| b.dt_estimate)
+            .fold(f64::INFINITY, f64::min);
+    let v = contact.iter().map(|b| b.max_speed).fold(0.0, f64::max) + gravity.norm() * end_time;
     MARGIN_ELEMENT_FRACTION * h + 2.0 * v * dt * MARGIN_STEPS
 }

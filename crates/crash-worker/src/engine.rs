@@ -100,7 +100,7 @@ impl Engine {
                     return reply;
                 }
             }
-            Command::Frame => Ok(Reply::Frame(self.frame())),
+            Command::Frame(ids) => self.frame(&ids).map(Reply::Frame),
             Command::States => Ok(Reply::States(self.states())),
             Command::Shutdown(_) => Ok(Reply::Ack),
         };
@@ -324,9 +324,16 @@ impl Engine {
         out
     }
 
-    /// What an output frame shows of every body held, sorted by id.
-    pub fn frame(&self) -> Vec<FrameBody> {
-        self.held().into_iter().map(FrameBody::capture).collect()
+    /// What an output frame shows of the bodies `ids` (all held), in that order.
+    pub fn frame(&self, ids: &[u32]) -> Result<Vec<FrameBody>, String> {
+        let held: BTreeMap<u32, &Body> = self.held().into_iter().map(|b| (b.def.id, b)).collect();
+        ids.iter()
+            .map(|id| {
+                held.get(id)
+                    .map(|b| FrameBody::capture(b))
+                    .ok_or_else(|| format!("a frame of body {id}, which is not on this worker"))
+            })
+            .collect()
     }
 
     /// The state of every body held, sorted by id.

@@ -4,7 +4,7 @@
 
 use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
-use crash_io::Frame;
+use crash_io::FrameBody;
 use crash_master::{run_with, MasterError, RunInput, RunOptions, RunStats, Sink, SinkError};
 use crash_worker::LocalWorker;
 
@@ -75,6 +75,8 @@ struct Watch {
     max_penetration: f64,
     last: Option<EnergyTotals>,
     steps: u64,
+    /// Step of the frame being received.
+    frame_step: u64,
 }
 
 impl Watch {
@@ -112,16 +114,21 @@ impl Sink for Watch {
         Ok(())
     }
 
-    fn frame(&mut self, frame: &Frame) -> Result<(), SinkError> {
-        for b in &frame.bodies {
-            let finite = |v: &[crash_core::Vec3]| v.iter().all(|p| p.iter().all(|c| c.is_finite()));
-            if !(finite(&b.x) && finite(&b.v) && finite(&b.w)) {
-                self.flag(format!(
-                    "non-finite state of body {} at step {}",
-                    b.id, frame.step
-                ));
-            }
+    fn frame_begin(&mut self, step: u64, _time: f64) -> Result<(), SinkError> {
+        self.frame_step = step;
+        Ok(())
+    }
+
+    fn frame_body(&mut self, b: &FrameBody) -> Result<(), SinkError> {
+        let finite = |v: &[crash_core::Vec3]| v.iter().all(|p| p.iter().all(|c| c.is_finite()));
+        if !(finite(&b.x) && finite(&b.v) && finite(&b.w)) {
+            let step = self.frame_step;
+            self.flag(format!("non-finite state of body {} at step {step}", b.id));
         }
+        Ok(())
+    }
+
+    fn frame_end(&mut self) -> Result<(), SinkError> {
         Ok(())
     }
 

@@ -246,7 +246,8 @@ impl FreePlate {
         }
         let input = RunInput {
             name: "free-plate".into(),
-            bodies: vec![b],
+            briefs: vec![crash_core::BodyBrief::of(&b)],
+            bodies: crash_master::BodySource::Built(vec![Some(b)]),
             gravity: Vec3::zeros(),
             contact: ContactConfig::default(),
             config: RunConfig {

@@ -55,10 +55,15 @@ impl Default for ContactConfig {
 impl ContactConfig {
     /// The search margin of one body: `margin` if set (> 0), otherwise its thickness.
     pub fn margin_for(&self, body: &Body) -> f64 {
+        self.margin_of(body.def.section.thickness)
+    }
+
+    /// The search margin of a body of the given thickness.
+    pub fn margin_of(&self, thickness: f64) -> f64 {
         if self.margin > 0.0 {
             self.margin
         } else {
-            body.def.section.thickness
+            thickness
         }
     }
 

@@ -15,7 +15,7 @@ use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::stats::RunStats;
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::{Body, BodyReport, Clock, EnergyLedger, RunConfig, Vec3};
+use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, RunConfig, Vec3};
 use crash_link::WorkerLink;
 
 mod barrier;
@@ -36,6 +36,7 @@ struct BodyInfo {
     /// Largest move per step the margin argument allows.
     allowed: f64,
     estimate: f64,
+    elements: usize,
 }
 
 /// Relative tolerance of the end-time and output-time comparisons (as the driver).
@@ -77,7 +78,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         if links.is_empty() {
             return Err(MasterError::Input("a run needs at least one worker".into()));
         }
-        if input.bodies.is_empty() {
+        if input.briefs.is_empty() {
             return Err(MasterError::Input("the scene has no bodies".into()));
         }
         if !(opts.margin_factor >= 1.0 && opts.margin_factor.is_finite()) {
@@ -86,35 +87,31 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                 opts.margin_factor
             )));
         }
-        let mut ids: Vec<u32> = input.bodies.iter().map(|b| b.def.id).collect();
-        ids.sort_unstable();
+        let mut sorted: Vec<&BodyBrief> = input.briefs.iter().collect();
+        sorted.sort_by_key(|b| b.id);
+        let ids: Vec<u32> = sorted.iter().map(|b| b.id).collect();
         if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
             return Err(MasterError::Input(format!(
                 "two bodies have the id {}",
                 w[0]
             )));
         }
-        let mut sorted: Vec<&Body> = input.bodies.iter().collect();
-        sorted.sort_by_key(|b| b.def.id);
         let c = input.contact;
         let info: Vec<BodyInfo> = sorted
             .iter()
             .map(|b| {
-                let m = c.margin_for(b);
-                let meshes = c.enabled && b.def.contact;
+                let m = c.margin_of(b.thickness);
+                let meshes = c.enabled && b.contact;
                 BodyInfo {
-                    id: b.def.id,
-                    thickness: b.def.section.thickness,
+                    id: b.id,
+                    thickness: b.thickness,
                     meshes,
                     extra: 0.5 * (opts.margin_factor - 1.0) * m,
                     allowed: 0.5 * (opts.margin_factor - 1.0) * m,
                     estimate: 1.0
-                        + if b.def.kinematic {
-                            0.0
-                        } else {
-                            b.element_count() as f64
-                        }
-                        + if meshes { b.node_count() as f64 } else { 0.0 },
+                        + if b.kinematic { 0.0 } else { b.elements as f64 }
+                        + if meshes { b.nodes as f64 } else { 0.0 },
+                    elements: b.elements,
                 }
             })
             .collect();
@@ -122,8 +119,8 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         // Verlet skin of the level-i search: the MEIM margin of the widest body
         let skin = sorted
             .iter()
-            .filter(|b| c.enabled && b.def.contact)
-            .map(|b| opts.margin_factor * c.margin_for(b))
+            .filter(|b| c.enabled && b.contact)
+            .map(|b| opts.margin_factor * c.margin_of(b.thickness))
             .fold(0.0, f64::max);
         Ok(Self {
             links,

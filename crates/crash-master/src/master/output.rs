@@ -1,36 +1,61 @@
-//! Output: when a frame is due, every worker sends what a frame shows of its bodies;
-//! the master merges them in id order, hands the frame to the sink and drops it.
+//! Output: when a frame is due, the master asks the workers for it in pieces of at most
+//! `FRAME_PIECE` elements (consecutive bodies of one worker, in id order) and hands each
+//! body to the sink as it arrives: neither the master nor the sink holds a large
+//! model's frame at once.
 
 use super::{ns, Master, TIME_EPS};
 use crate::error::MasterError;
 use crate::sink::Sink;
-use crash_io::{Frame, FrameBody};
-use crash_link::{Command, Reply, WorkerLink};
+use crash_core::hash::StateHasher;
+use crash_link::{Command, LinkError, Reply, WorkerLink};
 use std::time::Instant;
 
+/// Most elements asked for in one frame request (a piece holds at least one body).
+pub const FRAME_PIECE: usize = 100_000;
+
 impl<L: WorkerLink> Master<'_, L> {
-    /// The frame of every body now, gathered from the workers.
-    fn gather_frame(&mut self) -> Result<Frame, MasterError> {
-        let nw = self.links.len();
-        let replies = self.exchange((0..nw).map(|_| vec![Command::Frame]).collect())?;
-        let mut all: Vec<FrameBody> = Vec::with_capacity(self.info.len());
-        for (w, mut r) in replies.into_iter().enumerate() {
-            match r.pop() {
-                Some(Reply::Frame(bodies)) => all.extend(bodies),
-                _ => return Err(self.bad_reply(w, "Frame")),
+    /// Runs of consecutive body indices on one worker, each of at most `FRAME_PIECE`
+    /// elements (or one body).
+    fn frame_pieces(&self) -> Vec<(usize, Vec<u32>)> {
+        let mut out: Vec<(usize, Vec<u32>, usize)> = Vec::new();
+        for (i, inf) in self.info.iter().enumerate() {
+            let w = self.worker_of[i].unwrap_or(0);
+            match out.last_mut() {
+                Some((lw, ids, n)) if *lw == w && *n + inf.elements <= FRAME_PIECE => {
+                    ids.push(inf.id);
+                    *n += inf.elements;
+                }
+                _ => out.push((w, vec![inf.id], inf.elements)),
             }
         }
-        let frame = Frame::from_bodies(self.clock.time, self.clock.step, all);
-        let ids: Vec<u32> = frame.bodies.iter().map(|b| b.id).collect();
-        if !ids.iter().copied().eq(self.info.iter().map(|i| i.id)) {
-            return Err(MasterError::Incomplete {
-                step: self.clock.step,
-                what: "frame bodies",
-                got: ids.len(),
-                expected: self.info.len(),
-            });
+        out.into_iter().map(|(w, ids, _)| (w, ids)).collect()
+    }
+
+    /// Stream the frame of every body now to the sink; returns its state hash.
+    fn stream_frame(&mut self, sink: &mut dyn Sink) -> Result<u64, MasterError> {
+        let nw = self.links.len();
+        let (step, time) = (self.clock.step, self.clock.time);
+        sink.frame_begin(step, time).map_err(MasterError::sink)?;
+        let mut hash = StateHasher::default();
+        for (w, ids) in self.frame_pieces() {
+            let mut cmds = vec![Vec::new(); nw];
+            cmds[w].push(Command::Frame(ids.clone()));
+            let Some(Reply::Frame(bodies)) = self.exchange(cmds)?.swap_remove(w).pop() else {
+                return Err(self.bad_reply(w, "Frame"));
+            };
+            if !bodies.iter().map(|b| b.id).eq(ids.iter().copied()) {
+                return Err(self.worker_error(
+                    w,
+                    LinkError::Protocol("a frame piece holds other bodies than asked".into()),
+                ));
+            }
+            for b in &bodies {
+                hash.add(b.id, &b.x, &b.v, &b.w);
+                sink.frame_body(b).map_err(MasterError::sink)?;
+            }
         }
-        Ok(frame)
+        sink.frame_end().map_err(MasterError::sink)?;
+        Ok(hash.finish())
     }
 
     /// Frame at the start, whenever an output time is reached, and at the end.
@@ -43,14 +68,18 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let t = Instant::now();
         let _s = tracing::debug_span!("output").entered();
-        let frame = self.gather_frame()?;
-        self.stats.final_hash = frame.state_hash();
-        sink.frame(&frame).map_err(MasterError::sink)?;
+        self.stats.final_hash = self.stream_frame(sink)?;
         self.last_frame_step = Some(self.clock.step);
-        while (self.frames as f64) * self.output_interval <= time * (1.0 + TIME_EPS)
-            && self.output_interval > 0.0
-        {
-            self.frames += 1;
+        if self.output_interval > 0.0 {
+            // the next frame is the first whose time lies beyond now: in closed form, so
+            // an interval far below the step costs nothing
+            let due = (time * (1.0 + TIME_EPS) / self.output_interval).floor();
+            let next = if due < u64::MAX as f64 {
+                due as u64 + 1
+            } else {
+                u64::MAX
+            };
+            self.frames = next.max(self.frames + 1);
         }
         self.stats.frames += 1;
         self.stats.stages.output_ns += ns(t);

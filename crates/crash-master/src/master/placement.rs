@@ -109,23 +109,58 @@ impl<L: WorkerLink> Master<'_, L> {
         lay
     }
 
-    /// Place the current MEIM groups on workers from scratch (start, resume) and hand
-    /// out `bodies`: the loads for each worker.
-    pub(super) fn place_all(
-        &mut self,
-        bodies: impl Iterator<Item = BodyLoad>,
-    ) -> Vec<Vec<BodyLoad>> {
+    /// Place the current MEIM groups on workers from scratch (start, resume): the
+    /// worker of each body (by index).
+    pub(super) fn place_all(&mut self) -> Vec<usize> {
         let groups = self.owned_groups();
         let placement = self.place(&groups);
-        let mut per_worker: Vec<Vec<BodyLoad>> =
-            (0..self.links.len()).map(|_| Vec::new()).collect();
-        for b in bodies {
-            let Some(i) = self.index(b.id) else { continue };
-            self.worker_of[i] = Some(placement[i]);
-            per_worker[placement[i]].push(b);
+        for (i, &w) in placement.iter().enumerate() {
+            self.worker_of[i] = Some(w);
         }
         self.layout = self.layouts(&groups, &placement);
-        per_worker
+        placement
+    }
+
+    /// Hand the bodies to their workers one at a time (each built or taken, sent, and
+    /// dropped before the next: the master never holds the model), then set every
+    /// worker's groups. `body(id)` gives the body to load.
+    pub(super) fn load_all(
+        &mut self,
+        placement: &[usize],
+        mut body: impl FnMut(u32) -> Result<BodyLoad, MasterError>,
+    ) -> Result<(), MasterError> {
+        let nw = self.links.len();
+        let setup = self.setup();
+        self.expect_acks(
+            (0..nw).map(|_| vec![Command::Setup(setup)]).collect(),
+            "Setup",
+        )?;
+        let at = self.clock;
+        for i in 0..self.info.len() {
+            let load = body(self.info[i].id)?;
+            let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+            cmds[placement[i]].push(Command::Load {
+                at,
+                bodies: vec![load],
+            });
+            self.expect_acks(cmds, "Load")?;
+        }
+        let cmds = self
+            .layout
+            .iter()
+            .map(|l| vec![Command::Regroup(l.clone())])
+            .collect();
+        self.expect_acks(cmds, "Regroup")
+    }
+
+    /// An exchange whose every reply must be Ack.
+    fn expect_acks(&mut self, cmds: Vec<Vec<Command>>, what: &str) -> Result<(), MasterError> {
+        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+            if r.iter().any(|x| !matches!(x, Reply::Ack)) {
+                return Err(self.bad_reply(w, what));
+            }
+        }
+        Ok(())
     }
 
     /// Reassign groups; move bodies whose worker changed (state, exact bits; the

@@ -4,6 +4,7 @@
 use super::Master;
 use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
+use crate::input::BodySource;
 use crate::meim::Meim;
 use crash_core::Body;
 use crash_link::{BodyLoad, Command, Reply, WorkerLink};
@@ -54,7 +55,7 @@ impl<L: WorkerLink> Master<'_, L> {
     pub(crate) fn resume(
         &mut self,
         ck: MasterCheckpoint,
-        bodies: Vec<Body>,
+        mut bodies: BodySource,
     ) -> Result<(), MasterError> {
         if ck.scene_hash != self.scene_hash {
             return Err(MasterError::Input(format!(
@@ -76,15 +77,6 @@ impl<L: WorkerLink> Master<'_, L> {
                 c.time, ck.next_dt
             )));
         }
-        let mut defs = bodies;
-        defs.sort_by_key(|b| b.def.id);
-        let mut loads = Vec::with_capacity(defs.len());
-        for (b, (id, state)) in defs.into_iter().zip(ck.states) {
-            let body = Body::from_parts(b.def, state).map_err(|e| {
-                MasterError::Input(format!("the checkpoint's state of body {id}: {e}"))
-            })?;
-            loads.push(BodyLoad::whole(body));
-        }
         self.clock = c;
         self.next_dt = ck.next_dt;
         self.dt0 = ck.dt0;
@@ -94,25 +86,18 @@ impl<L: WorkerLink> Master<'_, L> {
         self.last_frame_step = ck.last_frame_step;
         self.stats = ck.stats;
         // the Verlet list starts empty: the first update does a full search
-        let per_worker = self.place_all(loads.into_iter());
-        let setup = self.setup();
-        let at = self.clock;
-        let cmds = per_worker
-            .into_iter()
-            .zip(&self.layout)
-            .map(|(bs, lay)| {
-                vec![
-                    Command::Setup(setup),
-                    Command::Load { at, bodies: bs },
-                    Command::Regroup(lay.clone()),
-                ]
-            })
-            .collect();
-        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
-            if r.iter().any(|x| !matches!(x, Reply::Ack)) {
-                return Err(self.bad_reply(w, "Setup/Load/Regroup"));
-            }
-        }
+        let placement = self.place_all();
+        let mut states = ck.states.into_iter();
+        self.load_all(&placement, |id| {
+            let body = bodies.take(id)?;
+            let (sid, state) = states.next().filter(|(sid, _)| *sid == id).ok_or_else(|| {
+                MasterError::Input(format!("the checkpoint has no state of body {id}"))
+            })?;
+            let body = Body::from_parts(body.def, state).map_err(|e| {
+                MasterError::Input(format!("the checkpoint's state of body {sid}: {e}"))
+            })?;
+            Ok(BodyLoad::whole(body))
+        })?;
         Ok(())
     }
 }

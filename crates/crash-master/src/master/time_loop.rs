@@ -4,12 +4,13 @@
 
 use super::{ns, Master, TIME_EPS};
 use crate::error::MasterError;
+use crate::input::BodySource;
 use crate::input::CostModel;
 use crate::sink::Sink;
 use crash_core::contact::BodyBox;
 use crash_core::driver::{check_runaway, choose_dt};
-use crash_core::{Body, Clock, EnergyTotals, Fault};
-use crash_link::{BodyLoad, Command, Reply, Setup, WorkerLink};
+use crash_core::{BodyBrief, Clock, EnergyTotals, Fault};
+use crash_link::{BodyLoad, Command, Setup, WorkerLink};
 use std::time::Instant;
 
 impl<L: WorkerLink> Master<'_, L> {
@@ -20,45 +21,24 @@ impl<L: WorkerLink> Master<'_, L> {
         }
     }
 
-    /// Bodies onto workers (each body's definition and state move to its worker: the
-    /// master keeps none), forces of the initial configuration, first dt.
+    /// Bodies onto workers (each body's definition and state move to its worker, one
+    /// body at a time: the master keeps none), forces of the initial configuration,
+    /// first dt.
     pub(crate) fn start(
         &mut self,
-        bodies: Vec<Body>,
+        mut bodies: BodySource,
+        briefs: &[BodyBrief],
         sink: &mut dyn Sink,
     ) -> Result<(), MasterError> {
         let t0 = Instant::now();
-        let boxes: Vec<BodyBox> = bodies
-            .iter()
-            .map(|b| self.inflate(BodyBox::of(b)))
-            .collect();
+        let boxes: Vec<BodyBox> = briefs.iter().map(|b| self.inflate(b.bbox())).collect();
         self.update_meim(&boxes);
-        let per_worker = self.place_all(bodies.into_iter().map(BodyLoad::whole));
+        let placement = self.place_all();
         self.stats.stages.meim_ns += ns(t0);
         let t1 = Instant::now();
-        let setup = self.setup();
-        let at = self.clock;
-        let cmds = per_worker
-            .into_iter()
-            .zip(&self.layout)
-            .map(|(bs, lay)| {
-                vec![
-                    Command::Setup(setup),
-                    Command::Load { at, bodies: bs },
-                    Command::Regroup(lay.clone()),
-                    Command::Start,
-                ]
-            })
-            .collect();
-        let replies = self.exchange(cmds)?;
+        self.load_all(&placement, |id| Ok(BodyLoad::whole(bodies.take(id)?)))?;
+        let reports = self.reports_of(|| Command::Start, "Start")?;
         self.stats.stages.migration_ns += ns(t1);
-        let mut reports = Vec::with_capacity(replies.len());
-        for (w, mut r) in replies.into_iter().enumerate() {
-            match r.pop() {
-                Some(Reply::Report(rep)) => reports.push(rep),
-                _ => return Err(self.bad_reply(w, "Start")),
-            }
-        }
         self.gather(reports)?;
         let energy = self
             .ledger
