@@ -15,6 +15,7 @@ pub mod error;
 pub mod exact;
 pub mod files;
 pub mod globals;
+pub mod keyword;
 pub mod margin;
 pub mod memory;
 pub mod motion;
@@ -41,6 +42,25 @@ use schema::SceneFile;
 use shape::MeshInputs;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// A scene or keyword deck that cannot be loaded.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum InputError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Deck(#[from] keyword::DeckError),
+}
+
+/// Load a scene file (TOML) or an LS-DYNA keyword deck (`.k`, `.key`, `.dyn`): the one
+/// entry point of `crash run` and `crash check`.
+pub fn load_input(path: &Path, deck: &keyword::DeckOptions) -> Result<Scene, InputError> {
+    if keyword::is_deck(path) {
+        keyword::load(path, deck)
+    } else {
+        Ok(load(path)?)
+    }
+}
 
 /// Values given on the command line that replace the file's.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
