@@ -10,6 +10,7 @@
 //! writes it.
 
 pub mod bc;
+pub mod boundary;
 pub mod cards;
 pub mod control;
 pub mod convert;
@@ -17,6 +18,7 @@ pub mod deck;
 pub mod emit;
 pub mod lexer;
 pub mod mesh;
+pub mod props;
 pub mod readers;
 
 pub use emit::Converted;
