@@ -115,10 +115,13 @@ impl Converted {
         Ok(scene.with_notes(self.notes))
     }
 
-    /// Write the scene to `scene` and its meshes next to it (names as in the TOML);
-    /// returns the files written.
+    /// Write the scene to `scene` and its meshes next to it (names as in the TOML;
+    /// the directory is made if needed); returns the files written.
     pub fn write(&self, scene: &Path) -> std::io::Result<Vec<PathBuf>> {
         let dir = scene.parent().map(Path::to_path_buf).unwrap_or_default();
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(&dir)?;
+        }
         let mut out = Vec::new();
         for (name, surface, _) in &self.meshes {
             let mut text = String::new();
