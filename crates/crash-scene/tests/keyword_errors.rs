@@ -444,3 +444,19 @@ fn part_without_elements_and_undefined_references_are_refused() {
         &["MID 8 is not defined"],
     );
 }
+
+#[test]
+fn nodes_of_no_element_draw_a_note() {
+    let t = with(
+        "*ELEMENT_SHELL",
+        "     999             1.0             1.0             1.0\n*ELEMENT_SHELL",
+    );
+    let b = run(&t, DeckOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(b.notes.len(), 1, "{:?}", b.notes);
+    assert!(
+        b.notes[0].contains("1 node(s) of the deck belong to no shell element")
+            && b.notes[0].contains("node 999"),
+        "{:?}",
+        b.notes
+    );
+}

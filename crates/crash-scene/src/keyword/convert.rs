@@ -233,6 +233,17 @@ pub fn model(deck: &Deck, opts: &DeckOptions) -> Result<Model, DeckError> {
         end_time,
         ..Model::default()
     };
+    let orphans: Vec<i64> = (0..deck.nodes.len())
+        .filter(|&k| ix.owner[k].is_none())
+        .map(|k| deck.nodes[k].id)
+        .collect();
+    if let Some(first) = orphans.first() {
+        m.notes.push(format!(
+            "{} node(s) of the deck belong to no shell element and are not part of any body (node {first}{})",
+            orphans.len(),
+            if orphans.len() > 1 { ", ..." } else { "" }
+        ));
+    }
     super::bc::supports_and_motion(&ix, &mut m)?;
     super::bc::loads(&ix, &mut m)?;
     velocities(&ix, &mut m)?;
