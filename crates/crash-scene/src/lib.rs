@@ -97,13 +97,30 @@ pub struct Scene {
 /// Read and check a scene file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-        kind: ErrorKind::Read,
+    let whole = |kind, message| SceneError {
+        kind,
         file: file.clone(),
         line: 0,
         column: 0,
         key: String::new(),
-        message: format!("cannot read the scene file: {e}"),
+        message,
+    };
+    // a scene file is small: the cap only keeps /dev/zero and the like out
+    let bytes = files::read(path, files::MAX_FILE_BYTES).map_err(|p| {
+        let msg = match &p {
+            files::FileProblem::Unreadable(e) => format!("cannot read the scene file: {e}"),
+            other => format!(
+                "cannot read the scene file: {}",
+                other.describe(path, files::MAX_FILE_BYTES)
+            ),
+        };
+        whole(ErrorKind::Read, msg)
+    })?;
+    let text = String::from_utf8(bytes).map_err(|_| {
+        whole(
+            ErrorKind::Read,
+            "cannot read the scene file: not UTF-8 text".into(),
+        )
     })?;
     parse(&text, &file)
 }

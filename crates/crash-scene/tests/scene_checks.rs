@@ -189,6 +189,14 @@ fn unreadable_scene_file_has_no_invented_location() {
             .starts_with("/no/such/scene.toml: cannot read the scene file"),
         "{e}"
     );
+    // a device as the scene file is refused without reading it
+    if std::path::Path::new("/dev/zero").exists() {
+        let e = crash_scene::load(std::path::Path::new("/dev/zero")).expect_err("device");
+        assert_eq!(
+            e.to_string(),
+            "/dev/zero: cannot read the scene file: /dev/zero is a character device, not a regular file"
+        );
+    }
 }
 
 /// A plate of 4430 x 4430 = 19.6 million quads: below the 20-million per-body guard.
