@@ -10,6 +10,15 @@ use std::collections::{BTreeMap, HashMap};
 
 pub(super) fn bodies(ix: &mut Index<'_>) -> Result<Vec<BodyOut>, DeckError> {
     let d = ix.deck;
+    if d.parts.is_empty() {
+        return Err(super::DeckError {
+            file: d.lx.files.first().cloned().unwrap_or_default(),
+            line: 0,
+            column: 0,
+            keyword: "PART".into(),
+            message: "the deck defines no *PART: there is nothing to run".into(),
+        });
+    }
     let mut shells_of: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
     let mut eids = HashMap::with_capacity(d.shells.len());
     for (k, s) in d.shells.iter().enumerate() {
