@@ -11,7 +11,10 @@ pub fn check(path: &Path, deck: &crash_scene::keyword::DeckOptions) -> anyhow::R
     let scene = crash_scene::load_input(path, deck)?;
     let built = scene.build()?;
     for n in &built.notes {
-        println!("note: {n}");
+        match n.strip_prefix("warning: ") {
+            Some(w) => println!("warning: {w}"),
+            None => println!("note: {n}"),
+        }
     }
     if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
         anyhow::bail!("{}", crate::run::penetration_message(&built, &p));

@@ -57,7 +57,10 @@ fn convert(deck: &Path, scene: &Path, opts: &DeckOptions) -> anyhow::Result<Exit
         .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
     let c = crash_scene::keyword::convert(deck, opts, &prefix)?;
     for n in &c.notes {
-        eprintln!("crash: note: {n}");
+        match n.strip_prefix("warning: ") {
+            Some(w) => eprintln!("crash: warning: {w}"),
+            None => eprintln!("crash: note: {n}"),
+        }
     }
     let files = c
         .write(scene)

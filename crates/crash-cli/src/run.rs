@@ -153,7 +153,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         })?;
     let built = scene.build()?;
     for n in &built.notes {
-        eprintln!("crash: note: {n}");
+        match n.strip_prefix("warning: ") {
+            Some(w) => eprintln!("crash: warning: {w}"),
+            None => eprintln!("crash: note: {n}"),
+        }
     }
     if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
         anyhow::bail!("{}", penetration_message(&built, &p));

@@ -62,7 +62,9 @@ pub struct Built {
     /// Requested outputs beyond the frames (not written by the run yet).
     pub outputs: Outputs,
     /// Things the user should know that are not errors (e.g. an output interval below
-    /// the time step); `crash run` and `crash check` print them.
+    /// the time step); `crash run` and `crash check` print them. A note that starts
+    /// with `warning: ` reports something the run does differently from the input
+    /// (e.g. friction ignored on request).
     pub notes: Vec<String>,
 }
 

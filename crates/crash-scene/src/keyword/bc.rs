@@ -281,7 +281,7 @@ pub(super) fn contacts(ix: &Index<'_>, m: &mut Model, opts: &DeckOptions) -> Res
                 )));
             }
             m.notes.push(format!(
-                "{}: *{}: {what}; ignored (--ignore-friction)",
+                "warning: {}: *{}: {what}; the friction is ignored (--ignore-friction)",
                 d.at(c.loc),
                 c.keyword
             ));
