@@ -7,9 +7,15 @@ use std::path::Path;
 /// docs/performance.md); used only for the run-time estimate.
 const NS_PER_ELEMENT_CYCLE: f64 = 250.0;
 
-pub fn check(path: &Path) -> anyhow::Result<()> {
-    let scene = crash_scene::load(path)?;
+pub fn check(path: &Path, deck: &crash_scene::keyword::DeckOptions) -> anyhow::Result<()> {
+    let scene = crash_scene::load_input(path, deck)?;
     let built = scene.build()?;
+    for n in &built.notes {
+        match n.strip_prefix("warning: ") {
+            Some(w) => println!("warning: {w}"),
+            None => println!("note: {n}"),
+        }
+    }
     if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
         anyhow::bail!("{}", crate::run::penetration_message(&built, &p));
     }

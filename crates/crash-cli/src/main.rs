@@ -1,7 +1,9 @@
 //! The `crash` command.
 
+use anyhow::Context;
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
+use crash_scene::keyword::DeckOptions;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser, Debug)]
@@ -21,8 +23,22 @@ enum Command {
     Run(crash_cli::run::RunArgs),
     /// Validate a scene and print its bodies, the stable time step and the cost, without running.
     Check {
-        /// The scene file (TOML).
+        /// The scene file (TOML) or an LS-DYNA keyword deck (.k, .key, .dyn).
         scene: PathBuf,
+        /// Keyword decks: run contacts with friction frictionless instead of refusing them.
+        #[arg(long)]
+        ignore_friction: bool,
+    },
+    /// Convert an LS-DYNA keyword deck into a scene (TOML) and its meshes (Gmsh .msh,
+    /// one per part, next to the scene): docs/keyword-input.md.
+    Convert {
+        /// The keyword deck (.k, .key, .dyn).
+        deck: PathBuf,
+        /// The scene file to write; meshes are written as SCENE_STEM.partPID.msh beside it.
+        scene: PathBuf,
+        /// Convert contacts with friction as frictionless instead of refusing them.
+        #[arg(long)]
+        ignore_friction: bool,
     },
     /// Verification ladders (error against wall time) and the stability matrix.
     Study(crash_cli::study::cli::StudyArgs),
@@ -31,6 +47,31 @@ enum Command {
         /// The run directory (written by `crash run`).
         out: PathBuf,
     },
+}
+
+/// `crash convert DECK SCENE`: write the scene and its meshes, print the files; warn
+/// when the scene would not run yet (e.g. a load curve the core cannot run).
+fn convert(deck: &Path, scene: &Path, opts: &DeckOptions) -> anyhow::Result<ExitCode> {
+    let prefix = scene
+        .file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    let c = crash_scene::keyword::convert(deck, opts, &prefix)?;
+    for n in &c.notes {
+        match n.strip_prefix("warning: ") {
+            Some(w) => eprintln!("crash: warning: {w}"),
+            None => eprintln!("crash: note: {n}"),
+        }
+    }
+    let files = c
+        .write(scene)
+        .with_context(|| format!("cannot write {}", scene.display()))?;
+    for f in &files {
+        println!("{}", f.display());
+    }
+    if let Err(e) = crash_scene::load(scene).and_then(|s| s.build()) {
+        eprintln!("crash: warning: the scene is written but does not run yet: {e}");
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn main() -> ExitCode {
@@ -44,7 +85,16 @@ fn main() -> ExitCode {
     let result = match Cli::parse().command {
         Command::Run(args) => crash_cli::run::run(&args),
         Command::Study(args) => crash_cli::study::cli::study(&args),
-        Command::Check { scene } => crash_cli::check::check(&scene).map(|()| ExitCode::SUCCESS),
+        Command::Check {
+            scene,
+            ignore_friction,
+        } => crash_cli::check::check(&scene, &DeckOptions { ignore_friction })
+            .map(|()| ExitCode::SUCCESS),
+        Command::Convert {
+            deck,
+            scene,
+            ignore_friction,
+        } => convert(&deck, &scene, &DeckOptions { ignore_friction }),
         Command::Render { out } => crash_io::render_run(&out)
             .map(|files| {
                 for f in files {

@@ -18,7 +18,7 @@ use std::process::ExitCode;
 
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// The scene file (TOML).
+    /// The scene file (TOML) or an LS-DYNA keyword deck (.k, .key, .dyn).
     pub scene: PathBuf,
     /// Run directory [default: out/<scene name>].
     #[arg(long)]
@@ -50,6 +50,10 @@ pub struct RunArgs {
     /// checkpoint are replaced).
     #[arg(long, value_name = "FILE")]
     pub restart: Option<PathBuf>,
+    /// Keyword decks: run contacts that have friction frictionless (a note says so)
+    /// instead of refusing them.
+    #[arg(long)]
+    pub ignore_friction: bool,
 }
 
 /// Exit code of a finished run whose energy-balance error exceeded the scene's limit.
@@ -149,11 +153,21 @@ fn load_restart(
 }
 
 pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
-    let scene = crash_scene::load(&args.scene)?.with_overrides(crash_scene::Overrides {
-        end_time: args.end_time,
-        output_interval: args.output_interval,
-    })?;
+    let deck = crash_scene::keyword::DeckOptions {
+        ignore_friction: args.ignore_friction,
+    };
+    let scene =
+        crash_scene::load_input(&args.scene, &deck)?.with_overrides(crash_scene::Overrides {
+            end_time: args.end_time,
+            output_interval: args.output_interval,
+        })?;
     let built = scene.build()?;
+    for n in &built.notes {
+        match n.strip_prefix("warning: ") {
+            Some(w) => eprintln!("crash: warning: {w}"),
+            None => eprintln!("crash: note: {n}"),
+        }
+    }
     if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
         anyhow::bail!("{}", penetration_message(&built, &p));
     }

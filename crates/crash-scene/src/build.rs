@@ -1,23 +1,30 @@
-//! From a checked scene to core bodies: place the meshes, make the bodies, apply initial
-//! motion, constraints, prescribed motion and loads; derive the contact margin; refuse
-//! bodies that interpenetrate at t = 0.
+//! From a checked scene to core bodies: plan the meshes and check the memory they need
+//! against the machine, generate or import them, place them, make the bodies, apply
+//! initial motion, constraints, prescribed motion and loads; derive the contact margin;
+//! refuse bodies that interpenetrate at t = 0.
 
 use crate::context::Ctx;
+use crate::curves::Curve;
 use crate::error::{ErrorKind, SceneError};
 use crate::globals::finite_vec;
-use crate::margin::default_margin;
+use crate::margin::{default_margin, dt_estimate};
+use crate::memory::{self, Counts};
+use crate::motion::{self, non_negative, Nodes};
+use crate::outputs::{self, Outputs};
 use crate::overlap::{check_initial_overlap, Penetration};
 use crate::schema::BodySpec;
-use crate::select::{dofs, select};
-use crate::shape::{shape, Shape};
+use crate::shape::{plan, Planned, Shape};
 use crate::Scene;
 use crash_core::contact::ContactConfig;
 use crash_core::hash::Fnv;
-use crash_core::{
-    Body, CoreError, Fault, Group, NodalLoad, RunConfig, Section, Stabilization, Vec3,
-    VelocityProgram,
-};
+use crash_core::{Body, CoreError, Fault, Group, RunConfig, Section, Stabilization, Vec3};
 use nalgebra::{Matrix3, Rotation3, Unit};
+use std::collections::BTreeMap;
+
+/// An output interval below the time step estimate writes a frame every step; values
+/// below this fraction of the estimate are raised to it, so that the frame scheduler
+/// (which counts output times one at a time) never loops once per interval.
+pub const OUTPUT_FLOOR_FRACTION: f64 = 0.01;
 
 /// What a body was built from, for summaries and output metadata.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,6 +59,13 @@ pub struct Built {
     pub scene_hash: u64,
     /// Per body, same order as `bodies`.
     pub info: Vec<BodyInfo>,
+    /// Requested outputs beyond the frames (not written by the run yet).
+    pub outputs: Outputs,
+    /// Things the user should know that are not errors (e.g. an output interval below
+    /// the time step); `crash run` and `crash check` print them. A note that starts
+    /// with `warning: ` reports something the run does differently from the input
+    /// (e.g. friction ignored on request).
+    pub notes: Vec<String>,
 }
 
 impl Built {
@@ -100,6 +114,18 @@ fn geometry_error(ctx: &Ctx, s: &Shape, e: CoreError) -> SceneError {
         _ => None,
     };
     match (&s.source, element) {
+        (Some(src), Some(el)) if src.written.is_some() => {
+            // a keyword deck's element: point at its card
+            let (file, line, tag) = src.element_origin(el).unwrap_or_default();
+            SceneError {
+                kind: ErrorKind::Geometry,
+                file,
+                line,
+                column: 0,
+                key: s.key.clone(),
+                message: format!("*ELEMENT_SHELL {tag}: {e}"),
+            }
+        }
         (Some(src), Some(el)) => {
             let (tag, line) = src.element_tags.get(el).copied().unwrap_or((0, 0));
             ctx.value_error(
@@ -112,13 +138,24 @@ fn geometry_error(ctx: &Ctx, s: &Shape, e: CoreError) -> SceneError {
     }
 }
 
-fn non_negative(ctx: &Ctx, key: &str, v: Option<f64>, unit: &str) -> Result<f64, SceneError> {
-    let v = v.unwrap_or(0.0);
-    if v.is_finite() && v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(ctx.invalid(key, format!("must be finite and >= 0 ({unit})")))
+/// The section: thickness, material and the shear correction factor (default 5/6).
+fn section(
+    ctx: &Ctx,
+    key: &str,
+    b: &BodySpec,
+    material: crash_core::Material,
+) -> Result<Section, SceneError> {
+    let mut sec = Section::new(material, b.thickness);
+    if let Some(k) = b.shear_factor {
+        if !(k.is_finite() && k > 0.0 && k <= 1.0) {
+            return Err(ctx.invalid(
+                &format!("{key}.shear_factor"),
+                "must be in (0, 1] (transverse shear correction factor; 5/6 by default)",
+            ));
+        }
+        sec.shear = k * material.shear_modulus() * b.thickness;
     }
+    Ok(sec)
 }
 
 pub(crate) fn body(
@@ -126,8 +163,9 @@ pub(crate) fn body(
     ctx: &Ctx,
     i: usize,
     b: &BodySpec,
-    hash: &mut Fnv,
-) -> Result<(Body, BodyInfo), SceneError> {
+    s: Shape,
+    curves: &BTreeMap<String, Curve>,
+) -> Result<(Body, BodyInfo, Option<Vec<u64>>), SceneError> {
     let key = format!("bodies[{i}]");
     let material = scene.materials.get(&b.material).copied().ok_or_else(|| {
         ctx.value_error(
@@ -139,28 +177,23 @@ pub(crate) fn body(
     if !(b.thickness.is_finite() && b.thickness > 0.0) {
         return Err(ctx.invalid(&format!("{key}.thickness"), "must be finite and > 0 (m)"));
     }
-    let s = shape(ctx, &scene.dir, i, b, hash)?;
+    let section = section(ctx, &key, b, material)?;
     let local = s.mesh.nodes.clone();
     let rot = rotation(ctx, &format!("{key}.rotation"), b)?;
     let pos = finite_vec(ctx, &format!("{key}.position"), b.position)?;
     let mut mesh = s.mesh.clone();
     mesh.transform(&rot, pos);
-    let mut body = Body::new(
-        i as u32,
-        &b.name,
-        &mesh,
-        Section::new(material, b.thickness),
-        Stabilization::default(),
-    )
-    .map_err(|e| match e {
-        CoreError::Thickness { .. } => {
-            ctx.invalid(&format!("{key}.thickness"), "must be finite and > 0 (m)")
-        }
-        CoreError::Material { field, valid, .. } => {
-            ctx.invalid(&format!("materials.{}.{field}", b.material), valid)
-        }
-        other => geometry_error(ctx, &s, other),
-    })?;
+    let mut body = Body::new(i as u32, &b.name, &mesh, section, Stabilization::default()).map_err(
+        |e| match e {
+            CoreError::Thickness { .. } => {
+                ctx.invalid(&format!("{key}.thickness"), "must be finite and > 0 (m)")
+            }
+            CoreError::Material { field, valid, .. } => {
+                ctx.invalid(&format!("materials.{}.{field}", b.material), valid)
+            }
+            other => geometry_error(ctx, &s, other),
+        },
+    )?;
     body.def_mut().mass_damping =
         non_negative(ctx, &format!("{key}.mass_damping"), b.mass_damping, "1/s")?;
     body.def_mut().contact = b.contact.unwrap_or(true);
@@ -168,8 +201,11 @@ pub(crate) fn body(
 
     let v = finite_vec(ctx, &format!("{key}.velocity"), b.velocity)?;
     let w = finite_vec(ctx, &format!("{key}.angular_velocity"), b.angular_velocity)?;
-    let com = body.centre_of_mass();
-    body.set_rigid_velocity(v, w, com);
+    let centre = match b.angular_velocity_centre {
+        Some(c) => finite_vec(ctx, &format!("{key}.angular_velocity_centre"), Some(c))?,
+        None => body.centre_of_mass(),
+    };
+    body.set_rigid_velocity(v, w, centre);
 
     let global = body.def.x0.clone();
     let mut info = BodyInfo {
@@ -179,72 +215,13 @@ pub(crate) fn body(
         prescribed_nodes: 0,
         loaded_nodes: 0,
     };
-    for (k, f) in b.fix.iter().enumerate() {
-        let fk = format!("{key}.fix[{k}]");
-        let nodes = select(ctx, &format!("{fk}.select"), &f.select, &local, &global)?;
-        let mask = dofs(ctx, &format!("{fk}.dofs"), f.dofs.as_ref())?;
-        for n in nodes {
-            body.fix(n, mask);
-        }
-    }
-    for (k, p) in b.prescribe.iter().enumerate() {
-        let pk = format!("{key}.prescribe[{k}]");
-        let nodes = select(ctx, &format!("{pk}.select"), &p.select, &local, &global)?;
-        let velocity = finite_vec(ctx, &format!("{pk}.velocity"), Some(p.velocity))?;
-        let ramp = non_negative(ctx, &format!("{pk}.ramp"), p.ramp, "s")?;
-        body.prescribe(
-            &nodes,
-            VelocityProgram {
-                velocity,
-                angular: Vec3::zeros(),
-                ramp,
-            },
-        );
-    }
-    // several loads on one node are summed here: the core keeps one load per node
-    let mut per_node: Vec<Option<NodalLoad>> = vec![None; body.node_count()];
-    for (k, l) in b.load.iter().enumerate() {
-        let lk = format!("{key}.load[{k}]");
-        let nodes = select(ctx, &format!("{lk}.select"), &l.select, &local, &global)?;
-        if l.force.is_none() && l.moment.is_none() {
-            return Err(ctx.missing(
-                &format!("{lk}.force"),
-                "a load needs force (N) and/or moment (N m)",
-            ));
-        }
-        let force = finite_vec(ctx, &format!("{lk}.force"), l.force)? / nodes.len() as f64;
-        let moment = finite_vec(ctx, &format!("{lk}.moment"), l.moment)? / nodes.len() as f64;
-        let t0 = non_negative(ctx, &format!("{lk}.start"), l.start, "s")?;
-        let t1 = t0 + non_negative(ctx, &format!("{lk}.ramp"), l.ramp, "s")?;
-        for n in nodes {
-            let slot = &mut per_node[n];
-            match slot {
-                None => {
-                    *slot = Some(NodalLoad {
-                        node: n as u32,
-                        force,
-                        moment,
-                        t0,
-                        t1,
-                    })
-                }
-                Some(prev) if prev.t0 == t0 && prev.t1 == t1 => {
-                    prev.force += force;
-                    prev.moment += moment;
-                }
-                Some(_) => {
-                    return Err(ctx.invalid(
-                        &format!("{lk}.select"),
-                        format!("node {n} already carries a load with another start/ramp: loads on one node must share start and ramp"),
-                    ))
-                }
-            }
-        }
-    }
-    for l in per_node.into_iter().flatten() {
-        body.add_load(l);
-        info.loaded_nodes += 1;
-    }
+    let tags = s.source.as_ref().map(|src| src.node_tags.clone());
+    let nodes = Nodes {
+        local: &local,
+        global: &global,
+        tags: tags.as_deref(),
+    };
+    motion::apply(ctx, &key, b, &mut body, &nodes, curves, &mut info)?;
     info.fixed_nodes = body.def.fixed.iter().filter(|&&f| f != 0).count();
     info.prescribed_nodes = body
         .def
@@ -252,17 +229,71 @@ pub(crate) fn body(
         .iter()
         .filter(|&&p| p != crash_core::body::NO_PROGRAM)
         .count();
-    Ok((body, info))
+    Ok((body, info, tags))
+}
+
+/// Refuse a scene whose meshes would not fit in the memory the machine has
+/// (`available`: bytes, None when unknown), before any mesh is generated.
+pub(crate) fn check_memory(
+    ctx: &Ctx,
+    plans: &[Planned],
+    available: Option<u64>,
+) -> Result<(), SceneError> {
+    let Some(available) = available else {
+        return Ok(());
+    };
+    let mut total = Counts::default();
+    plans.iter().for_each(|p| total.add(p.counts));
+    let need = total.bytes();
+    if need <= available as f64 {
+        return Ok(());
+    }
+    let largest = plans
+        .iter()
+        .max_by_key(|p| p.counts.elements())
+        .map_or("bodies", |p| p.key.as_str());
+    Err(ctx.key_error(
+        ErrorKind::TooLarge,
+        largest,
+        format!(
+            "the scene needs about {} of memory ({} elements, {} nodes; about {:.0} bytes per quad and its node, docs/scene-format.md \"Memory\"), more than the {} this machine has available (MemAvailable): coarsen the mesh or run on a larger machine",
+            memory::human(need),
+            total.elements(),
+            total.nodes,
+            Counts { nodes: 1, tris: 0, quads: 1 }.bytes(),
+            memory::human(available as f64),
+        ),
+    ))
 }
 
 pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneError> {
     let g = &scene.globals;
+    let mut plans = Vec::with_capacity(scene.spec.bodies.len());
+    for (i, b) in scene.spec.bodies.iter().enumerate() {
+        plans.push(plan(ctx, &scene.dir, i, b, &mut hash, &scene.inputs)?);
+    }
+    let available = scene.memory_limit.or_else(memory::available);
+    check_memory(ctx, &plans, available)?;
+    let curves = crate::curves::curves(ctx, &scene.spec)?;
     let mut bodies = Vec::with_capacity(scene.spec.bodies.len());
     let mut info = Vec::with_capacity(scene.spec.bodies.len());
-    for (i, b) in scene.spec.bodies.iter().enumerate() {
-        let (body, inf) = body(scene, ctx, i, b, &mut hash)?;
+    let mut tags = Vec::with_capacity(scene.spec.bodies.len());
+    for (i, (b, p)) in scene.spec.bodies.iter().zip(plans).enumerate() {
+        let (body, inf, t) = body(scene, ctx, i, b, p.generate(), &curves)?;
         bodies.push(body);
         info.push(inf);
+        tags.push(t);
+    }
+    let ids: Vec<u32> = bodies.iter().map(|b| b.def.id).collect();
+    let outputs = outputs::resolve(ctx, &scene.spec, &ids, &tags)?;
+    let mut notes = Vec::new();
+    let dt = g.safety * bodies.iter().map(dt_estimate).fold(f64::INFINITY, f64::min);
+    let mut output_interval = g.output_interval;
+    if dt.is_finite() && output_interval < dt {
+        notes.push(format!(
+            "output_interval {output_interval:.3e} s is below the time step (about {dt:.3e} s): a frame is written every step"
+        ));
+        output_interval = output_interval.max(OUTPUT_FLOOR_FRACTION * dt);
     }
     let mut contact = g.contact;
     if !g.margin_given && contact.enabled {
@@ -277,12 +308,14 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
         gravity: g.gravity,
         end_time: g.end_time,
         safety: g.safety,
-        output_interval: g.output_interval,
+        output_interval,
         contact,
         margin_derived: !g.margin_given,
         energy_limit: g.energy_limit,
         scene_hash: hash.finish(),
         info,
+        outputs,
+        notes,
     })
 }
 

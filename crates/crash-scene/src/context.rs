@@ -2,6 +2,21 @@
 
 use crate::error::{line_col, ErrorKind, SceneError};
 use crate::spans::SpanIndex;
+use std::collections::BTreeMap;
+
+/// Where a key of a scene converted from a keyword deck was written in the deck.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Origin {
+    pub file: String,
+    /// 1-based line of the card.
+    pub line: usize,
+    /// The keyword and entity, e.g. `*SECTION_SHELL 2, T1`.
+    pub what: String,
+}
+
+/// Key path (`bodies[0].thickness`) -> its origin; a key without an entry takes the
+/// origin of the nearest enclosing key that has one.
+pub type Origins = BTreeMap<String, Origin>;
 
 /// The file a scene came from, with the spans of its keys.
 #[derive(Debug, Clone)]
@@ -9,6 +24,9 @@ pub struct Ctx {
     pub file: String,
     pub text: String,
     pub spans: SpanIndex,
+    /// Set for a scene converted from a keyword deck: errors then point at the deck's
+    /// cards (file and line; no column), not at the generated TOML.
+    pub origins: Option<Origins>,
 }
 
 /// Longest value text quoted in a message.
@@ -20,10 +38,37 @@ impl Ctx {
             file: file.into(),
             text: text.into(),
             spans: SpanIndex::new(text),
+            origins: None,
+        }
+    }
+
+    /// The deck card a key came from (see `Origins`).
+    pub fn origin(&self, key: &str) -> Option<&Origin> {
+        let origins = self.origins.as_ref()?;
+        let mut p = key;
+        loop {
+            if let Some(o) = origins.get(p) {
+                return Some(o);
+            }
+            p = &p[..p.rfind(['.', '['])?];
         }
     }
 
     fn at(&self, kind: ErrorKind, offset: usize, key: &str, message: String) -> SceneError {
+        if self.origins.is_some() {
+            let (file, line, message) = match self.origin(key) {
+                Some(o) => (o.file.clone(), o.line, format!("{}: {message}", o.what)),
+                None => (self.file.clone(), 0, message),
+            };
+            return SceneError {
+                kind,
+                file,
+                line,
+                column: 0,
+                key: key.into(),
+                message,
+            };
+        }
         let (line, column) = line_col(&self.text, offset);
         SceneError {
             kind,
@@ -113,7 +158,10 @@ impl Ctx {
             .strip_prefix("missing field `")
             .and_then(|r| r.strip_suffix('`'))
         {
-            let key = match path {
+            // the span is the enclosing table's (empty at the top level): name the key by
+            // that table's full path, array index included
+            let table = e.span().and_then(|s| self.spans.table_with_span(&s));
+            let key = match table {
                 Some(p) => format!("{p}.{field}"),
                 None => field.to_string(),
             };

@@ -24,22 +24,46 @@ pub enum ErrorKind {
     MeshFile,
     /// The geometry is unusable (degenerate elements, bodies interpenetrating at t = 0).
     Geometry,
+    /// Valid input that the solver cannot run yet (e.g. a general load curve on a
+    /// prescribed velocity: parsed and checked, but the core has no such program).
+    Unsupported,
+    /// The scene needs more memory than the machine has available, or a file is larger
+    /// than the reader accepts.
+    TooLarge,
 }
 
-/// A scene error located in its file: `file:line:column: key = value: what is valid`.
+/// A scene error located in its file: `file:line:column: key = value: what is valid`
+/// (`file: message` when there is no line, e.g. the scene file itself is unreadable).
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-#[error("{file}:{line}:{column}: {message}")]
+#[error("{}", self.located())]
 pub struct SceneError {
     pub kind: ErrorKind,
     /// The scene file as named by the caller.
     pub file: String,
-    /// 1-based line and column (in characters) of the offending key or value.
+    /// 1-based line and column (in characters) of the offending key or value; line 0
+    /// when the error concerns the whole file, column 0 when only the line is known
+    /// (errors located in a keyword deck).
     pub line: usize,
     pub column: usize,
     /// Dotted key path, e.g. `materials.steel.poisson` or `bodies[1].thickness`.
     pub key: String,
     /// The full explanation (starts with the key).
     pub message: String,
+}
+
+impl SceneError {
+    fn located(&self) -> String {
+        if self.line == 0 {
+            format!("{}: {}", self.file, self.message)
+        } else if self.column == 0 {
+            format!("{}:{}: {}", self.file, self.line, self.message)
+        } else {
+            format!(
+                "{}:{}:{}: {}",
+                self.file, self.line, self.column, self.message
+            )
+        }
+    }
 }
 
 /// 1-based (line, column) of a byte offset; columns count characters.

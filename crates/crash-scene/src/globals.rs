@@ -215,3 +215,43 @@ pub fn references(
     }
     Ok(())
 }
+
+/// Every `curve` named by a prescribed motion or a load is defined.
+pub fn curve_references(
+    ctx: &Ctx,
+    s: &SceneFile,
+    curves: &BTreeMap<String, crate::curves::Curve>,
+) -> Result<(), SceneError> {
+    let defined = || {
+        if curves.is_empty() {
+            "none: add a [curves.NAME] table".to_string()
+        } else {
+            curves.keys().cloned().collect::<Vec<_>>().join(", ")
+        }
+    };
+    for (i, b) in s.bodies.iter().enumerate() {
+        let named = b
+            .prescribe
+            .iter()
+            .enumerate()
+            .map(|(k, p)| (format!("bodies[{i}].prescribe[{k}].curve"), &p.curve))
+            .chain(
+                b.load
+                    .iter()
+                    .enumerate()
+                    .map(|(k, l)| (format!("bodies[{i}].load[{k}].curve"), &l.curve)),
+            );
+        for (key, c) in named {
+            if let Some(name) = c {
+                if !curves.contains_key(name) {
+                    return Err(ctx.value_error(
+                        ErrorKind::Reference,
+                        &key,
+                        format!("no curve of that name; defined: {}", defined()),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}

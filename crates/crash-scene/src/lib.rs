@@ -1,16 +1,27 @@
 //! crash-scene: scene files (TOML) turned into ready-to-run core objects.
 //!
 //! `load`/`parse` read and check a scene (syntax, keys, types, globals, materials,
-//! references); `Scene::build` generates or imports the meshes and returns the bodies
-//! and run parameters (`Built`). Every error is a `SceneError` that names the file,
-//! line, column and key and says what is valid. The format: docs/scene-format.md.
+//! curves, references, the files it names); `Scene::build` estimates the memory the
+//! meshes need, generates or imports them and returns the bodies and run parameters
+//! (`Built`). Every error is a `SceneError` that names the file, line, column and key
+//! and says what is valid. The format: docs/scene-format.md. `keyword` reads LS-DYNA
+//! keyword decks into the same scenes (docs/keyword-input.md); `load_input` loads
+//! either.
 
 pub mod build;
 pub mod context;
+pub mod curves;
 pub mod error;
+pub mod exact;
+pub mod files;
 pub mod globals;
+pub mod keyword;
 pub mod margin;
+pub mod memory;
+pub mod motion;
 pub mod msh;
+pub mod msh_write;
+pub mod outputs;
 pub mod overlap;
 pub mod plan;
 pub mod schema;
@@ -25,13 +36,33 @@ pub use overlap::{check_initial_overlap, Penetration};
 pub use plan::Plan;
 pub use summary::{BodySummary, Summary};
 
-use context::Ctx;
+use context::{Ctx, Origins};
 use crash_core::hash::Fnv;
 use crash_core::Material;
 use globals::Globals;
 use schema::SceneFile;
+use shape::MeshInputs;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// A scene or keyword deck that cannot be loaded.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum InputError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Deck(#[from] keyword::DeckError),
+}
+
+/// Load a scene file (TOML) or an LS-DYNA keyword deck (`.k`, `.key`, `.dyn`): the one
+/// entry point of `crash run` and `crash check`.
+pub fn load_input(path: &Path, deck: &keyword::DeckOptions) -> Result<Scene, InputError> {
+    if keyword::is_deck(path) {
+        keyword::load(path, deck)
+    } else {
+        Ok(load(path)?)
+    }
+}
 
 /// Values given on the command line that replace the file's.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -57,18 +88,41 @@ pub struct Scene {
     ctx: Ctx,
     /// FNV-1a state after the scene file's bytes.
     hash: Fnv,
+    /// Mesh files given in memory (a converted keyword deck's parts), by name.
+    inputs: MeshInputs,
+    /// Memory the build may assume available [bytes] (None: MemAvailable).
+    memory_limit: Option<u64>,
+    /// Notes from the conversion of a keyword deck, passed on to `Built::notes`.
+    notes: Vec<String>,
 }
 
 /// Read and check a scene file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-        kind: ErrorKind::Read,
+    let whole = |kind, message| SceneError {
+        kind,
         file: file.clone(),
         line: 0,
         column: 0,
         key: String::new(),
-        message: format!("cannot read the scene file: {e}"),
+        message,
+    };
+    // a scene file is small: the cap only keeps /dev/zero and the like out
+    let bytes = files::read(path, files::MAX_FILE_BYTES).map_err(|p| {
+        let msg = match &p {
+            files::FileProblem::Unreadable(e) => format!("cannot read the scene file: {e}"),
+            other => format!(
+                "cannot read the scene file: {}",
+                other.describe(path, files::MAX_FILE_BYTES)
+            ),
+        };
+        whole(ErrorKind::Read, msg)
+    })?;
+    let text = String::from_utf8(bytes).map_err(|_| {
+        whole(
+            ErrorKind::Read,
+            "cannot read the scene file: not UTF-8 text".into(),
+        )
     })?;
     parse(&text, &file)
 }
@@ -76,15 +130,36 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 /// Check a scene given as text; `file` names it in errors and locates imported meshes
 /// (relative to its directory).
 pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
-    let ctx = Ctx::new(file, text);
+    let dir = Path::new(file)
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    parse_with(text, file, dir, MeshInputs::new(), None)
+}
+
+/// `parse` with mesh files given in memory and, for a converted keyword deck, the
+/// deck cards its keys came from (errors then point at the deck).
+pub fn parse_with(
+    text: &str,
+    file: &str,
+    dir: PathBuf,
+    inputs: MeshInputs,
+    origins: Option<Origins>,
+) -> Result<Scene, SceneError> {
+    let mut ctx = Ctx::new(file, text);
+    ctx.origins = origins;
     let spec: SceneFile = toml::from_str(text).map_err(|e| ctx.from_toml(&e))?;
     let end_time = globals::check_end_time(&ctx, spec.end_time, false)?;
     let g = globals::globals(&ctx, &spec, end_time, None)?;
     let materials = globals::materials(&ctx, &spec)?;
     globals::references(&ctx, &spec, &materials)?;
-    let path = Path::new(file);
+    let curves = curves::curves(&ctx, &spec)?;
+    globals::curve_references(&ctx, &spec, &curves)?;
+    outputs::check(&ctx, &spec)?;
+    check_files(&ctx, &spec, &dir, &inputs)?;
     let name = spec.name.clone().unwrap_or_else(|| {
-        path.file_stem()
+        Path::new(file)
+            .file_stem()
             .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned())
     });
     let mut hash = Fnv::default();
@@ -92,13 +167,56 @@ pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
     Ok(Scene {
         spec,
         name,
-        dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        dir,
         globals: g,
         materials,
         overrides: Overrides::default(),
         ctx,
         hash,
+        inputs,
+        memory_limit: None,
+        notes: Vec::new(),
     })
+}
+
+/// Every mesh file the scene names exists, is a regular file, is within the size cap and
+/// can be read in the memory available: checked before anything is built, and
+/// reported at the `file` key that names it.
+fn check_files(
+    ctx: &Ctx,
+    spec: &SceneFile,
+    dir: &Path,
+    inputs: &MeshInputs,
+) -> Result<(), SceneError> {
+    for (i, b) in spec.bodies.iter().enumerate() {
+        let Some(m) = &b.mesh else { continue };
+        if inputs.contains_key(&m.file) {
+            continue;
+        }
+        let key = format!("bodies[{i}].mesh.file");
+        let path = dir.join(&m.file);
+        let len = files::check(&path, files::MAX_FILE_BYTES).map_err(|p| {
+            let kind = match p {
+                files::FileProblem::TooLarge(_) => ErrorKind::TooLarge,
+                _ => ErrorKind::Read,
+            };
+            ctx.value_error(kind, &key, p.describe(&path, files::MAX_FILE_BYTES))
+        })?;
+        let need = len.saturating_mul(shape::MSH_READ_FACTOR);
+        if let Some(avail) = memory::available().filter(|&a| need > a) {
+            return Err(ctx.value_error(
+                ErrorKind::TooLarge,
+                &key,
+                format!(
+                    "{} is {len} bytes: reading it needs about {}, more than the {} this machine has available",
+                    path.display(),
+                    memory::human(need as f64),
+                    memory::human(avail as f64)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl Scene {
@@ -134,6 +252,23 @@ impl Scene {
 
     /// Generate or import the meshes and build the bodies (ids 0..n in file order).
     pub fn build(&self) -> Result<Built, SceneError> {
-        build::build(self, &self.ctx, self.hash)
+        let mut b = build::build(self, &self.ctx, self.hash)?;
+        let mut notes = self.notes.clone();
+        notes.append(&mut b.notes);
+        b.notes = notes;
+        Ok(b)
+    }
+
+    /// Build as if the machine had `bytes` of memory available (instead of
+    /// /proc/meminfo's MemAvailable): for tests and for running on another machine.
+    pub fn with_memory_limit(mut self, bytes: u64) -> Self {
+        self.memory_limit = Some(bytes);
+        self
+    }
+
+    /// Add notes that `Built::notes` will carry (the conversion notes of a deck).
+    pub fn with_notes(mut self, notes: Vec<String>) -> Self {
+        self.notes.extend(notes);
+        self
     }
 }

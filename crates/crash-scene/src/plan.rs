@@ -6,9 +6,11 @@
 //! ([`Scene::body`]), so it never holds more than two bodies. Bodies, margin, hash and
 //! errors are exactly those of [`Scene::build`].
 
-use crate::build::{body, overlap_error, BodyInfo};
+use crate::build::{body, check_memory, overlap_error, BodyInfo, OUTPUT_FLOOR_FRACTION};
 use crate::error::SceneError;
 use crate::margin::{default_margin_of, MarginInputs};
+use crate::outputs::{self, Outputs};
+use crate::shape::plan;
 use crate::Scene;
 use crash_core::contact::{candidate_pairs, initial_penetrations, BodyBox, ContactConfig};
 use crash_core::hash::Fnv;
@@ -29,6 +31,10 @@ pub struct Plan {
     pub margin_derived: bool,
     pub energy_limit: f64,
     pub scene_hash: u64,
+    /// Output requests (as `Built::outputs`).
+    pub outputs: Outputs,
+    /// What the build adjusted, for the console (as `Built::notes`).
+    pub notes: Vec<String>,
 }
 
 impl Plan {
@@ -53,24 +59,54 @@ impl Scene {
             )
         })?;
         let mut ignored = Fnv::default();
-        Ok(body(self, &self.ctx, i, spec, &mut ignored)?.0)
+        let planned = plan(&self.ctx, &self.dir, i, spec, &mut ignored, &self.inputs)?;
+        let curves = crate::curves::curves(&self.ctx, &self.spec)?;
+        Ok(body(self, &self.ctx, i, spec, planned.generate(), &curves)?.0)
     }
 
     /// Plan the run: every check of `build`, without keeping the bodies.
     pub fn plan(&self) -> Result<Plan, SceneError> {
         let g = &self.globals;
+        let ctx = &self.ctx;
         let mut hash = self.hash;
         let n = self.spec.bodies.len();
-        let (mut briefs, mut info, mut inputs) = (
+        let mut plans = Vec::with_capacity(n);
+        for (i, b) in self.spec.bodies.iter().enumerate() {
+            plans.push(plan(ctx, &self.dir, i, b, &mut hash, &self.inputs)?);
+        }
+        check_memory(
+            ctx,
+            &plans,
+            self.memory_limit.or_else(crate::memory::available),
+        )?;
+        let curves = crate::curves::curves(ctx, &self.spec)?;
+        let (mut briefs, mut info, mut inputs, mut tags) = (
+            Vec::with_capacity(n),
             Vec::with_capacity(n),
             Vec::with_capacity(n),
             Vec::with_capacity(n),
         );
-        for (i, b) in self.spec.bodies.iter().enumerate() {
-            let (body, inf) = body(self, &self.ctx, i, b, &mut hash)?;
+        for (i, (b, p)) in self.spec.bodies.iter().zip(plans).enumerate() {
+            let (body, inf, t) = body(self, ctx, i, b, p.generate(), &curves)?;
             briefs.push(BodyBrief::of(&body));
             inputs.push(MarginInputs::of(&body));
             info.push(inf);
+            tags.push(t);
+        }
+        let ids: Vec<u32> = briefs.iter().map(|b| b.id).collect();
+        let outputs = outputs::resolve(ctx, &self.spec, &ids, &tags)?;
+        let mut notes = Vec::new();
+        let dt = g.safety
+            * inputs
+                .iter()
+                .map(|m| m.dt_estimate)
+                .fold(f64::INFINITY, f64::min);
+        let mut output_interval = g.output_interval;
+        if dt.is_finite() && output_interval < dt {
+            notes.push(format!(
+                "output_interval {output_interval:.3e} s is below the time step (about {dt:.3e} s): a frame is written every step"
+            ));
+            output_interval = output_interval.max(OUTPUT_FLOOR_FRACTION * dt);
         }
         let mut contact = g.contact;
         if !g.margin_given && contact.enabled {
@@ -86,11 +122,13 @@ impl Scene {
             gravity: g.gravity,
             end_time: g.end_time,
             safety: g.safety,
-            output_interval: g.output_interval,
+            output_interval,
             contact,
             margin_derived: !g.margin_given,
             energy_limit: g.energy_limit,
             scene_hash: hash.finish(),
+            outputs,
+            notes,
         })
     }
 

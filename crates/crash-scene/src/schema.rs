@@ -1,6 +1,9 @@
 //! The scene file as written (serde, unknown keys rejected). Values are checked and
 //! turned into core objects by `build`; defaults live there, next to their checks.
+//! Fixed-length arrays (vectors, sizes, cell counts, curve points) are read by
+//! `exact`, which refuses any other length.
 
+use crate::exact;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
@@ -16,6 +19,7 @@ pub struct SceneFile {
     /// Fraction of the critical time step used (default 0.9).
     pub dt_safety: Option<f64>,
     /// Gravity acceleration [m/s^2] (default zero).
+    #[serde(default, deserialize_with = "exact::option")]
     pub gravity: Option<V3>,
     /// Time between output frames [s] (default end_time / 100).
     pub output_interval: Option<f64>,
@@ -27,6 +31,49 @@ pub struct SceneFile {
     pub materials: BTreeMap<String, MaterialSpec>,
     #[serde(default)]
     pub bodies: Vec<BodySpec>,
+    /// Load curves by name: time/value tables for prescribed motion and loads.
+    #[serde(default)]
+    pub curves: BTreeMap<String, CurveSpec>,
+    /// Requested result intervals beyond the frames (parsed and checked; written by the
+    /// run once the outputs exist, see docs/scene-format.md).
+    #[serde(default)]
+    pub outputs: OutputsSpec,
+}
+
+/// A load curve: points (time [s], value) with increasing times, linear between
+/// points, the first value before the first point and the last value after the last.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurveSpec {
+    #[serde(deserialize_with = "exact::rows")]
+    pub points: Vec<[f64; 2]>,
+}
+
+/// Result intervals [s] named after the LS-DYNA files they correspond to.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputsSpec {
+    /// Global statistics (energies of the whole scene).
+    pub glstat: Option<f64>,
+    /// Energies per body.
+    pub matsum: Option<f64>,
+    /// Contact forces per interface / body pair.
+    pub rcforc: Option<f64>,
+    /// Histories of the nodes in `history`.
+    pub nodout: Option<f64>,
+    /// Reaction forces at supports.
+    pub spcforc: Option<f64>,
+    /// Nodes whose histories are requested, by body and mesh node id.
+    #[serde(default)]
+    pub history: Vec<HistorySpec>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HistorySpec {
+    pub body: String,
+    /// Node ids of the body's mesh file.
+    pub nodes: Vec<i64>,
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
@@ -67,13 +114,24 @@ pub struct BodySpec {
     pub thickness: f64,
     /// "tri" or "quad" (default depends on the shape).
     pub element: Option<String>,
+    /// Transverse shear correction factor (default 5/6).
+    pub shear_factor: Option<f64>,
     /// Translation [m] applied after the rotation.
+    #[serde(default, deserialize_with = "exact::option")]
     pub position: Option<V3>,
     pub rotation: Option<RotationSpec>,
-    /// Initial velocity of the centre of mass [m/s].
+    /// Initial velocity of the centre of mass (of `angular_velocity_centre` when given)
+    /// [m/s].
+    #[serde(default, deserialize_with = "exact::option")]
     pub velocity: Option<V3>,
-    /// Initial angular velocity [rad/s] about the centre of mass.
+    /// Initial angular velocity [rad/s] about the centre of mass (or about
+    /// `angular_velocity_centre`).
+    #[serde(default, deserialize_with = "exact::option")]
     pub angular_velocity: Option<V3>,
+    /// The point [m, global] the initial rigid motion is given at (default: the centre
+    /// of mass).
+    #[serde(default, deserialize_with = "exact::option")]
+    pub angular_velocity_centre: Option<V3>,
     /// Mass-proportional damping c [1/s].
     pub mass_damping: Option<f64>,
     /// Takes part in contact (default true).
@@ -98,6 +156,7 @@ pub struct BodySpec {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotationSpec {
+    #[serde(deserialize_with = "exact::array")]
     pub axis: V3,
     pub angle: f64,
 }
@@ -107,8 +166,10 @@ pub struct RotationSpec {
 #[serde(deny_unknown_fields)]
 pub struct PlateSpec {
     /// [lx, ly] in m.
+    #[serde(deserialize_with = "exact::array")]
     pub size: [f64; 2],
     /// [nx, ny] cells.
+    #[serde(default, deserialize_with = "exact::option")]
     pub cells: Option<[i64; 2]>,
     /// Target cell size [m] (instead of cells).
     pub element_size: Option<f64>,
@@ -130,6 +191,7 @@ pub struct CylinderSpec {
     pub radius: f64,
     pub length: f64,
     /// [around, along] cells.
+    #[serde(default, deserialize_with = "exact::option")]
     pub cells: Option<[i64; 2]>,
     pub element_size: Option<f64>,
 }
@@ -138,6 +200,7 @@ pub struct CylinderSpec {
 #[serde(deny_unknown_fields)]
 pub struct BoxSpec {
     /// [lx, ly, lz] in m.
+    #[serde(deserialize_with = "exact::array")]
     pub size: V3,
     /// Cells along the longest side.
     pub cells: Option<i64>,
@@ -166,10 +229,18 @@ pub struct FixSpec {
 #[serde(deny_unknown_fields)]
 pub struct PrescribeSpec {
     pub select: toml::Value,
-    /// Prescribed velocity [m/s] (rotations are held).
+    /// Prescribed velocity [m/s].
+    #[serde(deserialize_with = "exact::array")]
     pub velocity: V3,
+    /// Prescribed angular velocity [rad/s] of each selected node (default: rotations
+    /// held).
+    #[serde(default, deserialize_with = "exact::option")]
+    pub angular_velocity: Option<V3>,
     /// Ramp time from zero [s] (default 0: moving from the start).
     pub ramp: Option<f64>,
+    /// A curve of `curves` that scales velocity and angular_velocity over time
+    /// (instead of ramp).
+    pub curve: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -177,11 +248,16 @@ pub struct PrescribeSpec {
 pub struct LoadSpec {
     pub select: toml::Value,
     /// Total force [N], split equally over the selected nodes.
+    #[serde(default, deserialize_with = "exact::option")]
     pub force: Option<V3>,
     /// Total moment [N m], split equally over the selected nodes.
+    #[serde(default, deserialize_with = "exact::option")]
     pub moment: Option<V3>,
     /// Time the load starts to rise [s] (default 0).
     pub start: Option<f64>,
     /// Rise time to full value [s] (default 0: a step).
     pub ramp: Option<f64>,
+    /// A curve of `curves` that scales force and moment over time (instead of start
+    /// and ramp).
+    pub curve: Option<String>,
 }

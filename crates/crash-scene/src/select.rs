@@ -1,5 +1,6 @@
 //! Node selectors ("all", the extreme faces/edges "x-" ... "z+" in the body's own frame,
-//! boxes in global coordinates, lists of these) and DOF sets.
+//! boxes in global coordinates, node ids of an imported mesh, lists of these) and DOF
+//! sets.
 
 use crate::context::Ctx;
 use crate::error::{ErrorKind, SceneError};
@@ -11,20 +12,27 @@ use toml::Value;
 /// Relative tolerance of selector comparisons (fraction of the body's size).
 pub const SELECT_TOL: f64 = 1e-9;
 
-const VALID_SELECT: &str = "valid: \"all\", \"x-\", \"x+\", \"y-\", \"y+\", \"z-\", \"z+\", { min = [x, y, z], max = [x, y, z] } (m, global), or a list of these";
+const VALID_SELECT: &str = "valid: \"all\", \"x-\", \"x+\", \"y-\", \"y+\", \"z-\", \"z+\", { min = [x, y, z], max = [x, y, z] } (m, global), { nodes = [ids] } (node ids of the mesh file), or a list of these";
 
 /// The nodes a selector picks, sorted and unique; an empty selection is an error.
 /// `local` are the node positions in the body's own frame (before rotation and
-/// translation), `global` after.
+/// translation), `global` after; `tags` the node ids of an imported mesh (None for a
+/// generated shape).
 pub fn select(
     ctx: &Ctx,
     key: &str,
     v: &Value,
     local: &[Vec3],
     global: &[Vec3],
+    tags: Option<&[u64]>,
 ) -> Result<Vec<usize>, SceneError> {
     let mut picked = vec![false; local.len()];
-    pick(ctx, key, v, local, global, &mut picked)?;
+    let body = Body {
+        local,
+        global,
+        tags,
+    };
+    pick(ctx, key, v, &body, &mut picked)?;
     let out: Vec<usize> = picked
         .iter()
         .enumerate()
@@ -44,14 +52,68 @@ pub fn select(
     Ok(out)
 }
 
+/// What a selector picks from.
+#[derive(Debug)]
+struct Body<'a> {
+    local: &'a [Vec3],
+    global: &'a [Vec3],
+    tags: Option<&'a [u64]>,
+}
+
+/// `{ nodes = [ids] }`: nodes of an imported mesh by their id in the file.
+fn pick_ids(
+    ctx: &Ctx,
+    key: &str,
+    v: &Value,
+    tags: Option<&[u64]>,
+    out: &mut [bool],
+) -> Result<(), SceneError> {
+    let Some(tags) = tags else {
+        return Err(ctx.invalid(
+            key,
+            "node ids select nodes of an imported mesh (mesh.file); this body's mesh is generated: use a face or a box",
+        ));
+    };
+    let ids = v.as_array().filter(|a| !a.is_empty()).ok_or_else(|| {
+        ctx.value_error(
+            ErrorKind::WrongType,
+            key,
+            "wrong type: must be a non-empty array of node ids (integers)",
+        )
+    })?;
+    let index: std::collections::HashMap<u64, usize> =
+        tags.iter().enumerate().map(|(i, &t)| (t, i)).collect();
+    for (k, id) in ids.iter().enumerate() {
+        let ik = format!("{key}[{k}]");
+        let n = id.as_integer().ok_or_else(|| {
+            ctx.value_error(
+                ErrorKind::WrongType,
+                &ik,
+                "wrong type: a node id is an integer",
+            )
+        })?;
+        let i = u64::try_from(n)
+            .ok()
+            .and_then(|t| index.get(&t))
+            .ok_or_else(|| {
+                ctx.invalid(
+                    &ik,
+                    format!("node {n} is not a node of this body's mesh (ids of the mesh file, used by its elements)"),
+                )
+            })?;
+        out[*i] = true;
+    }
+    Ok(())
+}
+
 fn pick(
     ctx: &Ctx,
     key: &str,
     v: &Value,
-    local: &[Vec3],
-    global: &[Vec3],
+    body: &Body<'_>,
     out: &mut [bool],
 ) -> Result<(), SceneError> {
+    let (local, global) = (body.local, body.global);
     match v {
         Value::String(s) => {
             if s == "all" {
@@ -77,13 +139,23 @@ fn pick(
             }
             Ok(())
         }
+        Value::Table(t) if t.contains_key("nodes") => {
+            if let Some(k) = t.keys().find(|k| *k != "nodes") {
+                return Err(ctx.key_error(
+                    ErrorKind::UnknownKey,
+                    &format!("{key}.{k}"),
+                    "a node-id selector has the one key nodes (use a list of selectors to combine it with a box)",
+                ));
+            }
+            pick_ids(ctx, &format!("{key}.nodes"), &t["nodes"], body.tags, out)
+        }
         Value::Table(t) => {
             for k in t.keys() {
                 if k != "min" && k != "max" {
                     return Err(ctx.key_error(
                         ErrorKind::UnknownKey,
                         &format!("{key}.{k}"),
-                        "unknown key in a box selector; valid keys: min, max",
+                        "unknown key in a box selector; valid keys: min, max (or nodes alone)",
                     ));
                 }
             }
@@ -117,7 +189,7 @@ fn pick(
                 ));
             }
             for (i, item) in items.iter().enumerate() {
-                pick(ctx, &format!("{key}[{i}]"), item, local, global, out)?;
+                pick(ctx, &format!("{key}[{i}]"), item, body, out)?;
             }
             Ok(())
         }

@@ -97,6 +97,17 @@ impl SpanIndex {
             .map_or_else(|| self.offset(path), |e| e.key.start)
     }
 
+    /// The table whose value span is exactly `span` (serde reports a missing field with
+    /// the span of the table it belongs in). An array of tables and its item share the
+    /// header's span: the item (the longer path, `bodies[1]`) wins.
+    pub fn table_with_span(&self, span: &Range<usize>) -> Option<&str> {
+        self.entries
+            .iter()
+            .filter(|(_, e)| e.value == *span)
+            .map(|(p, _)| p.as_str())
+            .max_by_key(|p| p.len())
+    }
+
     /// The innermost key whose key span or value span holds `pos` (key spans win: an
     /// unknown-key error points at the key).
     pub fn path_at(&self, pos: usize) -> Option<&str> {

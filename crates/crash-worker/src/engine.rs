@@ -14,6 +14,7 @@
 //! clock; the engine only remembers the clock its bodies are at, to refuse a command
 //! meant for another moment (so a resumed run continues on any set of workers).
 
+use crate::error::EngineError;
 use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, Fault, Group};
 use crash_io::FrameBody;
 use crash_link::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
@@ -84,7 +85,7 @@ impl Engine {
             Command::Regroup(layout) => self.regroup(layout),
             Command::Start => {
                 if let Err(e) = self.check_clock(&Clock::default()) {
-                    return Reply::Error(e);
+                    return Reply::Error(e.to_string());
                 }
                 self.at = Some(Clock::default());
                 return self.run(|g| g.start());
@@ -93,7 +94,7 @@ impl Engine {
                 if let Err(e) = self.check_clock(&at) {
                     Err(e)
                 } else if !(dt.is_finite() && dt > 0.0) {
-                    Err(format!("step {}: invalid time step {dt}", at.step))
+                    Err(EngineError::Step { step: at.step, dt })
                 } else {
                     let reply = self.run(|g| g.advance(&at, dt));
                     self.at = Some(at.after(dt));
@@ -104,24 +105,24 @@ impl Engine {
             Command::States => Ok(Reply::States(self.states())),
             Command::Shutdown(_) => Ok(Reply::Ack),
         };
-        res.unwrap_or_else(Reply::Error)
+        res.unwrap_or_else(|e| Reply::Error(e.to_string()))
     }
 
     /// A command for clock `at` fits the held bodies (any clock fits an empty engine).
-    fn check_clock(&self, at: &Clock) -> Result<(), String> {
+    fn check_clock(&self, at: &Clock) -> Result<(), EngineError> {
         match self.at {
-            Some(c) if self.body_count() > 0 && !c.same_as(at) => Err(format!(
-                "a command for step {} (t = {:e} s) reached bodies at step {} (t = {:e} s)",
-                at.step, at.time, c.step, c.time
-            )),
+            Some(c) if self.body_count() > 0 && !c.same_as(at) => Err(EngineError::Clock {
+                asked_step: at.step,
+                asked_time: at.time,
+                held_step: c.step,
+                held_time: c.time,
+            }),
             _ => Ok(()),
         }
     }
 
-    fn new_group(&self, bodies: Vec<Body>) -> Result<Group, String> {
-        let setup = self
-            .setup
-            .ok_or("bodies arrived before the run setup (gravity, contact)")?;
+    fn new_group(&self, bodies: Vec<Body>) -> Result<Group, EngineError> {
+        let setup = self.setup.ok_or(EngineError::NoSetup)?;
         let mut g = Group::new(bodies, setup.gravity);
         g.contact = setup.contact;
         Ok(g)
@@ -135,18 +136,16 @@ impl Engine {
             .map(|b| b.def.id)
     }
 
-    fn load(&mut self, at: Clock, bodies: Vec<BodyLoad>) -> Result<Reply, String> {
+    fn load(&mut self, at: Clock, bodies: Vec<BodyLoad>) -> Result<Reply, EngineError> {
         self.check_clock(&at)?;
         let held: BTreeSet<u32> = self.ids().collect();
         let mut built = Vec::with_capacity(bodies.len());
         for b in bodies {
             if held.contains(&b.id) {
-                return Err(format!("body {} is already on this worker", b.id));
+                return Err(EngineError::AlreadyHeld(b.id));
             }
             let known = self.defs.get(&b.id).cloned();
-            let body = b
-                .into_body(known.as_ref())
-                .map_err(|e| format!("cannot load: {e}"))?;
+            let body = b.into_body(known.as_ref())?;
             built.push(body);
         }
         for b in &built {
@@ -171,10 +170,13 @@ impl Engine {
         all
     }
 
-    fn unload(&mut self, ids: &[u32], with_def: &[u32]) -> Result<Reply, String> {
+    fn unload(&mut self, ids: &[u32], with_def: &[u32]) -> Result<Reply, EngineError> {
         let held: BTreeSet<u32> = self.ids().collect();
         if let Some(id) = ids.iter().find(|id| !held.contains(id)) {
-            return Err(format!("cannot unload body {id}: it is not on this worker"));
+            return Err(EngineError::NotHeld {
+                id: *id,
+                what: "an unload",
+            });
         }
         // Groups losing members are dissolved; the master sends the new layout next.
         let mut out = Vec::with_capacity(ids.len());
@@ -211,20 +213,18 @@ impl Engine {
         ))
     }
 
-    fn regroup(&mut self, layout: Vec<Vec<u32>>) -> Result<Reply, String> {
+    fn regroup(&mut self, layout: Vec<Vec<u32>>) -> Result<Reply, EngineError> {
         let mut listed = BTreeSet::new();
         for id in layout.iter().flatten() {
             if !listed.insert(*id) {
-                return Err(format!("regroup lists body {id} twice"));
+                return Err(EngineError::Twice(*id));
             }
         }
         let held: BTreeSet<u32> = self.ids().collect();
         if listed != held {
             let missing: Vec<u32> = listed.difference(&held).copied().collect();
             let extra: Vec<u32> = held.difference(&listed).copied().collect();
-            return Err(format!(
-                "regroup does not match the bodies held: not here {missing:?}, not placed {extra:?}"
-            ));
+            return Err(EngineError::Layout { missing, extra });
         }
         let mut layout = layout;
         for g in &mut layout {
@@ -267,13 +267,10 @@ impl Engine {
         f: impl Fn(&mut Group) -> Result<Vec<BodyReport>, Fault> + Sync + Send,
     ) -> Reply {
         if self.broken {
-            return Reply::Error("a fault stopped this worker's groups".into());
+            return Reply::Error(EngineError::Broken.to_string());
         }
         if !self.loose.is_empty() {
-            return Reply::Error(format!(
-                "{} bodies were loaded but not placed in a group",
-                self.loose.len()
-            ));
+            return Reply::Error(EngineError::Unplaced(self.loose.len()).to_string());
         }
         let t0 = Instant::now();
         let results: Vec<(Result<Vec<BodyReport>, Fault>, u64)> = self
@@ -325,13 +322,16 @@ impl Engine {
     }
 
     /// What an output frame shows of the bodies `ids` (all held), in that order.
-    pub fn frame(&self, ids: &[u32]) -> Result<Vec<FrameBody>, String> {
+    pub fn frame(&self, ids: &[u32]) -> Result<Vec<FrameBody>, EngineError> {
         let held: BTreeMap<u32, &Body> = self.held().into_iter().map(|b| (b.def.id, b)).collect();
         ids.iter()
             .map(|id| {
                 held.get(id)
                     .map(|b| FrameBody::capture(b))
-                    .ok_or_else(|| format!("a frame of body {id}, which is not on this worker"))
+                    .ok_or(EngineError::NotHeld {
+                        id: *id,
+                        what: "a frame",
+                    })
             })
             .collect()
     }

@@ -8,9 +8,11 @@
 
 pub mod client;
 pub mod engine;
+pub mod error;
 pub mod local;
 pub mod probe;
 
 pub use client::{run, WorkerError, WorkerOptions};
 pub use engine::Engine;
+pub use error::EngineError;
 pub use local::LocalWorker;
