@@ -21,6 +21,7 @@ pub mod meim;
 pub mod pairs;
 pub mod remote_link;
 pub mod server;
+pub mod session;
 pub mod sink;
 pub mod stats;
 
@@ -31,11 +32,11 @@ pub use file_sink::{read_restart, RestartFile, RESTART_FILE};
 pub use input::{BodySource, CostModel, RunInput, RunOptions, RunSize};
 pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions};
+pub use session::Session;
 pub use sink::{EnergyRecord, RecordSink, Sink, SinkError};
 pub use stats::{Migration, RunStats, StageTimes};
 
 use crash_link::WorkerLink;
-use master::Master;
 use std::time::Instant;
 
 /// Run a scene on the given workers (any `WorkerLink`): start, step to the end time,
@@ -73,44 +74,44 @@ fn drive<L: WorkerLink>(
     let wall = Instant::now();
     // wall time before the checkpoint (the time lost after it is not counted)
     let wall_before = resume.as_ref().map_or(0.0, |c| c.stats.wall_s);
-    let mut m = match Master::new(links, &input, *opts) {
-        Ok(m) => m,
+    let mut s = match Session::start(input, resume, links, sink, opts) {
+        Ok(s) => s,
         Err(e) => {
-            let _ = sink.finish(&RunStats::default(), Some(&e));
+            let stats = RunStats {
+                wall_s: wall_before + wall.elapsed().as_secs_f64(),
+                ..RunStats::default()
+            };
+            let _ = sink.finish(&stats, Some(&e));
             return Err(e);
         }
     };
-    let RunInput { bodies, briefs, .. } = input;
     let every = opts.checkpoint_every;
     let result = (|| {
-        match resume {
-            None => m.start(bodies, &briefs, sink)?,
-            Some(state) => m.resume(state, bodies)?,
-        }
-        while !m.finished() {
-            m.step(sink)?;
-            if every > 0 && m.steps().is_multiple_of(every) && !m.finished() {
+        while !s.finished() {
+            s.step(sink)?;
+            if every > 0 && s.clock().step.is_multiple_of(every) && !s.finished() {
                 let t = Instant::now();
-                m.stats.wall_s = wall_before + wall.elapsed().as_secs_f64();
-                let state = m.checkpoint()?;
+                s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
+                let state = s.checkpoint()?;
                 sink.checkpoint(&state).map_err(MasterError::sink)?;
-                m.stats.stages.output_ns += t.elapsed().as_nanos() as u64;
+                s.stats_mut().stages.output_ns += t.elapsed().as_nanos() as u64;
             }
         }
-        m.finish(sink)
+        Ok(())
     })();
-    m.stats.wall_s = wall_before + wall.elapsed().as_secs_f64();
+    let result = result.and_then(|()| s.finish(sink));
+    s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
+    s.end(result.as_ref().err());
     match result {
-        Ok(()) => {
-            m.shutdown("the run is complete");
-            sink.finish(&m.stats, None).map_err(MasterError::sink)?;
-            Ok(m.stats.clone())
+        Ok(_) => {
+            let stats = s.stats().clone();
+            sink.finish(&stats, None).map_err(MasterError::sink)?;
+            Ok(stats)
         }
         Err(e) => {
-            tracing::error!("run stopped at step {}: {e}", m.clock().step);
-            m.shutdown(&format!("the run stopped: {e}"));
-            m.stats.final_hash = 0;
-            let _ = sink.finish(&m.stats, Some(&e));
+            let mut stats = s.stats().clone();
+            stats.final_hash = 0;
+            let _ = sink.finish(&stats, Some(&e));
             Err(e)
         }
     }

@@ -15,6 +15,7 @@
 //! meant for another moment (so a resumed run continues on any set of workers).
 
 use crate::error::EngineError;
+use crash_core::contact::PairStats;
 use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, Fault, Group};
 use crash_io::FrameBody;
 use crash_link::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
@@ -310,6 +311,18 @@ impl Engine {
     }
 
     /// Every body held, sorted by id.
+    pub fn bodies(&self) -> Vec<&Body> {
+        self.held()
+    }
+
+    /// Contact statistics of the last force pass, group after group.
+    pub fn contact_stats(&self) -> Vec<PairStats> {
+        self.groups
+            .iter()
+            .flat_map(|g| g.contact_stats().iter().copied())
+            .collect()
+    }
+
     fn held(&self) -> Vec<&Body> {
         let mut out: Vec<&Body> = self
             .groups

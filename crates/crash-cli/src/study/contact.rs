@@ -51,15 +51,11 @@ pub fn reissner(level: Level) -> Result<Measurement, CaseError> {
         let elements = c.element_count() + p.element_count();
         let end = 2e-4 / 2.0 + (gap0 + 0.52 * T) / vp;
         let mut run = driver(group(vec![c, p], 1e-3), end, level.safety)?;
-        let z0 = run.group.bodies[0].state.x[pole].z;
+        let z0 = run.bodies()[0].state.x[pole].z;
         let mut curve = Vec::new();
         run.run(|r| {
-            let w = r.group.bodies[0].state.x[pole].z - z0;
-            let f = r
-                .group
-                .contact_stats()
-                .first()
-                .map_or(0.0, |s| s.normal_force);
+            let w = r.bodies[0].state.x[pole].z - z0;
+            let f = r.contact_stats().first().map_or(0.0, |s| s.normal_force);
             curve.push((w, f));
         })?;
         let below: Vec<(f64, f64)> = curve
@@ -103,7 +99,7 @@ pub fn bounce(level: Level) -> Result<Measurement, CaseError> {
         )?;
         let (mut first, mut last) = (None, 0.0);
         run.run(|r| {
-            if let Some(st) = r.group.contact_stats().first() {
+            if let Some(st) = r.contact_stats().first() {
                 if st.active_nodes > 0 {
                     first.get_or_insert(r.time());
                     last = r.time();
@@ -111,7 +107,7 @@ pub fn bounce(level: Level) -> Result<Measurement, CaseError> {
             }
         })?;
         let duration = first.map_or(f64::NAN, |f| last - f);
-        let rebound = com_velocity(&run.group.bodies[0]).z / v0;
+        let rebound = com_velocity(&run.bodies()[0]).z / v0;
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
@@ -119,7 +115,7 @@ pub fn bounce(level: Level) -> Result<Measurement, CaseError> {
             value: duration,
             notes: vec![
                 ("restitution".into(), rebound),
-                ("max energy error".into(), run.ledger.max_error()),
+                ("max energy error".into(), run.max_energy_error),
             ],
         })
     })
@@ -153,10 +149,10 @@ pub fn spheres_head_on(level: Level) -> Result<Measurement, CaseError> {
         let mut run = driver(group(vec![a, b], 1e-3), 1.6e-3, level.safety)?;
         let mut drift: f64 = 0.0;
         run.run(|r| {
-            let p: Vec3 = r.group.bodies.iter().map(Body::linear_momentum).sum();
+            let p: Vec3 = r.bodies.iter().map(|b| b.linear_momentum()).sum();
             drift = drift.max(p.norm() / p_scale);
         })?;
-        let va = com_velocity(&run.group.bodies[0]);
+        let va = com_velocity(&run.bodies()[0]);
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
@@ -164,7 +160,7 @@ pub fn spheres_head_on(level: Level) -> Result<Measurement, CaseError> {
             value: -va.x / v0,
             notes: vec![
                 ("momentum drift".into(), drift),
-                ("max energy error".into(), run.ledger.max_error()),
+                ("max energy error".into(), run.max_energy_error),
             ],
         })
     })
@@ -188,16 +184,16 @@ pub fn sphere_on_plate(level: Level) -> Result<Measurement, CaseError> {
         let mut run = driver(group(vec![s, p], 1e-3), 2.5e-3, level.safety)?;
         let mut pen: f64 = 0.0;
         run.run(|r| {
-            for st in r.group.contact_stats() {
+            for st in r.contact_stats() {
                 pen = pen.max(st.max_penetration_ratio);
             }
         })?;
-        let rebound = com_velocity(&run.group.bodies[0]).z / v0;
+        let rebound = com_velocity(&run.bodies()[0]).z / v0;
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
             steps: run.clock.step,
-            value: run.ledger.max_error(),
+            value: run.max_energy_error,
             notes: vec![
                 ("restitution".into(), rebound),
                 ("max penetration/t".into(), pen),

@@ -1,7 +1,8 @@
 //! Refinement ladders: one measured run per level, observed orders of convergence.
 
+use super::looprun::LoopRun;
 use crash_core::shapes::ElementKind;
-use crash_core::{Body, CoreError, Fault, Group, Run, RunConfig, Vec3};
+use crash_core::{Body, CoreError, Fault, Group, Vec3};
 use std::time::Instant;
 
 /// Why a case could not be measured: its input was refused, or the run stopped.
@@ -9,6 +10,8 @@ use std::time::Instant;
 pub enum CaseError {
     Input(CoreError),
     Fault(Fault),
+    /// The time loop stopped for a reason of its own (not a physical fault).
+    Run(String),
 }
 
 impl std::fmt::Display for CaseError {
@@ -16,6 +19,7 @@ impl std::fmt::Display for CaseError {
         match self {
             CaseError::Input(e) => write!(f, "input refused: {e}"),
             CaseError::Fault(e) => write!(f, "run stopped: {e}"),
+            CaseError::Run(e) => write!(f, "run stopped: {e}"),
         }
     }
 }
@@ -132,16 +136,10 @@ fn order(a: (f64, f64), b: (f64, f64)) -> Option<f64> {
     (a.1 > 0.0 && b.1 > 0.0 && a.0 != b.0 && p.is_finite()).then_some(p)
 }
 
-/// A single-group run of the core driver at the level's safety factor.
-pub fn driver(group: Group, end_time: f64, safety: f64) -> Result<Run, Fault> {
-    Run::new(
-        group,
-        RunConfig {
-            end_time,
-            safety,
-            ..Default::default()
-        },
-    )
+/// A run of `group`'s bodies through the time loop `crash run` runs, at the level's
+/// safety factor.
+pub fn driver(group: Group, end_time: f64, safety: f64) -> Result<LoopRun, CaseError> {
+    Ok(LoopRun::new(group, end_time, safety))
 }
 
 /// A group of bodies without gravity.

@@ -7,6 +7,7 @@ pub mod cases;
 pub mod cli;
 pub mod contact;
 pub mod ladder;
+pub mod looprun;
 pub mod matrix;
 pub mod outcome;
 pub mod report;

@@ -39,7 +39,7 @@ fn plate_frequency(
     let mut crossings = Vec::new();
     let mut prev = (0.0, 0.0);
     run.run(|r| {
-        let w = r.group.bodies[0].state.x[centre].z;
+        let w = r.bodies[0].state.x[centre].z;
         let time = r.time();
         if prev.0 > 0.0 && prev.1 * w < 0.0 {
             crossings.push(prev.0 + prev.1 / (prev.1 - w) * (time - prev.0));
@@ -135,7 +135,7 @@ pub fn cantilever(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
         let elements = b.element_count();
         let mut run = driver(group(vec![b]), 0.4, level.safety)?;
         run.run(|_| {})?;
-        let b = &run.group.bodies[0];
+        let b = &run.bodies()[0];
         let w = -tip
             .iter()
             .map(|&i| b.state.x[i].z - b.def.x0[i].z)
@@ -188,7 +188,7 @@ pub fn wave_speed(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
         let mut hist = vec![Vec::new(); 2];
         let mut run = driver(group(vec![b]), 0.9 / exact, level.safety)?;
         run.run(|r| {
-            let b = &r.group.bodies[0];
+            let b = &r.bodies[0];
             for (h, set) in hist.iter_mut().zip(&sets) {
                 let v = set.iter().map(|&i| b.state.v[i].x).sum::<f64>() / set.len().max(1) as f64;
                 h.push((r.time() - 0.5 * r.clock.last_dt, v));
@@ -231,10 +231,10 @@ pub fn rigid_rotation(kind: ElementKind, level: Level) -> Result<Measurement, Ca
         let mut run = driver(group(vec![b]), end, level.safety)?;
         let mut worst = 0.0f64;
         run.run(|r| {
-            let e = r.group.bodies[0].state.energy;
+            let e = r.bodies[0].state.energy;
             worst = worst.max((e.internal.abs() + e.hourglass.abs()) / e.kinetic);
         })?;
-        let dl = (run.group.bodies[0].angular_momentum() - l0).norm() / l0.norm();
+        let dl = (run.bodies()[0].angular_momentum() - l0).norm() / l0.norm();
         Ok(Raw {
             h: 0.1 / n as f64,
             elements,

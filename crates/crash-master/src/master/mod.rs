@@ -157,9 +157,12 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         self.info.binary_search_by_key(&id, |b| b.id).ok()
     }
 
-    /// Steps taken so far.
-    pub(crate) fn steps(&self) -> u64 {
-        self.clock.step
+    pub(crate) fn links(&self) -> &[L] {
+        self.links
+    }
+
+    pub(crate) fn max_energy_error(&self) -> f64 {
+        self.ledger.max_error()
     }
 
     /// Best-effort shutdown of every worker (some may be gone).

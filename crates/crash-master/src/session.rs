@@ -1,0 +1,105 @@
+//! The time loop driven one step at a time by its caller: the same loop `run_with`
+//! drives (and `crash run` and `crash-master` with it), for a caller that observes the
+//! run between steps (the study reads the bodies of its in-process worker).
+
+use crate::checkpoint::MasterCheckpoint;
+use crate::error::MasterError;
+use crate::input::{RunInput, RunOptions};
+use crate::master::Master;
+use crate::sink::Sink;
+use crate::stats::RunStats;
+use crash_core::Clock;
+use crash_link::WorkerLink;
+
+/// A run in progress on `links`.
+pub struct Session<'a, L: WorkerLink> {
+    m: Master<'a, L>,
+}
+
+impl<L: WorkerLink> std::fmt::Debug for Session<'_, L> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Session")
+            .field("clock", &self.m.clock())
+            .finish()
+    }
+}
+
+impl<'a, L: WorkerLink> Session<'a, L> {
+    /// Bodies onto the workers, forces of the initial configuration, the first frame
+    /// (`resume`: the checkpoint's state instead, nothing written).
+    pub fn start(
+        input: RunInput,
+        resume: Option<MasterCheckpoint>,
+        links: &'a mut [L],
+        sink: &mut dyn Sink,
+        opts: &RunOptions,
+    ) -> Result<Self, MasterError> {
+        let mut m = Master::new(links, &input, *opts)?;
+        let RunInput { bodies, briefs, .. } = input;
+        let started = match resume {
+            None => m.start(bodies, &briefs, sink),
+            Some(state) => m.resume(state, bodies),
+        };
+        match started {
+            Ok(()) => Ok(Self { m }),
+            Err(e) => {
+                m.shutdown(&format!("the run stopped: {e}"));
+                Err(e)
+            }
+        }
+    }
+
+    pub fn finished(&self) -> bool {
+        self.m.finished()
+    }
+
+    /// One global step.
+    pub fn step(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        self.m.step(sink)
+    }
+
+    /// The state after the current step (gathered from the workers).
+    pub fn checkpoint(&mut self) -> Result<MasterCheckpoint, MasterError> {
+        self.m.checkpoint()
+    }
+
+    /// The run's clock.
+    pub fn clock(&self) -> Clock {
+        self.m.clock()
+    }
+
+    /// The largest relative energy-balance error so far.
+    pub fn max_energy_error(&self) -> f64 {
+        self.m.max_energy_error()
+    }
+
+    /// The workers (in-process ones can be read between steps).
+    pub fn links(&self) -> &[L] {
+        self.m.links()
+    }
+
+    pub fn stats(&self) -> &RunStats {
+        &self.m.stats
+    }
+
+    pub(crate) fn stats_mut(&mut self) -> &mut RunStats {
+        &mut self.m.stats
+    }
+
+    /// The final frame and the statistics (then `end`).
+    pub fn finish(&mut self, sink: &mut dyn Sink) -> Result<RunStats, MasterError> {
+        self.m.finish(sink)?;
+        Ok(self.m.stats.clone())
+    }
+
+    /// Tell the workers to stop (after an error: why).
+    pub fn end(&mut self, error: Option<&MasterError>) {
+        match error {
+            None => self.m.shutdown("the run is complete"),
+            Some(e) => {
+                tracing::error!("run stopped at step {}: {e}", self.m.clock().step);
+                self.m.shutdown(&format!("the run stopped: {e}"));
+            }
+        }
+    }
+}
