@@ -107,7 +107,7 @@ pub fn bounce(level: Level) -> Result<Measurement, CaseError> {
             }
         })?;
         let duration = first.map_or(f64::NAN, |f| last - f);
-        let rebound = com_velocity(&run.bodies()[0]).z / v0;
+        let rebound = com_velocity(run.bodies()[0]).z / v0;
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
@@ -152,7 +152,7 @@ pub fn spheres_head_on(level: Level) -> Result<Measurement, CaseError> {
             let p: Vec3 = r.bodies.iter().map(|b| b.linear_momentum()).sum();
             drift = drift.max(p.norm() / p_scale);
         })?;
-        let va = com_velocity(&run.bodies()[0]);
+        let va = com_velocity(run.bodies()[0]);
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
@@ -188,7 +188,7 @@ pub fn sphere_on_plate(level: Level) -> Result<Measurement, CaseError> {
                 pen = pen.max(st.max_penetration_ratio);
             }
         })?;
-        let rebound = com_velocity(&run.bodies()[0]).z / v0;
+        let rebound = com_velocity(run.bodies()[0]).z / v0;
         Ok(Raw {
             h: sphere_edge(R, level.mesh),
             elements,
