@@ -43,9 +43,12 @@ pub enum MasterError {
     Network(String),
 }
 
+/// What a sink's writers may fail with (boxed: each sink has its own errors).
+pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
+
 impl MasterError {
     /// An output error (the sink's own error type is boxed).
-    pub fn sink(e: crate::sink::SinkError) -> Self {
+    pub fn sink(e: SinkError) -> Self {
         MasterError::Sink(e.to_string())
     }
 }

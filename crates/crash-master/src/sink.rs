@@ -9,7 +9,7 @@ use crash_core::hash::StateHasher;
 use crash_core::EnergyTotals;
 use crash_io::FrameBody;
 
-pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
+pub use crate::error::SinkError;
 
 /// Receives the results of a run, in time order.
 pub trait Sink {
