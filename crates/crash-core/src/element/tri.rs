@@ -100,6 +100,12 @@ pub struct KernelOut<S> {
     pub ratio: S,
 }
 
+/// Components of `p` in the frame (e1, e2, e3).
+#[inline(always)]
+pub fn local<S: Real>(p: V3<S>, e1: V3<S>, e2: V3<S>, e3: V3<S>) -> [S; 3] {
+    [p.dot(e1), p.dot(e2), p.dot(e3)]
+}
+
 /// Internal forces of a triangle: writes its three slots (global force, moment).
 #[inline(always)]
 pub fn tri_kernel<S: Real>(
@@ -149,10 +155,17 @@ pub fn tri_kernel<S: Real>(
         cx,
         cy,
     };
-    let loc = |p: V3<S>| [p.dot(e1), p.dot(e2), p.dot(e3)];
     let rates = LocalRates {
-        v: [loc(e.v[0]), loc(e.v[1]), loc(e.v[2])],
-        w: [loc(e.w[0]), loc(e.w[1]), loc(e.w[2])],
+        v: [
+            local(e.v[0], e1, e2, e3),
+            local(e.v[1], e1, e2, e3),
+            local(e.v[2], e1, e2, e3),
+        ],
+        w: [
+            local(e.w[0], e1, e2, e3),
+            local(e.w[1], e1, e2, e3),
+            local(e.w[2], e1, e2, e3),
+        ],
     };
     let mut lo = [[S::splat(0.0); 6]; 3];
     let (e_pl, d_pl) = plate_forces(k, &kin, &rates, h, st, &mut lo);

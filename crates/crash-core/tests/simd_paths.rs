@@ -1,0 +1,155 @@
+//! One binary, every instruction set: the element loops give the same bits on every SIMD
+//! path this CPU has (baseline, AVX2, AVX-512: `element::simd`), and in SIMD batches of
+//! 4 or 8 elements the same bits as one element at a time.
+
+use crash_core::element::batch::{QuadChunk, TriChunk};
+use crash_core::element::real::{F4, F8};
+use crash_core::element::simd::{self, Lanewise, Path};
+use crash_core::hash::state_hash;
+use crash_core::shapes::{plate, ElementKind};
+use crash_core::{Body, Group, Material, Run, RunConfig, Section, Stabilization, Vec3};
+
+/// Triangles and quads, with and without Kelvin damping, element counts that leave a
+/// remainder after the SIMD batches, a distorted mesh and a velocity field with spin.
+fn scene() -> Vec<Body> {
+    let mut out = Vec::new();
+    let cases = [
+        (ElementKind::Tri, 1e-7, 19, 13),
+        (ElementKind::Quad, 1e-7, 21, 13),
+        (ElementKind::Quad, 0.0, 37, 29),
+        (ElementKind::Tri, 0.0, 11, 7),
+    ];
+    for (id, (kind, kelvin, nx, ny)) in cases.into_iter().enumerate() {
+        let mat = Material::new(7800.0, 200e9, 0.3, kelvin).expect("valid");
+        let mut m = plate(0.4, 0.3, nx, ny, kind);
+        for p in &mut m.nodes {
+            let (x, y) = (p.x, p.y);
+            p.x += 0.002 * (31.0 * y).sin();
+            p.y += 0.002 * (23.0 * x).cos();
+            p.z += 0.01 * id as f64 + 0.001 * (17.0 * x).sin();
+        }
+        let mut b = Body::new(
+            id as u32,
+            "p",
+            &m,
+            Section::new(mat, 0.002),
+            Stabilization::default(),
+        )
+        .expect("valid");
+        for i in 0..b.x.len() {
+            let p = b.x0[i];
+            b.v[i] = Vec3::new(
+                0.3 * p.y,
+                -0.2 * p.x,
+                2.0 * (9.0 * p.x).sin() * (7.0 * p.y).cos(),
+            );
+            b.w[i] = Vec3::new(3.0 * p.y, 1.0, -2.0 * p.x);
+        }
+        out.push(b);
+    }
+    out
+}
+
+fn final_hash() -> u64 {
+    let mut run = Run::new(
+        Group::new(scene(), Vec3::new(0.0, 0.0, -9.81)),
+        RunConfig {
+            end_time: f64::INFINITY,
+            ..Default::default()
+        },
+    )
+    .expect("start");
+    for _ in 0..200 {
+        run.step().expect("stable");
+    }
+    state_hash(&run.group.bodies)
+}
+
+#[test]
+fn every_simd_path_gives_the_same_state_hash() {
+    let paths = simd::available();
+    println!(
+        "paths on this CPU: {:?} (auto: {})",
+        paths.iter().map(|p| p.name()).collect::<Vec<_>>(),
+        simd::best().name()
+    );
+    let mut hashes = Vec::new();
+    for p in &paths {
+        simd::force(*p).expect("available path");
+        assert_eq!(simd::path_name(), p.name());
+        let h = final_hash();
+        println!("{}: state hash {h:016x}", p.name());
+        hashes.push(h);
+    }
+    assert!(hashes.windows(2).all(|w| w[0] == w[1]), "{hashes:x?}");
+    for p in Path::ALL {
+        assert_eq!(simd::force(p).is_ok(), p.supported());
+    }
+    simd::force(simd::best()).expect("best path");
+}
+
+/// Internal forces of one body with batches of `S::W` elements (and the remainder one by
+/// one), compared bit for bit.
+fn forces_with<S: crash_core::element::real::Lanes>(b: &Body) -> (Vec<u64>, Vec<u64>) {
+    let mut b = b.clone();
+    let (sec, stab) = (b.section, b.stab);
+    let nodes = (&b.x[..], &b.v[..], &b.w[..]);
+    let nt = b.tris.len();
+    let (ts, qs) = b.slots.split_at_mut(3 * nt);
+    let (tst, qst) = b.shell.split_at_mut(nt);
+    let mut sums = Vec::new();
+    for _ in 0..3 {
+        let s = TriChunk {
+            sec: &sec,
+            stab: &stab,
+            els: &b.tris,
+            states: &mut *tst,
+            slots: &mut *ts,
+            nodes,
+            h: 1e-6,
+            first: 0,
+        }
+        .run::<S>()
+        .expect("forces");
+        let q = QuadChunk {
+            sec: &sec,
+            stab: &stab,
+            els: &b.quads,
+            states: &mut *qst,
+            hourglass: &mut b.hourglass,
+            slots: &mut *qs,
+            nodes,
+            h: 1e-6,
+            first: nt,
+        }
+        .run::<S>()
+        .expect("forces");
+        for s in [s, q] {
+            let e = s.energy;
+            sums.extend([e.internal, e.hourglass, e.damping, s.dt, s.hot_density]);
+        }
+    }
+    let mut bits: Vec<u64> = b.slots.iter().flatten().map(|v| v.to_bits()).collect();
+    bits.extend(
+        b.shell
+            .iter()
+            .flat_map(|s| s.m.into_iter().chain(s.q).chain([s.drill]))
+            .map(f64::to_bits),
+    );
+    bits.extend(
+        b.hourglass
+            .iter()
+            .flat_map(|h| [h.w, h.th[0], h.th[1]])
+            .map(f64::to_bits),
+    );
+    (bits, sums.into_iter().map(f64::to_bits).collect())
+}
+
+#[test]
+fn batches_of_4_and_8_match_one_element_at_a_time() {
+    for b in scene() {
+        let one = forces_with::<f64>(&b);
+        assert_eq!(one, forces_with::<F4>(&b), "F4, body {}", b.id);
+        assert_eq!(one, forces_with::<F8>(&b), "F8, body {}", b.id);
+    }
+}
