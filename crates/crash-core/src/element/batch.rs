@@ -20,57 +20,72 @@ pub type Nodes<'a> = (&'a [Vec3], &'a [Vec3], &'a [Vec3]);
 /// What a chunk reports: its sums, or the first failing element (body-wide index).
 pub type ChunkResult = Result<ForceSums, (usize, ElemFailure)>;
 
-/// Build a kernel scalar from W per-lane values.
+/// Lanes from per-lane values `f(0..W)`.
 #[inline(always)]
-fn lanes<S: Lanes>(f: impl Fn(usize) -> f64) -> S {
-    let mut s = S::splat(0.0);
-    for k in 0..S::W {
-        s.set_lane(k, f(k));
+fn gather<S: Lanes>(f: impl Fn(usize) -> f64) -> S {
+    let mut a = [0.0; 8];
+    for (k, v) in a.iter_mut().enumerate().take(S::W) {
+        *v = f(k);
     }
-    s
+    S::from_array(a)
 }
 
-/// Gather x, v and w of one element node for every lane.
+/// One node vector of every lane: `at(k)` is lane k's node.
 #[inline(always)]
-fn node_vecs<S: Lanes>((x, v, w): Nodes<'_>, node: impl Fn(usize) -> u32) -> [V3<S>; 3] {
-    let z = S::splat(0.0);
-    let mut out = [V3::new(z, z, z); 3];
-    for k in 0..S::W {
-        let i = node(k) as usize;
-        for (o, a) in out.iter_mut().zip([x, v, w]) {
-            let p = &a[i];
-            o.x.set_lane(k, p.x);
-            o.y.set_lane(k, p.y);
-            o.z.set_lane(k, p.z);
-        }
-    }
-    out
+fn gather_v3<S: Lanes>(a: &[Vec3], at: impl Fn(usize) -> usize) -> V3<S> {
+    V3::new(
+        gather(
+            #[inline(always)]
+            |k| a[at(k)].x,
+        ),
+        gather(
+            #[inline(always)]
+            |k| a[at(k)].y,
+        ),
+        gather(
+            #[inline(always)]
+            |k| a[at(k)].z,
+        ),
+    )
 }
 
 #[inline(always)]
-fn shell_in<S: Lanes>(st: &[ShellState]) -> ShellL<S> {
+fn gather_shell<S: Lanes>(sts: &[ShellState]) -> ShellL<S> {
     ShellL {
-        m: std::array::from_fn(|c| lanes(|k| st[k].m[c])),
-        q: std::array::from_fn(|c| lanes(|k| st[k].q[c])),
-        drill: lanes(|k| st[k].drill),
+        m: [
+            gather(|k| sts[k].m[0]),
+            gather(|k| sts[k].m[1]),
+            gather(|k| sts[k].m[2]),
+        ],
+        q: [gather(|k| sts[k].q[0]), gather(|k| sts[k].q[1])],
+        drill: gather(|k| sts[k].drill),
     }
 }
 
 #[inline(always)]
-fn shell_out<S: Lanes>(l: &ShellL<S>, st: &mut [ShellState]) {
-    for (k, s) in st.iter_mut().enumerate().take(S::W) {
-        s.m = l.m.map(|c| c.lane(k));
-        s.q = l.q.map(|c| c.lane(k));
-        s.drill = l.drill.lane(k);
+fn scatter_shell<S: Lanes>(l: &ShellL<S>, sts: &mut [ShellState]) {
+    let (m0, m1, m2) = (l.m[0].to_array(), l.m[1].to_array(), l.m[2].to_array());
+    let (q0, q1, dr) = (l.q[0].to_array(), l.q[1].to_array(), l.drill.to_array());
+    for (k, s) in sts.iter_mut().enumerate().take(S::W) {
+        s.m = [m0[k], m1[k], m2[k]];
+        s.q = [q0[k], q1[k]];
+        s.drill = dr[k];
     }
 }
 
+/// Force slots of node i of every lane: slots[n k + i] (n nodes per element).
 #[inline(always)]
-fn slots_out<S: Lanes, const N: usize>(out: &[[S; 6]; N], slots: &mut [Slot]) {
+fn scatter_slots<S: Lanes>(o: &[S; 6], n: usize, i: usize, slots: &mut [Slot]) {
+    let c = [
+        o[0].to_array(),
+        o[1].to_array(),
+        o[2].to_array(),
+        o[3].to_array(),
+        o[4].to_array(),
+        o[5].to_array(),
+    ];
     for k in 0..S::W {
-        for i in 0..N {
-            slots[k * N + i] = out[i].map(|c| c.lane(k));
-        }
+        slots[n * k + i] = [c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k]];
     }
 }
 
@@ -96,28 +111,115 @@ fn book<S: Lanes>(
     e0: usize,
     sums: &mut ForceSums,
 ) -> Result<(), (usize, ElemFailure)> {
-    for l in 0..S::W {
-        let ratio = r.ratio.lane(l);
+    let ratio = r.ratio.to_array();
+    for (l, &ratio) in ratio.iter().enumerate().take(S::W) {
         if ratio.is_nan() || ratio < COLLAPSE_RATIO {
             return Err((e0 + l, ElemFailure::Collapsed { ratio }));
         }
     }
-    let dt = element_dt(sec, r.length);
-    let density = (r.internal + hourglass) / area0;
+    let dt = element_dt(sec, r.length).to_array();
+    let density = ((r.internal + hourglass) / area0).to_array();
+    let (internal, hourglass) = (r.internal.to_array(), hourglass.to_array());
+    let damping = r.damping.to_array();
     for l in 0..S::W {
         sums.add(
             e0 + l,
-            r.internal.lane(l),
-            hourglass.lane(l),
-            r.damping.lane(l),
-            density.lane(l),
-            dt.lane(l),
+            internal[l],
+            hourglass[l],
+            damping[l],
+            density[l],
+            dt[l],
         );
     }
     Ok(())
 }
 
-/// Triangles `els` (exactly S::W of them) starting at element index `e0`.
+/// Lanes of a triangle batch: kernel input, resultants and nodal forces.
+#[derive(Debug, Clone, Copy)]
+pub struct TriLanes<S> {
+    input: TriIn<S>,
+    st: ShellL<S>,
+    out: [[S; 6]; 3],
+}
+
+impl<S: Real> TriLanes<S> {
+    fn zero() -> Self {
+        let z = S::splat(0.0);
+        let z3 = V3::new(z, z, z);
+        Self {
+            input: TriIn {
+                x: [z3; 3],
+                v: [z3; 3],
+                w: [z3; 3],
+                bx0: [z; 3],
+                by0: [z; 3],
+                area0: z,
+            },
+            st: ShellL {
+                m: [z; 3],
+                q: [z; 2],
+                drill: z,
+            },
+            out: [[z; 6]; 3],
+        }
+    }
+}
+
+/// Gather S::W triangles into `l` (every input and resultant).
+#[inline(always)]
+fn tri_gather<S: Lanes>(
+    els: &[TriElem],
+    nodes: Nodes<'_>,
+    sts: &[ShellState],
+    l: &mut TriLanes<S>,
+) {
+    let (els, sts) = (&els[..S::W], &sts[..S::W]);
+    for i in 0..3 {
+        l.input.x[i] = gather_v3(
+            nodes.0,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        l.input.v[i] = gather_v3(
+            nodes.1,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        l.input.w[i] = gather_v3(
+            nodes.2,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        l.input.bx0[i] = gather(|k| els[k].bx0[i]);
+        l.input.by0[i] = gather(|k| els[k].by0[i]);
+    }
+    l.input.area0 = gather(|k| els[k].area0);
+    l.st = gather_shell(sts);
+}
+
+#[inline(always)]
+fn tri_scatter<S: Lanes>(l: &TriLanes<S>, sts: &mut [ShellState], slots: &mut [Slot]) {
+    scatter_shell(&l.st, &mut sts[..S::W]);
+    let slots = &mut slots[..3 * S::W];
+    for i in 0..3 {
+        scatter_slots(&l.out[i], 3, i, slots);
+    }
+}
+
+#[inline(always)]
+fn tri_compute<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    e0: usize,
+    h: S,
+    l: &mut TriLanes<S>,
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
+    let r = tri_kernel(k, &l.input, h, &mut l.st, &mut l.out);
+    book(sec, &r, S::splat(0.0), l.input.area0, e0, sums)
+}
+
+/// Triangles `els` (at least S::W of them; the first S::W) from element index `e0`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn tri_batch<S: Lanes>(
@@ -130,26 +232,144 @@ fn tri_batch<S: Lanes>(
     sts: &mut [ShellState],
     slots: &mut [Slot],
     sums: &mut ForceSums,
+    buf: &mut TriLanes<S>,
 ) -> Result<(), (usize, ElemFailure)> {
-    let g: [[V3<S>; 3]; 3] = std::array::from_fn(|i| node_vecs(nodes, |l| els[l].nodes[i]));
-    let input = TriIn {
-        x: std::array::from_fn(|i| g[i][0]),
-        v: std::array::from_fn(|i| g[i][1]),
-        w: std::array::from_fn(|i| g[i][2]),
-        bx0: std::array::from_fn(|i| lanes(|l| els[l].bx0[i])),
-        by0: std::array::from_fn(|i| lanes(|l| els[l].by0[i])),
-        area0: lanes(|l| els[l].area0),
-    };
-    let mut st = shell_in::<S>(sts);
-    let mut out = [[S::splat(0.0); 6]; 3];
-    let r = tri_kernel(k, &input, h, &mut st, &mut out);
-    book(sec, &r, S::splat(0.0), input.area0, e0, sums)?;
-    shell_out(&st, sts);
-    slots_out(&out, slots);
+    tri_gather(els, nodes, sts, buf);
+    tri_compute(k, sec, e0, h, buf, sums)?;
+    tri_scatter(buf, sts, slots);
     Ok(())
 }
 
-/// Quads `els` (exactly S::W of them) starting at element index `e0`.
+/// Lanes of a quad batch: kernel input, resultants and nodal forces.
+#[derive(Debug, Clone, Copy)]
+pub struct QuadLanes<S> {
+    input: QuadIn<S>,
+    st: ShellL<S>,
+    hg: HgL<S>,
+    out: [[S; 6]; 4],
+}
+
+impl<S: Real> QuadLanes<S> {
+    fn zero() -> Self {
+        let z = S::splat(0.0);
+        let z3 = V3::new(z, z, z);
+        Self {
+            input: QuadIn {
+                x: [z3; 4],
+                v: [z3; 4],
+                w: [z3; 4],
+                bx0: [z; 2],
+                by0: [z; 2],
+                gamma: [z; 4],
+                area0: z,
+                e0: [z; 3],
+                k_m: z,
+                k_w: z,
+                k_th: z,
+            },
+            st: ShellL {
+                m: [z; 3],
+                q: [z; 2],
+                drill: z,
+            },
+            hg: HgL { w: z, th: [z; 2] },
+            out: [[z; 6]; 4],
+        }
+    }
+}
+
+/// Gather S::W quads into `l` (every input and resultant).
+#[inline(always)]
+fn quad_gather<S: Lanes>(
+    els: &[QuadElem],
+    nodes: Nodes<'_>,
+    sts: &[ShellState],
+    hgs: &[HourglassState],
+    l: &mut QuadLanes<S>,
+) {
+    let (els, sts, hgs) = (&els[..S::W], &sts[..S::W], &hgs[..S::W]);
+    let q = &mut l.input;
+    for i in 0..4 {
+        q.x[i] = gather_v3(
+            nodes.0,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        q.v[i] = gather_v3(
+            nodes.1,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        q.w[i] = gather_v3(
+            nodes.2,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        q.gamma[i] = gather(|k| els[k].gamma[i]);
+    }
+    q.bx0 = [gather(|k| els[k].bx0[2]), gather(|k| els[k].bx0[3])];
+    q.by0 = [gather(|k| els[k].by0[2]), gather(|k| els[k].by0[3])];
+    q.e0 = [
+        gather(|k| els[k].e0[0]),
+        gather(|k| els[k].e0[1]),
+        gather(|k| els[k].e0[2]),
+    ];
+    q.area0 = gather(|k| els[k].area0);
+    q.k_m = gather(|k| els[k].k_m);
+    q.k_w = gather(|k| els[k].k_w);
+    q.k_th = gather(|k| els[k].k_th);
+    l.st = gather_shell(sts);
+    l.hg = HgL {
+        w: gather(|k| hgs[k].w),
+        th: [gather(|k| hgs[k].th[0]), gather(|k| hgs[k].th[1])],
+    };
+}
+
+#[inline(always)]
+fn quad_scatter<S: Lanes>(
+    l: &QuadLanes<S>,
+    sts: &mut [ShellState],
+    hgs: &mut [HourglassState],
+    slots: &mut [Slot],
+) {
+    scatter_shell(&l.st, &mut sts[..S::W]);
+    let (w, t0, t1) = (
+        l.hg.w.to_array(),
+        l.hg.th[0].to_array(),
+        l.hg.th[1].to_array(),
+    );
+    for (k, h) in hgs[..S::W].iter_mut().enumerate() {
+        h.w = w[k];
+        h.th = [t0[k], t1[k]];
+    }
+    let slots = &mut slots[..4 * S::W];
+    for i in 0..4 {
+        scatter_slots(&l.out[i], 4, i, slots);
+    }
+}
+
+#[inline(always)]
+fn quad_compute<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    e0: usize,
+    h: S,
+    l: &mut QuadLanes<S>,
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
+    let (r, extra) = quad_kernel(k, &l.input, h, &mut l.st, &mut l.hg, &mut l.out);
+    let corners = extra.corners.map(|c| c.to_array());
+    for ln in 0..S::W {
+        for (corner, c) in corners.iter().enumerate() {
+            if c[ln].is_nan() || c[ln] <= 0.0 {
+                return Err((e0 + ln, ElemFailure::Inverted { corner }));
+            }
+        }
+    }
+    book(sec, &r, extra.hourglass, l.input.area0, e0, sums)
+}
+
+/// Quads `els` (at least S::W of them; the first S::W) from element index `e0`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn quad_batch<S: Lanes>(
@@ -163,42 +383,11 @@ fn quad_batch<S: Lanes>(
     hgs: &mut [HourglassState],
     slots: &mut [Slot],
     sums: &mut ForceSums,
+    buf: &mut QuadLanes<S>,
 ) -> Result<(), (usize, ElemFailure)> {
-    let g: [[V3<S>; 3]; 4] = std::array::from_fn(|i| node_vecs(nodes, |l| els[l].nodes[i]));
-    let input = QuadIn {
-        x: std::array::from_fn(|i| g[i][0]),
-        v: std::array::from_fn(|i| g[i][1]),
-        w: std::array::from_fn(|i| g[i][2]),
-        bx0: std::array::from_fn(|i| lanes(|l| els[l].bx0[2 + i])),
-        by0: std::array::from_fn(|i| lanes(|l| els[l].by0[2 + i])),
-        gamma: std::array::from_fn(|i| lanes(|l| els[l].gamma[i])),
-        area0: lanes(|l| els[l].area0),
-        e0: std::array::from_fn(|i| lanes(|l| els[l].e0[i])),
-        k_m: lanes(|l| els[l].k_m),
-        k_w: lanes(|l| els[l].k_w),
-        k_th: lanes(|l| els[l].k_th),
-    };
-    let mut st = shell_in::<S>(sts);
-    let mut hg = HgL {
-        w: lanes(|l| hgs[l].w),
-        th: std::array::from_fn(|c| lanes(|l| hgs[l].th[c])),
-    };
-    let mut out = [[S::splat(0.0); 6]; 4];
-    let (r, extra) = quad_kernel(k, &input, h, &mut st, &mut hg, &mut out);
-    for l in 0..S::W {
-        for (corner, c) in extra.corners.iter().enumerate() {
-            if c.lane(l).is_nan() || c.lane(l) <= 0.0 {
-                return Err((e0 + l, ElemFailure::Inverted { corner }));
-            }
-        }
-    }
-    book(sec, &r, extra.hourglass, input.area0, e0, sums)?;
-    shell_out(&st, sts);
-    for (l, s) in hgs.iter_mut().enumerate().take(S::W) {
-        s.w = hg.w.lane(l);
-        s.th = hg.th.map(|c| c.lane(l));
-    }
-    slots_out(&out, slots);
+    quad_gather(els, nodes, sts, hgs, buf);
+    quad_compute(k, sec, e0, h, buf, sums)?;
+    quad_scatter(buf, sts, hgs, slots);
     Ok(())
 }
 
@@ -227,6 +416,7 @@ impl Lanewise for TriChunk<'_> {
         );
         let (els, sts, slots) = (self.els, self.states, self.slots);
         let mut sums = ForceSums::default();
+        let (mut buf, mut buf1) = (TriLanes::<S>::zero(), TriLanes::<f64>::zero());
         let w = S::W;
         let full = els.len() - els.len() % w;
         let mut j = 0;
@@ -234,13 +424,14 @@ impl Lanewise for TriChunk<'_> {
             tri_batch(
                 &kw,
                 self.sec,
-                &els[j..j + w],
+                &els[j..],
                 self.first + j,
                 self.nodes,
                 S::splat(self.h),
                 &mut sts[j..],
                 &mut slots[3 * j..],
                 &mut sums,
+                &mut buf,
             )?;
             j += w;
         }
@@ -248,13 +439,14 @@ impl Lanewise for TriChunk<'_> {
             tri_batch(
                 &k1,
                 self.sec,
-                &els[j..j + 1],
+                &els[j..],
                 self.first + j,
                 self.nodes,
                 self.h,
                 &mut sts[j..],
                 &mut slots[3 * j..],
                 &mut sums,
+                &mut buf1,
             )?;
             j += 1;
         }
@@ -288,6 +480,7 @@ impl Lanewise for QuadChunk<'_> {
         );
         let (els, sts, hgs, slots) = (self.els, self.states, self.hourglass, self.slots);
         let mut sums = ForceSums::default();
+        let (mut buf, mut buf1) = (QuadLanes::<S>::zero(), QuadLanes::<f64>::zero());
         let w = S::W;
         let full = els.len() - els.len() % w;
         let mut j = 0;
@@ -295,7 +488,7 @@ impl Lanewise for QuadChunk<'_> {
             quad_batch(
                 &kw,
                 self.sec,
-                &els[j..j + w],
+                &els[j..],
                 self.first + j,
                 self.nodes,
                 S::splat(self.h),
@@ -303,6 +496,7 @@ impl Lanewise for QuadChunk<'_> {
                 &mut hgs[j..],
                 &mut slots[4 * j..],
                 &mut sums,
+                &mut buf,
             )?;
             j += w;
         }
@@ -310,7 +504,7 @@ impl Lanewise for QuadChunk<'_> {
             quad_batch(
                 &k1,
                 self.sec,
-                &els[j..j + 1],
+                &els[j..],
                 self.first + j,
                 self.nodes,
                 self.h,
@@ -318,6 +512,7 @@ impl Lanewise for QuadChunk<'_> {
                 &mut hgs[j..],
                 &mut slots[4 * j..],
                 &mut sums,
+                &mut buf1,
             )?;
             j += 1;
         }

@@ -15,7 +15,7 @@
 //! nodal force and moment costs one scaled vector add (docs/theory.md, section 2.3).
 
 use super::membrane::{gradient, green, green_s};
-use super::plate::{Consts, ShellL};
+use super::plate::{plate_update, Consts, ShellL};
 use super::real::{Real, V3};
 use super::reference::{quad_gradients, Frame};
 use super::tri::KernelOut;
@@ -215,34 +215,7 @@ pub fn quad_kernel<S: Real>(
     let drill_rate = wm[2] - half * spin;
 
     // rate-form plate resultants
-    let dm = k.bending.apply(kr);
-    st.m[0] += h * dm[0];
-    st.m[1] += h * dm[1];
-    st.m[2] += h * dm[2];
-    st.q[0] += h * k.shear * gr[0];
-    st.q[1] += h * k.shear * gr[1];
-    st.drill += h * k.drill * drill_rate;
-    let m0 = st.m;
-    let e_pl = area
-        * ((m0[0] * m0[0] + m0[1] * m0[1] - k.two_nu * m0[0] * m0[1] + k.two_1pnu * m0[2] * m0[2])
-            * k.bend_energy
-            + (st.q[0] * st.q[0] + st.q[1] * st.q[1]) * k.half_inv_shear
-            + st.drill * st.drill * k.half_inv_drill);
-    let (mut mm, mut qq) = (st.m, st.q);
-    let mut d_pl = zero;
-    if k.alpha > 0.0 {
-        let a = S::splat(k.alpha);
-        let md = k.bending.apply_scaled(a, kr);
-        let qd = [a * k.shear * gr[0], a * k.shear * gr[1]];
-        d_pl = h
-            * area
-            * (md[0] * kr[0] + md[1] * kr[1] + md[2] * kr[2] + qd[0] * gr[0] + qd[1] * gr[1]);
-        mm[0] += md[0];
-        mm[1] += md[1];
-        mm[2] += md[2];
-        qq[0] += qd[0];
-        qq[1] += qd[1];
-    }
+    let (e_pl, d_pl, mm, qq) = plate_update(k, area, kr, gr, drill_rate, h, st);
 
     // rate-form hourglass resultants (w and rotations)
     hg.w += h * e.k_w * vg.dot(e3);

@@ -19,6 +19,7 @@ pub trait Real:
 {
     fn splat(v: f64) -> Self;
     fn sqrt(self) -> Self;
+    /// `f64::max` lane by lane (a NaN operand yields the other one).
     fn max(self, o: Self) -> Self;
 }
 
@@ -96,12 +97,14 @@ macro_rules! lane_type {
         impl Lanes for $name {
             const W: usize = $w;
             #[inline(always)]
-            fn lane(self, k: usize) -> f64 {
-                self.0[k]
+            fn from_array(a: [f64; 8]) -> Self {
+                $name([$(a[$k]),*])
             }
             #[inline(always)]
-            fn set_lane(&mut self, k: usize, v: f64) {
-                self.0[k] = v;
+            fn to_array(self) -> [f64; 8] {
+                let mut a = [0.0; 8];
+                $(a[$k] = self.0[$k];)*
+                a
             }
         }
     };
@@ -173,21 +176,24 @@ impl<S: Real> V3<S> {
     }
 }
 
-/// Lane `k` of a value (for scatter after a batch).
+/// Lanes in and out of a batch (gather before the kernel, scatter after it).
 pub trait Lanes: Real {
+    /// Elements per batch (at most 8).
     const W: usize;
-    fn lane(self, k: usize) -> f64;
-    fn set_lane(&mut self, k: usize, v: f64);
+    /// The first W entries of `a` as lanes.
+    fn from_array(a: [f64; 8]) -> Self;
+    /// The lanes, in the first W entries.
+    fn to_array(self) -> [f64; 8];
 }
 
 impl Lanes for f64 {
     const W: usize = 1;
     #[inline(always)]
-    fn lane(self, _k: usize) -> f64 {
-        self
+    fn from_array(a: [f64; 8]) -> Self {
+        a[0]
     }
     #[inline(always)]
-    fn set_lane(&mut self, _k: usize, v: f64) {
-        *self = v;
+    fn to_array(self) -> [f64; 8] {
+        [self, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     }
 }

@@ -1,18 +1,31 @@
 //! Run-time choice of the instruction set for the element loops, so that one binary
 //! runs on every x86-64 and uses what the CPU has:
 //!
-//! | path       | lanes per batch  | target features                                  |
-//! | ---------- | ---------------- | ------------------------------------------------ |
-//! | `avx512`   | 4 (`F4`, ymm)    | AVX-512 F/VL/DQ/BW + AVX2 + FMA (x86-64-v4 level) |
-//! | `avx2`     | 4 (`F4`, ymm)    | AVX2 + FMA + BMI1/2 (x86-64-v3 level)            |
-//! | `baseline` | 4 (`F4`, 2 xmm)  | none beyond the target's (SSE2 on x86-64)        |
+//! | path       | lanes per batch          | target features                                   |
+//! | ---------- | ------------------------ | ------------------------------------------------- |
+//! | `avx512`   | 8 (`Avx8`, one zmm)      | AVX-512 F/VL/DQ/BW + AVX2 + FMA (x86-64-v4 level) |
+//! | `avx2`     | 4 (`Avx4`, one ymm)      | AVX2 + FMA + BMI1/2 (x86-64-v3 level)             |
+//! | `baseline` | 4 (`F4`, [f64; 4])       | none beyond the target's (SSE2 on x86-64)         |
 //!
 //! The kernels are generic (`Real`, `Lanes`) and `#[inline(always)]`; each path is one
-//! `#[target_feature]` function that instantiates them, so the compiler generates the
-//! same source three times for three instruction sets. Every path gives the same bits:
-//! the kernels use only correctly rounded IEEE operations, element by element in the
-//! same order, and never a fused multiply-add (Rust does not contract `a * b + c`).
-//! `tests/simd_paths.rs` checks this on every path the machine has.
+//! `#[target_feature]` function that instantiates them with its lane type, so the
+//! compiler generates the same source three times for three instruction sets. `Avx4` and
+//! `Avx8` wrap `__m256d` / `__m512d` and do their arithmetic with `core::arch`
+//! intrinsics: every operation is one vector instruction whatever the size of the
+//! kernel (plain `[f64; N]` lanes rely on the compiler's SLP vectorizer, which gave up on
+//! parts of the triangle kernel after unrelated edits, and under AVX-512 features turned
+//! lane gathers into slow `vgatherqpd`).
+//!
+//! Every path gives the same bits: the kernels use only correctly rounded IEEE
+//! operations (+, -, *, /, sqrt, max, negation), element by element in the same order,
+//! and never a fused multiply-add (Rust does not contract `a * b + c`, and no FMA
+//! intrinsic is used). `tests/simd_paths.rs` checks this on every path the machine has.
+//!
+//! Unsafe code: this module only (`#[allow(unsafe_code)]` on the items that need it).
+//! The intrinsics need AVX2 / AVX-512; calling them is sound because `Avx4` and `Avx8`
+//! are private to this module and instantiated only in `run_avx2` / `run_avx512`, which
+//! `dispatch` calls only after `Path::supported` detected every feature they enable; so a
+//! value of these types exists only on a CPU that has them.
 //!
 //! The path is detected once (`is_x86_feature_detected!`). `CRASH_SIMD=baseline|avx2|
 //! avx512|auto` in the environment, read at that moment, or [`force`] overrides it; a
@@ -49,7 +62,10 @@ impl Path {
 
     /// Elements per SIMD batch on this path.
     pub fn lanes(self) -> usize {
-        4
+        match self {
+            Path::Avx512 => 8,
+            _ => 4,
+        }
     }
 
     /// Whether this CPU (and OS) can run the path.
@@ -189,23 +205,197 @@ pub fn dispatch<K: Lanewise>(work: K) -> K::Output {
         // SAFETY: `path()` returns Avx512 or Avx2 only if `Path::supported` detected
         // every target feature the called function enables (invariant of `CURRENT`).
         #[cfg(target_arch = "x86_64")]
-        Path::Avx512 => unsafe { run_avx512(work) },
+        Path::Avx512 => unsafe { x86::run_avx512(work) },
         #[cfg(target_arch = "x86_64")]
-        Path::Avx2 => unsafe { run_avx2(work) },
+        Path::Avx2 => unsafe { x86::run_avx2(work) },
         _ => work.run::<F4>(),
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2,avx,fma,bmi1,bmi2,sse4.2,popcnt")]
-fn run_avx512<K: Lanewise>(work: K) -> K::Output {
-    work.run::<F4>()
-}
+#[allow(unsafe_code)]
+mod x86 {
+    //! The AVX2 and AVX-512 lane types and the two `#[target_feature]` entry points. See
+    //! the module documentation above for why the intrinsic calls are sound: every
+    //! `unsafe` block below relies on that one invariant (the CPU has the features of
+    //! the entry point that instantiated the type), plus, for loads and stores, on
+    //! pointers to local `[f64; 8]` arrays, valid for 8 writes.
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx,fma,bmi1,bmi2,sse4.2,popcnt")]
-fn run_avx2<K: Lanewise>(work: K) -> K::Output {
-    work.run::<F4>()
+    use super::super::real::{Lanes, Real};
+    use super::Lanewise;
+    use std::arch::x86_64::*;
+    use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
+
+    #[target_feature(
+        enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,avx,fma,bmi1,bmi2,sse4.2,popcnt"
+    )]
+    pub(super) fn run_avx512<K: Lanewise>(work: K) -> K::Output {
+        work.run::<Avx8>()
+    }
+
+    #[target_feature(enable = "avx2,avx,fma,bmi1,bmi2,sse4.2,popcnt")]
+    pub(super) fn run_avx2<K: Lanewise>(work: K) -> K::Output {
+        work.run::<Avx4>()
+    }
+
+    macro_rules! lane_type {
+        ($name:ident, $v:ty, $w:literal, $set1:ident, $add:ident, $sub:ident, $mul:ident,
+         $div:ident, $sqrt:ident, $xor:ident, $max:ident, $load:ident, $store:ident,
+         $blend_nan:expr) => {
+            /// Lanes in one vector register (see the module documentation).
+            #[derive(Debug, Clone, Copy)]
+            struct $name($v);
+
+            impl Add for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn add(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $add(self.0, o.0) })
+                }
+            }
+            impl Sub for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn sub(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $sub(self.0, o.0) })
+                }
+            }
+            impl Mul for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn mul(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $mul(self.0, o.0) })
+                }
+            }
+            impl Div for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn div(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $div(self.0, o.0) })
+                }
+            }
+            impl Neg for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn neg(self) -> $name {
+                    // flips the sign bit, as scalar negation does
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $xor(self.0, $set1(-0.0)) })
+                }
+            }
+            impl AddAssign for $name {
+                #[inline(always)]
+                fn add_assign(&mut self, o: $name) {
+                    *self = *self + o;
+                }
+            }
+            impl SubAssign for $name {
+                #[inline(always)]
+                fn sub_assign(&mut self, o: $name) {
+                    *self = *self - o;
+                }
+            }
+            impl Real for $name {
+                #[inline(always)]
+                fn splat(v: f64) -> Self {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $set1(v) })
+                }
+                #[inline(always)]
+                fn sqrt(self) -> Self {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $sqrt(self.0) })
+                }
+                #[inline(always)]
+                fn max(self, o: Self) -> Self {
+                    // max_pd returns its second operand when either is NaN; f64::max
+                    // returns the operand that is not NaN: take self where o is NaN.
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $blend_nan($max(self.0, o.0), self.0, o.0) })
+                }
+            }
+            impl Lanes for $name {
+                const W: usize = $w;
+                #[inline(always)]
+                fn from_array(a: [f64; 8]) -> Self {
+                    // built in registers (a store-and-reload would stall on the
+                    // store-to-load forwarding of the scalar stores)
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $load(a) })
+                }
+                #[inline(always)]
+                fn to_array(self) -> [f64; 8] {
+                    let mut a = [0.0; 8];
+                    // SAFETY: see the module documentation (8 writable f64).
+                    unsafe { $store(a.as_mut_ptr(), self.0) };
+                    a
+                }
+            }
+        };
+    }
+
+    #[inline(always)]
+    unsafe fn from4(a: [f64; 8]) -> __m256d {
+        // SAFETY: called only from Avx4 methods (see the module documentation).
+        unsafe { _mm256_setr_pd(a[0], a[1], a[2], a[3]) }
+    }
+
+    #[inline(always)]
+    unsafe fn from8(a: [f64; 8]) -> __m512d {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe { _mm512_setr_pd(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]) }
+    }
+
+    /// r where o is not NaN, s where it is.
+    #[inline(always)]
+    unsafe fn keep_if_nan4(r: __m256d, s: __m256d, o: __m256d) -> __m256d {
+        // SAFETY: called only from Avx4 methods (see the module documentation).
+        unsafe { _mm256_blendv_pd(r, s, _mm256_cmp_pd::<_CMP_UNORD_Q>(o, o)) }
+    }
+
+    /// r where o is not NaN, s where it is.
+    #[inline(always)]
+    unsafe fn keep_if_nan8(r: __m512d, s: __m512d, o: __m512d) -> __m512d {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe { _mm512_mask_blend_pd(_mm512_cmp_pd_mask::<_CMP_UNORD_Q>(o, o), r, s) }
+    }
+
+    lane_type!(
+        Avx4,
+        __m256d,
+        4,
+        _mm256_set1_pd,
+        _mm256_add_pd,
+        _mm256_sub_pd,
+        _mm256_mul_pd,
+        _mm256_div_pd,
+        _mm256_sqrt_pd,
+        _mm256_xor_pd,
+        _mm256_max_pd,
+        from4,
+        _mm256_storeu_pd,
+        keep_if_nan4
+    );
+    lane_type!(
+        Avx8,
+        __m512d,
+        8,
+        _mm512_set1_pd,
+        _mm512_add_pd,
+        _mm512_sub_pd,
+        _mm512_mul_pd,
+        _mm512_div_pd,
+        _mm512_sqrt_pd,
+        _mm512_xor_pd,
+        _mm512_max_pd,
+        from8,
+        _mm512_storeu_pd,
+        keep_if_nan8
+    );
 }
 
 #[cfg(test)]
