@@ -1,6 +1,9 @@
 //! Runs the element-force stage of a plate repeatedly (for instruction counting with
 //! `valgrind --tool=callgrind`, which is repeatable on a busy machine):
-//! `kernel_loop [tri|quad] [cycles]`. Threads: `RAYON_NUM_THREADS` (default all cores);
+//! `kernel_loop [tri|quad|tri-step|quad-step] [cycles] [cells per side]` (`-step`: the
+//! whole step, `Group::advance`, instead of the element forces alone) (default 71 for triangles, 100
+//! for quads: about 10 000 elements, which stay in cache; the shell_step bench has
+//! about 100 000, 224 and 317). Threads: `RAYON_NUM_THREADS` (default all cores);
 //! SIMD path: `CRASH_SIMD` (default the best the CPU has).
 //!
 //! Besides the mean it prints the fastest single cycle: on a loaded machine a cycle
@@ -8,16 +11,22 @@
 //! least noisy time figure available without hardware counters.
 
 use crash_core::shapes::{plate, ElementKind};
-use crash_core::{Body, Material, Section, Stabilization, Vec3};
+use crash_core::{Body, Group, Material, Section, Stabilization, Vec3};
 
 fn main() {
     let mut args = std::env::args().skip(1);
-    let kind = match args.next().as_deref() {
-        Some("quad") => ElementKind::Quad,
-        _ => ElementKind::Tri,
+    let what = args.next().unwrap_or_default();
+    let kind = if what.starts_with("quad") {
+        ElementKind::Quad
+    } else {
+        ElementKind::Tri
     };
+    let whole_step = what.ends_with("-step");
     let cycles: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20);
-    let n = if kind == ElementKind::Tri { 71 } else { 100 };
+    let n = args
+        .next()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(if kind == ElementKind::Tri { 71 } else { 100 });
     let mat = Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid material");
     let m = plate(1.0, 1.0, n, n, kind);
     let mut b = Body::new(
@@ -32,24 +41,33 @@ fn main() {
         let p = b.x0[i];
         b.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
     }
+    let n = b.element_count() as f64;
+    let mut group = Group::new(vec![b.clone()], Vec3::zeros());
+    if whole_step {
+        group.start().expect("start");
+    }
     let mut e = 0.0;
     let mut fastest = f64::INFINITY;
     let start = std::time::Instant::now();
     for step in 0..cycles {
         let t = std::time::Instant::now();
-        e += b
-            .internal_forces(1e-7, step as u64)
-            .expect("forces")
-            .energy
-            .internal;
+        if whole_step {
+            group.advance(1e-7).expect("step");
+            e += group.bodies[0].internal_now;
+        } else {
+            e += b
+                .internal_forces(1e-7, step as u64)
+                .expect("forces")
+                .energy
+                .internal;
+        }
         fastest = fastest.min(t.elapsed().as_nanos() as f64);
     }
-    let n = b.element_count() as f64;
     let ns = start.elapsed().as_nanos() as f64 / (cycles as f64 * n);
     println!(
         "{} elements x {cycles} cycles, energy {e:e}, {ns:.1} ns per element-cycle \
          (fastest cycle {:.1}; SIMD path {})",
-        b.element_count(),
+        n,
         fastest / n,
         crash_core::element::simd::path_name()
     );

@@ -73,22 +73,6 @@ fn scatter_shell<S: Lanes>(l: &ShellL<S>, sts: &mut [ShellState]) {
     }
 }
 
-/// Force slots of node i of every lane: slots[n k + i] (n nodes per element).
-#[inline(always)]
-fn scatter_slots<S: Lanes>(o: &[S; 6], n: usize, i: usize, slots: &mut [Slot]) {
-    let c = [
-        o[0].to_array(),
-        o[1].to_array(),
-        o[2].to_array(),
-        o[3].to_array(),
-        o[4].to_array(),
-        o[5].to_array(),
-    ];
-    for k in 0..S::W {
-        slots[n * k + i] = [c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k]];
-    }
-}
-
 /// `forces::element_dt` in lanes (the same operations).
 #[inline(always)]
 fn element_dt<S: Real>(sec: &Section, length: S) -> S {
@@ -111,10 +95,12 @@ fn book<S: Lanes>(
     e0: usize,
     sums: &mut ForceSums,
 ) -> Result<(), (usize, ElemFailure)> {
-    let ratio = r.ratio.to_array();
-    for (l, &ratio) in ratio.iter().enumerate().take(S::W) {
-        if ratio.is_nan() || ratio < COLLAPSE_RATIO {
-            return Err((e0 + l, ElemFailure::Collapsed { ratio }));
+    if !r.ratio.all_above(COLLAPSE_RATIO, false) {
+        let ratio = r.ratio.to_array();
+        for (l, &ratio) in ratio.iter().enumerate().take(S::W) {
+            if ratio.is_nan() || ratio < COLLAPSE_RATIO {
+                return Err((e0 + l, ElemFailure::Collapsed { ratio }));
+            }
         }
     }
     let dt = element_dt(sec, r.length).to_array();
@@ -200,9 +186,8 @@ fn tri_gather<S: Lanes>(
 #[inline(always)]
 fn tri_scatter<S: Lanes>(l: &TriLanes<S>, sts: &mut [ShellState], slots: &mut [Slot]) {
     scatter_shell(&l.st, &mut sts[..S::W]);
-    let slots = &mut slots[..3 * S::W];
     for i in 0..3 {
-        scatter_slots(&l.out[i], 3, i, slots);
+        S::scatter_rows6(&l.out[i], slots, i, 3);
     }
 }
 
@@ -342,9 +327,8 @@ fn quad_scatter<S: Lanes>(
         h.w = w[k];
         h.th = [t0[k], t1[k]];
     }
-    let slots = &mut slots[..4 * S::W];
     for i in 0..4 {
-        scatter_slots(&l.out[i], 4, i, slots);
+        S::scatter_rows6(&l.out[i], slots, i, 4);
     }
 }
 
@@ -358,11 +342,18 @@ fn quad_compute<S: Lanes>(
     sums: &mut ForceSums,
 ) -> Result<(), (usize, ElemFailure)> {
     let (r, extra) = quad_kernel(k, &l.input, h, &mut l.st, &mut l.hg, &mut l.out);
-    let corners = extra.corners.map(|c| c.to_array());
-    for ln in 0..S::W {
-        for (corner, c) in corners.iter().enumerate() {
-            if c[ln].is_nan() || c[ln] <= 0.0 {
-                return Err((e0 + ln, ElemFailure::Inverted { corner }));
+    let c = &extra.corners;
+    let convex = c[0].all_above(0.0, true)
+        && c[1].all_above(0.0, true)
+        && c[2].all_above(0.0, true)
+        && c[3].all_above(0.0, true);
+    if !convex {
+        let corners = extra.corners.map(|c| c.to_array());
+        for ln in 0..S::W {
+            for (corner, c) in corners.iter().enumerate() {
+                if c[ln].is_nan() || c[ln] <= 0.0 {
+                    return Err((e0 + ln, ElemFailure::Inverted { corner }));
+                }
             }
         }
     }

@@ -184,6 +184,32 @@ pub trait Lanes: Real {
     fn from_array(a: [f64; 8]) -> Self;
     /// The lanes, in the first W entries.
     fn to_array(self) -> [f64; 8];
+
+    /// Whether every lane is >= t (`gt`: > t); false for a NaN lane.
+    #[inline(always)]
+    fn all_above(self, t: f64, gt: bool) -> bool {
+        let a = self.to_array();
+        a[..Self::W]
+            .iter()
+            .all(|&v| if gt { v > t } else { v >= t })
+    }
+
+    /// Six values per lane to six-value rows: `rows[first + stride k][c] = cols[c]` of
+    /// lane k, for k < W (a transpose; SIMD types do it in registers).
+    #[inline(always)]
+    fn scatter_rows6(cols: &[Self; 6], rows: &mut [[f64; 6]], first: usize, stride: usize) {
+        let c = [
+            cols[0].to_array(),
+            cols[1].to_array(),
+            cols[2].to_array(),
+            cols[3].to_array(),
+            cols[4].to_array(),
+            cols[5].to_array(),
+        ];
+        for k in 0..Self::W {
+            rows[first + stride * k] = [c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k]];
+        }
+    }
 }
 
 impl Lanes for f64 {

@@ -241,7 +241,7 @@ mod x86 {
     macro_rules! lane_type {
         ($name:ident, $v:ty, $w:literal, $set1:ident, $add:ident, $sub:ident, $mul:ident,
          $div:ident, $sqrt:ident, $xor:ident, $max:ident, $load:ident, $store:ident,
-         $blend_nan:expr) => {
+         $blend_nan:expr, $quarter:ident, $above:ident) => {
             /// Lanes in one vector register (see the module documentation).
             #[derive(Debug, Clone, Copy)]
             struct $name($v);
@@ -334,6 +334,28 @@ mod x86 {
                     unsafe { $store(a.as_mut_ptr(), self.0) };
                     a
                 }
+                #[inline(always)]
+                fn all_above(self, t: f64, gt: bool) -> bool {
+                    // SAFETY: see the module documentation.
+                    unsafe { $above(self.0, t, gt) }
+                }
+                #[inline(always)]
+                fn scatter_rows6(
+                    cols: &[Self; 6],
+                    rows: &mut [[f64; 6]],
+                    first: usize,
+                    stride: usize,
+                ) {
+                    for k in 0..$w / 4 {
+                        // SAFETY: see the module documentation.
+                        let t = unsafe { transpose4x6($quarter(cols, k)) };
+                        for (j, (lo, hi)) in t.into_iter().enumerate() {
+                            let r = &mut rows[first + stride * (4 * k + j)];
+                            // SAFETY: see the module documentation; `r` has 6 f64.
+                            unsafe { store_row6(r, lo, hi) };
+                        }
+                    }
+                }
             }
         };
     }
@@ -348,6 +370,99 @@ mod x86 {
     unsafe fn from8(a: [f64; 8]) -> __m512d {
         // SAFETY: called only from Avx8 methods (see the module documentation).
         unsafe { _mm512_setr_pd(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]) }
+    }
+
+    /// Every lane > t (gt) or >= t; ordered compares, so false for NaN.
+    #[inline(always)]
+    unsafe fn above4(v: __m256d, t: f64, gt: bool) -> bool {
+        // SAFETY: called only from Avx4 methods (see the module documentation).
+        unsafe {
+            let t = _mm256_set1_pd(t);
+            let m = if gt {
+                _mm256_cmp_pd::<_CMP_GT_OQ>(v, t)
+            } else {
+                _mm256_cmp_pd::<_CMP_GE_OQ>(v, t)
+            };
+            _mm256_movemask_pd(m) == 0xf
+        }
+    }
+
+    /// Every lane > t (gt) or >= t; ordered compares, so false for NaN.
+    #[inline(always)]
+    unsafe fn above8(v: __m512d, t: f64, gt: bool) -> bool {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe {
+            let t = _mm512_set1_pd(t);
+            let m = if gt {
+                _mm512_cmp_pd_mask::<_CMP_GT_OQ>(v, t)
+            } else {
+                _mm512_cmp_pd_mask::<_CMP_GE_OQ>(v, t)
+            };
+            m == 0xff
+        }
+    }
+
+    /// Lanes 4k..4k+4 of six columns (k = 0 for Avx4).
+    #[inline(always)]
+    unsafe fn quarter4(c: &[Avx4; 6], _k: usize) -> [__m256d; 6] {
+        [c[0].0, c[1].0, c[2].0, c[3].0, c[4].0, c[5].0]
+    }
+
+    /// Lanes 4k..4k+4 of six columns (k = 0, 1 for Avx8).
+    #[inline(always)]
+    unsafe fn quarter8(c: &[Avx8; 6], k: usize) -> [__m256d; 6] {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe {
+            if k == 0 {
+                c.map(|v| _mm512_castpd512_pd256(v.0))
+            } else {
+                c.map(|v| _mm512_extractf64x4_pd::<1>(v.0))
+            }
+        }
+    }
+
+    /// Rows of a 4-lane x 6-column block: lane j gets (c0..c3 of lane j, c4 c5 of lane j).
+    #[inline(always)]
+    unsafe fn transpose4x6(c: [__m256d; 6]) -> [(__m256d, __m128d); 4] {
+        // SAFETY: called only from Avx4/Avx8 methods (see the module documentation).
+        unsafe {
+            let t0 = _mm256_unpacklo_pd(c[0], c[1]); // a0 b0 a2 b2
+            let t1 = _mm256_unpackhi_pd(c[0], c[1]); // a1 b1 a3 b3
+            let t2 = _mm256_unpacklo_pd(c[2], c[3]);
+            let t3 = _mm256_unpackhi_pd(c[2], c[3]);
+            let u0 = _mm256_unpacklo_pd(c[4], c[5]);
+            let u1 = _mm256_unpackhi_pd(c[4], c[5]);
+            [
+                (
+                    _mm256_permute2f128_pd::<0x20>(t0, t2),
+                    _mm256_castpd256_pd128(u0),
+                ),
+                (
+                    _mm256_permute2f128_pd::<0x20>(t1, t3),
+                    _mm256_castpd256_pd128(u1),
+                ),
+                (
+                    _mm256_permute2f128_pd::<0x31>(t0, t2),
+                    _mm256_extractf128_pd::<1>(u0),
+                ),
+                (
+                    _mm256_permute2f128_pd::<0x31>(t1, t3),
+                    _mm256_extractf128_pd::<1>(u1),
+                ),
+            ]
+        }
+    }
+
+    /// Store (lo, hi) as the six values of `r`.
+    #[inline(always)]
+    unsafe fn store_row6(r: &mut [f64; 6], lo: __m256d, hi: __m128d) {
+        let p = r.as_mut_ptr();
+        // SAFETY: p points to 6 writable f64: 4 at p, 2 at p + 4; AVX is available
+        // (called only from Avx4/Avx8 methods, see the module documentation).
+        unsafe {
+            _mm256_storeu_pd(p, lo);
+            _mm_storeu_pd(p.add(4), hi);
+        }
     }
 
     /// r where o is not NaN, s where it is.
@@ -378,7 +493,9 @@ mod x86 {
         _mm256_max_pd,
         from4,
         _mm256_storeu_pd,
-        keep_if_nan4
+        keep_if_nan4,
+        quarter4,
+        above4
     );
     lane_type!(
         Avx8,
@@ -394,7 +511,9 @@ mod x86 {
         _mm512_max_pd,
         from8,
         _mm512_storeu_pd,
-        keep_if_nan8
+        keep_if_nan8,
+        quarter8,
+        above8
     );
 }
 
