@@ -11,6 +11,10 @@ use crash_core::{Body, Group, Material, Run, RunConfig, Section, Stabilization, 
 
 /// Triangles and quads, with and without Kelvin damping, element counts that leave a
 /// remainder after the SIMD batches, a distorted mesh and a velocity field with spin.
+/// Polynomials only (no sin/cos: libm picks its implementation by CPU, and its last
+/// bit may differ between them), so the hash can be compared across machines: the
+/// same binary under `qemu-x86_64 -cpu Nehalem` (baseline path only) must print the
+/// same hash as here.
 fn scene() -> Vec<Body> {
     let mut out = Vec::new();
     let cases = [
@@ -24,9 +28,9 @@ fn scene() -> Vec<Body> {
         let mut m = plate(0.4, 0.3, nx, ny, kind);
         for p in &mut m.nodes {
             let (x, y) = (p.x, p.y);
-            p.x += 0.002 * (31.0 * y).sin();
-            p.y += 0.002 * (23.0 * x).cos();
-            p.z += 0.01 * id as f64 + 0.001 * (17.0 * x).sin();
+            p.x += 0.02 * y * (0.09 - y * y);
+            p.y += 0.02 * x * (0.16 - x * x);
+            p.z += 0.01 * id as f64 + 0.01 * x * (0.04 - x * x);
         }
         let mut b = Body::new(
             id as u32,
@@ -38,11 +42,8 @@ fn scene() -> Vec<Body> {
         .expect("valid");
         for i in 0..b.x.len() {
             let p = b.x0[i];
-            b.v[i] = Vec3::new(
-                0.3 * p.y,
-                -0.2 * p.x,
-                2.0 * (9.0 * p.x).sin() * (7.0 * p.y).cos(),
-            );
+            let bump = 50.0 * (0.04 - p.x * p.x) * (0.0225 - p.y * p.y) / 0.0009;
+            b.v[i] = Vec3::new(0.3 * p.y, -0.2 * p.x, 2.0 * bump * p.x / 0.2);
             b.w[i] = Vec3::new(3.0 * p.y, 1.0, -2.0 * p.x);
         }
         out.push(b);
@@ -82,6 +83,13 @@ fn every_simd_path_gives_the_same_state_hash() {
         hashes.push(h);
     }
     assert!(hashes.windows(2).all(|w| w[0] == w[1]), "{hashes:x?}");
+    if let Ok(want) = std::env::var("CRASH_EXPECT_HASH") {
+        assert_eq!(
+            format!("{:016x}", hashes[0]),
+            want,
+            "hash of another machine"
+        );
+    }
     for p in Path::ALL {
         assert_eq!(simd::force(p).is_ok(), p.supported());
     }
@@ -152,4 +160,51 @@ fn batches_of_4_and_8_match_one_element_at_a_time() {
         assert_eq!(one, forces_with::<F4>(&b), "F4, body {}", b.id);
         assert_eq!(one, forces_with::<F8>(&b), "F8, body {}", b.id);
     }
+}
+
+/// The baseline path on an emulated CPU without SSE3/AVX (Nehalem: SSE4.2 at most), if
+/// `qemu-x86_64` is installed (`apt-get install qemu-user`): no SIGILL, and the state
+/// hash of this machine. Skipped (with a message) without qemu.
+#[test]
+fn an_old_cpu_under_qemu_runs_the_baseline_path_to_the_same_hash() {
+    if std::env::var("CRASH_EXPECT_HASH").is_ok() {
+        return; // this is the emulated run itself
+    }
+    let qemu = std::process::Command::new("qemu-x86_64")
+        .arg("--version")
+        .output();
+    if !qemu.is_ok_and(|o| o.status.success()) {
+        println!("skipped: qemu-x86_64 is not installed");
+        return;
+    }
+    let here = format!("{:016x}", final_hash()); // any path: they agree
+
+    let exe = std::env::current_exe().expect("test binary");
+    let out = std::process::Command::new("qemu-x86_64")
+        .args(["-cpu", "Nehalem"])
+        .arg(exe)
+        .args([
+            "every_simd_path_gives_the_same_state_hash",
+            "--exact",
+            "--nocapture",
+        ])
+        .env("CRASH_EXPECT_HASH", &here)
+        .env_remove("CRASH_SIMD")
+        .output()
+        .expect("qemu runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    println!("under qemu -cpu Nehalem:\n{text}");
+    assert!(
+        out.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains(r#"paths on this CPU: ["baseline"]"#),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("baseline: state hash {here}")),
+        "{text}"
+    );
 }
