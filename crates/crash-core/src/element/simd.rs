@@ -5,13 +5,13 @@
 //! | ---------- | ------------------------ | ------------------------------------------------- |
 //! | `avx512`   | 8 (`Avx8`, one zmm)      | AVX-512 F/VL/DQ/BW + AVX2 + FMA (x86-64-v4 level) |
 //! | `avx2`     | 4 (`Avx4`, one ymm)      | AVX2 + FMA + BMI1/2 (x86-64-v3 level)             |
-//! | `baseline` | 4 (`F4`, [f64; 4])       | none beyond the target's (SSE2 on x86-64)         |
+//! | `baseline` | 4 (`Sse4`, two xmm)      | none beyond x86-64's own SSE2                     |
 //!
 //! The kernels are generic (`Real`, `Lanes`) and `#[inline(always)]`; each path is one
 //! `#[target_feature]` function that instantiates them with its lane type, so the
-//! compiler generates the same source three times for three instruction sets. `Avx4` and
-//! `Avx8` wrap `__m256d` / `__m512d` and do their arithmetic with `core::arch`
-//! intrinsics: every operation is one vector instruction whatever the size of the
+//! compiler generates the same source three times for three instruction sets. `Sse4`,
+//! `Avx4` and `Avx8` wrap `__m128d` pairs, `__m256d` and `__m512d` and do their
+//! arithmetic with `core::arch` intrinsics: every operation is one vector instruction whatever the size of the
 //! kernel (plain `[f64; N]` lanes rely on the compiler's SLP vectorizer, which gave up on
 //! parts of the triangle kernel after unrelated edits, and under AVX-512 features turned
 //! lane gathers into slow `vgatherqpd`).
@@ -25,13 +25,17 @@
 //! The intrinsics need AVX2 / AVX-512; calling them is sound because `Avx4` and `Avx8`
 //! are private to this module and instantiated only in `run_avx2` / `run_avx512`, which
 //! `dispatch` calls only after `Path::supported` detected every feature they enable; so a
-//! value of these types exists only on a CPU that has them.
+//! value of these types exists only on a CPU that has them. `Sse4` needs SSE2, which
+//! every x86-64 CPU has. On other architectures the baseline path runs `F4` (plain
+//! arrays, no unsafe code).
 //!
 //! The path is detected once (`is_x86_feature_detected!`). `CRASH_SIMD=baseline|avx2|
 //! avx512|auto` in the environment, read at that moment, or [`force`] overrides it; a
 //! path the CPU lacks is never taken.
 
-use super::real::{Lanes, F4};
+use super::real::Lanes;
+#[cfg(not(target_arch = "x86_64"))]
+use super::real::F4;
 use std::sync::atomic::{AtomicU8, Ordering};
 
 /// An instruction-set path of the element kernels.
@@ -208,6 +212,9 @@ pub fn dispatch<K: Lanewise>(work: K) -> K::Output {
         Path::Avx512 => unsafe { x86::run_avx512(work) },
         #[cfg(target_arch = "x86_64")]
         Path::Avx2 => unsafe { x86::run_avx2(work) },
+        #[cfg(target_arch = "x86_64")]
+        Path::Baseline => x86::run_baseline(work),
+        #[cfg(not(target_arch = "x86_64"))]
         _ => work.run::<F4>(),
     }
 }
@@ -236,6 +243,100 @@ mod x86 {
     #[target_feature(enable = "avx2,avx,fma,bmi1,bmi2,sse4.2,popcnt")]
     pub(super) fn run_avx2<K: Lanewise>(work: K) -> K::Output {
         work.run::<Avx4>()
+    }
+
+    /// SSE2 is part of x86-64 itself: no detection needed.
+    pub(super) fn run_baseline<K: Lanewise>(work: K) -> K::Output {
+        work.run::<Sse4>()
+    }
+
+    /// Four lanes in two SSE2 registers (the baseline path). SSE2 belongs to every
+    /// x86-64 CPU, so the intrinsics below are always available.
+    #[derive(Debug, Clone, Copy)]
+    struct Sse4([__m128d; 2]);
+
+    macro_rules! sse_op {
+        ($tr:ident, $f:ident, $op:ident) => {
+            impl $tr for Sse4 {
+                type Output = Sse4;
+                #[inline(always)]
+                fn $f(self, o: Sse4) -> Sse4 {
+                    // SAFETY: SSE2 is in the x86-64 baseline.
+                    unsafe { Sse4([$op(self.0[0], o.0[0]), $op(self.0[1], o.0[1])]) }
+                }
+            }
+        };
+    }
+    sse_op!(Add, add, _mm_add_pd);
+    sse_op!(Sub, sub, _mm_sub_pd);
+    sse_op!(Mul, mul, _mm_mul_pd);
+    sse_op!(Div, div, _mm_div_pd);
+
+    impl Neg for Sse4 {
+        type Output = Sse4;
+        #[inline(always)]
+        fn neg(self) -> Sse4 {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe {
+                let m = _mm_set1_pd(-0.0);
+                Sse4([_mm_xor_pd(self.0[0], m), _mm_xor_pd(self.0[1], m)])
+            }
+        }
+    }
+    impl AddAssign for Sse4 {
+        #[inline(always)]
+        fn add_assign(&mut self, o: Sse4) {
+            *self = *self + o;
+        }
+    }
+    impl SubAssign for Sse4 {
+        #[inline(always)]
+        fn sub_assign(&mut self, o: Sse4) {
+            *self = *self - o;
+        }
+    }
+    impl Real for Sse4 {
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe { Sse4([_mm_set1_pd(v); 2]) }
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe { Sse4([_mm_sqrt_pd(self.0[0]), _mm_sqrt_pd(self.0[1])]) }
+        }
+        #[inline(always)]
+        fn max(self, o: Self) -> Self {
+            // as for Avx4: self where o is NaN (and-not/or blend, SSE2 has no blendv)
+            let half = |a: __m128d, b: __m128d| {
+                // SAFETY: SSE2 is in the x86-64 baseline.
+                unsafe {
+                    let nan = _mm_cmpunord_pd(b, b);
+                    let m = _mm_max_pd(a, b);
+                    _mm_or_pd(_mm_and_pd(nan, a), _mm_andnot_pd(nan, m))
+                }
+            };
+            Sse4([half(self.0[0], o.0[0]), half(self.0[1], o.0[1])])
+        }
+    }
+    impl Lanes for Sse4 {
+        const W: usize = 4;
+        #[inline(always)]
+        fn from_array(a: [f64; 8]) -> Self {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe { Sse4([_mm_setr_pd(a[0], a[1]), _mm_setr_pd(a[2], a[3])]) }
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f64; 8] {
+            let mut a = [0.0; 8];
+            // SAFETY: SSE2 is in the x86-64 baseline; a has 8 writable f64.
+            unsafe {
+                _mm_storeu_pd(a.as_mut_ptr(), self.0[0]);
+                _mm_storeu_pd(a.as_mut_ptr().add(2), self.0[1]);
+            }
+            a
+        }
     }
 
     macro_rules! lane_type {
