@@ -4,17 +4,17 @@
 //! | path       | lanes per batch          | target features                                   |
 //! | ---------- | ------------------------ | ------------------------------------------------- |
 //! | `avx512`   | 8 (`Avx8`, one zmm)      | AVX-512 F/VL/DQ/BW + AVX2 + FMA (x86-64-v4 level) |
-//! | `avx2`     | 4 (`Avx4`, one ymm)      | AVX2 + FMA + BMI1/2 (x86-64-v3 level)             |
+//! | `avx2`     | 4 (`Avx4`, one ymm)      | AVX + AVX2 + FMA (x86-64-v3 level)                |
 //! | `baseline` | 4 (`Sse4`, two xmm)      | none beyond x86-64's own SSE2                     |
 //!
 //! The kernels are generic (`Real`, `Lanes`) and `#[inline(always)]`; each path is one
 //! `#[target_feature]` function that instantiates them with its lane type, so the
 //! compiler generates the same source three times for three instruction sets. `Sse4`,
 //! `Avx4` and `Avx8` wrap `__m128d` pairs, `__m256d` and `__m512d` and do their
-//! arithmetic with `core::arch` intrinsics: every operation is one vector instruction whatever the size of the
-//! kernel (plain `[f64; N]` lanes rely on the compiler's SLP vectorizer, which gave up on
-//! parts of the triangle kernel after unrelated edits, and under AVX-512 features turned
-//! lane gathers into slow `vgatherqpd`).
+//! arithmetic with `core::arch` intrinsics: every operation is one vector instruction
+//! whatever the size of the kernel (plain `[f64; N]` lanes rely on the compiler's SLP
+//! vectorizer, which gave up on parts of the triangle kernel after unrelated edits, and
+//! under AVX-512 features turned lane gathers into slow `vgatherqpd`).
 //!
 //! Every path gives the same bits: the kernels use only correctly rounded IEEE
 //! operations (+, -, *, /, sqrt, max, negation), element by element in the same order,
@@ -72,16 +72,16 @@ impl Path {
         }
     }
 
-    /// Whether this CPU (and OS) can run the path.
+    /// Whether this CPU (and OS) can run the path: every feature its entry point
+    /// enables (`x86::run_avx2`, `x86::run_avx512`) is detected.
     pub fn supported(self) -> bool {
         match self {
             Path::Baseline => true,
             #[cfg(target_arch = "x86_64")]
             Path::Avx2 => {
-                is_x86_feature_detected!("avx2")
+                is_x86_feature_detected!("avx")
+                    && is_x86_feature_detected!("avx2")
                     && is_x86_feature_detected!("fma")
-                    && is_x86_feature_detected!("bmi1")
-                    && is_x86_feature_detected!("bmi2")
             }
             #[cfg(target_arch = "x86_64")]
             Path::Avx512 => {
@@ -222,25 +222,26 @@ pub fn dispatch<K: Lanewise>(work: K) -> K::Output {
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod x86 {
-    //! The AVX2 and AVX-512 lane types and the two `#[target_feature]` entry points. See
-    //! the module documentation above for why the intrinsic calls are sound: every
-    //! `unsafe` block below relies on that one invariant (the CPU has the features of
-    //! the entry point that instantiated the type), plus, for loads and stores, on
-    //! pointers to local `[f64; 8]` arrays, valid for 8 writes.
+    //! The lane types of the three x86-64 paths and their entry points (two of them
+    //! `#[target_feature]`). See the module documentation above for why the intrinsic
+    //! calls are sound: every `unsafe` block below relies on that one invariant (the CPU
+    //! has the features of the entry point that instantiated the type; SSE2 always),
+    //! plus, for stores, on pointers into local `[f64; 8]` arrays or `[f64; 6]` slots,
+    //! valid for the writes made.
 
     use super::super::real::{Lanes, Real};
     use super::Lanewise;
     use std::arch::x86_64::*;
     use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
 
-    #[target_feature(
-        enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,avx,fma,bmi1,bmi2,sse4.2,popcnt"
-    )]
+    // exactly the features `Path::Avx512.supported()` detects
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,avx,fma")]
     pub(super) fn run_avx512<K: Lanewise>(work: K) -> K::Output {
         work.run::<Avx8>()
     }
 
-    #[target_feature(enable = "avx2,avx,fma,bmi1,bmi2,sse4.2,popcnt")]
+    // exactly the features `Path::Avx2.supported()` detects
+    #[target_feature(enable = "avx2,avx,fma")]
     pub(super) fn run_avx2<K: Lanewise>(work: K) -> K::Output {
         work.run::<Avx4>()
     }
