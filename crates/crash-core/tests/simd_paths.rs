@@ -8,6 +8,10 @@ use crash_core::element::simd::{self, Lanewise, Path};
 use crash_core::hash::state_hash;
 use crash_core::shapes::{plate, ElementKind};
 use crash_core::{Body, Group, Material, Run, RunConfig, Section, Stabilization, Vec3};
+use std::sync::Mutex;
+
+/// Tests that force SIMD paths take this lock (the path is process-wide).
+static FORCING: Mutex<()> = Mutex::new(());
 
 /// Triangles and quads, with and without Kelvin damping, element counts that leave a
 /// remainder after the SIMD batches, a distorted mesh and a velocity field with spin.
@@ -68,6 +72,7 @@ fn final_hash() -> u64 {
 
 #[test]
 fn every_simd_path_gives_the_same_state_hash() {
+    let _one_at_a_time = FORCING.lock().unwrap_or_else(|e| e.into_inner());
     let paths = simd::available();
     println!(
         "paths on this CPU: {:?} (auto: {})",
@@ -96,9 +101,36 @@ fn every_simd_path_gives_the_same_state_hash() {
     simd::force(simd::best()).expect("best path");
 }
 
+/// How a body's element loops run: one lane type, or the current SIMD path.
+trait Runner {
+    fn tri(c: TriChunk<'_>) -> crash_core::element::batch::ChunkResult;
+    fn quad(c: QuadChunk<'_>) -> crash_core::element::batch::ChunkResult;
+}
+
+impl<S: crash_core::element::real::Lanes> Runner for S {
+    fn tri(c: TriChunk<'_>) -> crash_core::element::batch::ChunkResult {
+        c.run::<S>()
+    }
+    fn quad(c: QuadChunk<'_>) -> crash_core::element::batch::ChunkResult {
+        c.run::<S>()
+    }
+}
+
+/// The path chosen by `simd::force` (its own lane type: Sse4, Avx4 or Avx8).
+struct Dispatched;
+
+impl Runner for Dispatched {
+    fn tri(c: TriChunk<'_>) -> crash_core::element::batch::ChunkResult {
+        simd::dispatch(c)
+    }
+    fn quad(c: QuadChunk<'_>) -> crash_core::element::batch::ChunkResult {
+        simd::dispatch(c)
+    }
+}
+
 /// Internal forces of one body with batches of `S::W` elements (and the remainder one by
 /// one), compared bit for bit.
-fn forces_with<S: crash_core::element::real::Lanes>(b: &Body) -> (Vec<u64>, Vec<u64>) {
+fn forces_with<S: Runner>(b: &Body) -> (Vec<u64>, Vec<u64>) {
     let mut b = b.clone();
     let (sec, stab) = (b.section, b.stab);
     let nodes = (&b.x[..], &b.v[..], &b.w[..]);
@@ -107,7 +139,7 @@ fn forces_with<S: crash_core::element::real::Lanes>(b: &Body) -> (Vec<u64>, Vec<
     let (tst, qst) = b.shell.split_at_mut(nt);
     let mut sums = Vec::new();
     for _ in 0..3 {
-        let s = TriChunk {
+        let s = S::tri(TriChunk {
             sec: &sec,
             stab: &stab,
             els: &b.tris,
@@ -116,10 +148,9 @@ fn forces_with<S: crash_core::element::real::Lanes>(b: &Body) -> (Vec<u64>, Vec<
             nodes,
             h: 1e-6,
             first: 0,
-        }
-        .run::<S>()
+        })
         .expect("forces");
-        let q = QuadChunk {
+        let q = S::quad(QuadChunk {
             sec: &sec,
             stab: &stab,
             els: &b.quads,
@@ -129,8 +160,7 @@ fn forces_with<S: crash_core::element::real::Lanes>(b: &Body) -> (Vec<u64>, Vec<
             nodes,
             h: 1e-6,
             first: nt,
-        }
-        .run::<S>()
+        })
         .expect("forces");
         for s in [s, q] {
             let e = s.energy;
@@ -155,11 +185,25 @@ fn forces_with<S: crash_core::element::real::Lanes>(b: &Body) -> (Vec<u64>, Vec<
 
 #[test]
 fn batches_of_4_and_8_match_one_element_at_a_time() {
+    let _one_at_a_time = FORCING.lock().unwrap_or_else(|e| e.into_inner());
     for b in scene() {
         let one = forces_with::<f64>(&b);
         assert_eq!(one, forces_with::<F4>(&b), "F4, body {}", b.id);
         assert_eq!(one, forces_with::<F8>(&b), "F8, body {}", b.id);
+        // the intrinsic lane types of every path this CPU has (the chunk is the whole
+        // body here, so W = 4 and W = 8 leave different remainders)
+        for p in simd::available() {
+            simd::force(p).expect("available");
+            assert_eq!(
+                one,
+                forces_with::<Dispatched>(&b),
+                "{}, body {}",
+                p.name(),
+                b.id
+            );
+        }
     }
+    simd::force(simd::best()).expect("best path");
 }
 
 /// The baseline path on an emulated CPU without SSE3/AVX (Nehalem: SSE4.2 at most), if
