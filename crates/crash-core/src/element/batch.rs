@@ -122,7 +122,7 @@ fn book<S: Lanes>(
 
 /// Lanes of a triangle batch: kernel input, resultants and nodal forces.
 #[derive(Debug, Clone, Copy)]
-pub struct TriLanes<S> {
+struct TriLanes<S> {
     input: TriIn<S>,
     st: ShellL<S>,
     out: [[S; 6]; 3],
@@ -227,7 +227,7 @@ fn tri_batch<S: Lanes>(
 
 /// Lanes of a quad batch: kernel input, resultants and nodal forces.
 #[derive(Debug, Clone, Copy)]
-pub struct QuadLanes<S> {
+struct QuadLanes<S> {
     input: QuadIn<S>,
     st: ShellL<S>,
     hg: HgL<S>,

@@ -31,6 +31,9 @@ const HG: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct QuadElem {
     pub nodes: [u32; 4],
+    /// Reference gradients, antisymmetric across the diagonals: bx0[0] = -bx0[2] and
+    /// bx0[1] = -bx0[3] exactly (likewise by0; `quad_gradients`). The kernel reads only
+    /// bx0[2..4], by0[2..4].
     pub bx0: [f64; 4],
     pub by0: [f64; 4],
     /// Hourglass shape vector gamma_I = (h_I - (h.X) bx_I - (h.Y) by_I) / 4.
@@ -277,4 +280,26 @@ pub fn quad_kernel<S: Real>(
             corners,
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+
+    #[test]
+    fn reference_gradients_are_exactly_antisymmetric_across_the_diagonals() {
+        let x = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.3, 0.1, 0.01),
+            Vec3::new(1.1, 0.9, -0.02),
+            Vec3::new(-0.2, 0.7, 0.01),
+        ];
+        let sec = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid"), 0.01);
+        let q = QuadElem::new([0, 1, 2, 3], &x, &sec, &Stabilization::default());
+        for i in 0..2 {
+            assert_eq!(q.bx0[i].to_bits(), (-q.bx0[i + 2]).to_bits());
+            assert_eq!(q.by0[i].to_bits(), (-q.by0[i + 2]).to_bits());
+        }
+    }
 }
