@@ -198,7 +198,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("cannot create the run directory {}", out.display()))?,
     };
-    let files = files.with_checkpoints(out.join(RESTART_FILE));
+    let simd = crash_core::element::simd::path_name();
+    let files = files
+        .with_checkpoints(out.join(RESTART_FILE))
+        .with_simd_path(simd);
     let mut sink = CliSink {
         files,
         progress: Progress::new(input.config.end_time, args.quiet),
@@ -217,7 +220,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         );
     }
     eprintln!(
-        "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {} worker(s), writing {}",
+        "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {} worker(s), {simd} element kernels, writing {}",
         input.name,
         input.briefs.len(),
         input.size().elements,

@@ -145,6 +145,10 @@ pub struct Summary {
     pub final_state_hash: String,
     /// Why the run stopped early, if it did.
     pub fault: Option<String>,
+    /// The element kernels' instruction-set path ("avx512", "avx2", "baseline") of the
+    /// process that computed (empty for crash-master: each worker prints its own).
+    #[serde(default)]
+    pub simd_path: String,
 }
 
 /// Hex form of a state hash as stored in summary.json.

@@ -71,6 +71,7 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
         warnings: ind.warnings(),
         final_state_hash: hash_hex(42),
         fault: None,
+        simd_path: "avx2".into(),
     };
     write_summary(&path, &s).expect("write");
     assert_eq!(read_summary(&path).expect("read"), s);

@@ -113,6 +113,12 @@ impl FileSink {
         })
     }
 
+    /// Record the element kernels' instruction-set path in summary.json.
+    pub fn with_simd_path(mut self, path: &str) -> Self {
+        self.summary.simd_path = path.to_string();
+        self
+    }
+
     /// Write every checkpoint to `path` (atomically, replacing the previous one).
     pub fn with_checkpoints(mut self, path: PathBuf) -> Self {
         self.restart = Some(path);

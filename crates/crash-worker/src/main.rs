@@ -66,6 +66,10 @@ fn main() -> ExitCode {
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    eprintln!(
+        "crash-worker: {} element kernels, {threads} threads",
+        crash_core::element::simd::path_name()
+    );
     let mut opts = crash_worker::WorkerOptions::new(master, threads);
     opts.connect_timeout = Duration::from_secs_f64(args.connect_timeout.max(0.0));
     if let Some(v) = args.protocol_version {

@@ -84,11 +84,12 @@ fn gradient_s<S: Real, const N: usize>(x: &[V3<S>; N], bx: &[S; N], by: &[S; N])
     (f1, f2)
 }
 
-/// Membrane forces (global) written into `f`; returns (stored energy, Kelvin
-/// dissipation over h).
+/// Membrane stress of one element (or a batch): returns (stored energy, Kelvin
+/// dissipation over h, p1, p2) with the nodal forces f_I = p1 bx_I + p2 by_I
+/// (p1, p2 = A0 F S e1, A0 F S e2).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn membrane_forces<S: Real, const N: usize>(
+pub fn membrane_stress<S: Real, const N: usize>(
     c: &Plane<S>,
     alpha: f64,
     bx: &[S; N],
@@ -98,8 +99,7 @@ pub fn membrane_forces<S: Real, const N: usize>(
     x: &[V3<S>; N],
     v: &[V3<S>; N],
     h: S,
-    f: &mut [V3<S>; N],
-) -> (S, S) {
+) -> (S, S, V3<S>, V3<S>) {
     let (f1, f2) = gradient_s(x, bx, by);
     let g = green_s(f1, f2);
     let e = [g[0] - e0[0], g[1] - e0[1], g[2] - e0[2]];
@@ -117,8 +117,5 @@ pub fn membrane_forces<S: Real, const N: usize>(
     }
     let p1 = f1.scale(s[0]).plus(f2.scale(s[2])).scale(area0);
     let p2 = f1.scale(s[2]).plus(f2.scale(s[1])).scale(area0);
-    for i in 0..N {
-        f[i] = p1.scale(bx[i]).plus(p2.scale(by[i]));
-    }
-    (energy, diss)
+    (energy, diss, p1, p2)
 }

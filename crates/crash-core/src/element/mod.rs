@@ -6,11 +6,13 @@
 //! state and writes per-node internal forces and moments into its own slots (no shared
 //! accumulation, so results do not depend on thread order).
 
+pub mod batch;
 pub mod membrane;
 pub mod plate;
 pub mod quad;
 pub mod real;
 pub mod reference;
+pub mod simd;
 pub mod tri;
 
 pub use quad::QuadElem;

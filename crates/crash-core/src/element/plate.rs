@@ -1,12 +1,14 @@
 //! The plate part shared by both elements, in the co-rotational frame: bending and
 //! transverse shear (Reissner–Mindlin) and the drilling stabilization, in rate form.
+//! Each element kernel computes the centroid rates below and the nodal forces as the
+//! exact transpose of its own rate operator; the resultant update is shared.
 //!
 //! Velocity of a fibre at height z: v = v_mid + omega x (z e3), so in local axes
 //! v_x = v_x^m + z w_y, v_y = v_y^m - z w_x. Hence (one-point, at the centroid)
 //!   curvature rate   k_xx = d(w_y)/dx, k_yy = -d(w_x)/dy, k_xy = d(w_y)/dy - d(w_x)/dx
 //!   shear rate       g_xz = dv_z/dx + w_y,  g_yz = dv_z/dy - w_x  (element-specific operator)
 //!   drilling rate    d    = mean(w_z) - (dv_y/dx - dv_x/dy)/2
-//! All three vanish for any rigid velocity field, so the nodal forces below (the exact
+//! All three vanish for any rigid velocity field, so the nodal forces (the exact
 //! transpose of these maps) are self-equilibrated: linear and angular momentum are
 //! conserved to round-off.
 
@@ -61,107 +63,47 @@ pub struct ShellL<S> {
     pub drill: S,
 }
 
-/// Local kinematics of an N-node element at the current configuration.
-#[derive(Debug, Clone, Copy)]
-pub struct PlateKin<S, const N: usize> {
-    pub bx: [S; N],
-    pub by: [S; N],
-    pub area: S,
-    /// Shear operator: g = sum_I cw[I] vz_I + cx[I] wx_I + cy[I] wy_I (2-vectors).
-    pub cw: [[S; 2]; N],
-    pub cx: [[S; 2]; N],
-    pub cy: [[S; 2]; N],
-}
-
-/// Local nodal rates: translational velocity and angular velocity in the element frame.
-#[derive(Debug, Clone, Copy)]
-pub struct LocalRates<S, const N: usize> {
-    pub v: [[S; 3]; N],
-    pub w: [[S; 3]; N],
-}
-
-/// Update the rate-form resultants over the step `h` and add the plate part of the
-/// internal forces (local axes) to `out` (per node: fx, fy, fz, mx, my, mz).
-/// Returns (stored energy, Kelvin dissipation over h).
+/// Update the rate-form resultants over the step `h` from the centroid rates (curvature
+/// kr, transverse shear g, drilling), for an element of current area `area`. Returns
+/// (stored energy, Kelvin dissipation over h, moments, shear forces), the last two
+/// including the Kelvin damping part (they enter the nodal forces; the state does not).
 #[inline(always)]
-pub fn plate_forces<S: Real, const N: usize>(
+pub fn plate_update<S: Real>(
     k: &Consts<S>,
-    kin: &PlateKin<S, N>,
-    r: &LocalRates<S, N>,
+    area: S,
+    kr: [S; 3],
+    g: [S; 2],
+    drill_rate: S,
     h: S,
     st: &mut ShellL<S>,
-    out: &mut [[S; 6]; N],
-) -> (S, S) {
-    let (bx, by) = (&kin.bx, &kin.by);
-    let zero = S::splat(0.0);
-    let half = S::splat(0.5);
-    let inv_n = S::splat(1.0 / N as f64);
-    let mut kr = [zero; 3];
-    let mut g = [zero; 2];
-    let mut wz = zero;
-    let mut spin = zero;
-    for i in 0..N {
-        let (wx, wy) = (r.w[i][0], r.w[i][1]);
-        kr[0] += bx[i] * wy;
-        kr[1] -= by[i] * wx;
-        kr[2] += by[i] * wy - bx[i] * wx;
-        let vz = r.v[i][2];
-        g[0] += kin.cw[i][0] * vz + kin.cx[i][0] * wx + kin.cy[i][0] * wy;
-        g[1] += kin.cw[i][1] * vz + kin.cx[i][1] * wx + kin.cy[i][1] * wy;
-        wz += r.w[i][2];
-        spin += bx[i] * r.v[i][1] - by[i] * r.v[i][0];
-    }
-    let drill_rate = wz * inv_n - half * spin;
-
+) -> (S, S, [S; 3], [S; 2]) {
     let dm = k.bending.apply(kr);
-    for (m, d) in st.m.iter_mut().zip(dm) {
-        *m += h * d;
-    }
+    st.m[0] += h * dm[0];
+    st.m[1] += h * dm[1];
+    st.m[2] += h * dm[2];
     st.q[0] += h * k.shear * g[0];
     st.q[1] += h * k.shear * g[1];
     st.drill += h * k.drill * drill_rate;
-
     let m0 = st.m;
-    let energy = kin.area
+    let energy = area
         * ((m0[0] * m0[0] + m0[1] * m0[1] - k.two_nu * m0[0] * m0[1] + k.two_1pnu * m0[2] * m0[2])
             * k.bend_energy
             + (st.q[0] * st.q[0] + st.q[1] * st.q[1]) * k.half_inv_shear
             + st.drill * st.drill * k.half_inv_drill);
-
-    // Kelvin damping: resultants from the strain rate (skipped when alpha = 0).
     let (mut m, mut q) = (st.m, st.q);
-    let mut diss = zero;
+    let mut diss = S::splat(0.0);
     if k.alpha > 0.0 {
         let a = S::splat(k.alpha);
         let md = k.bending.apply_scaled(a, kr);
         let qd = [a * k.shear * g[0], a * k.shear * g[1]];
         diss = h
-            * kin.area
+            * area
             * (md[0] * kr[0] + md[1] * kr[1] + md[2] * kr[2] + qd[0] * g[0] + qd[1] * g[1]);
-        for (mc, d) in m.iter_mut().zip(md) {
-            *mc += d;
-        }
+        m[0] += md[0];
+        m[1] += md[1];
+        m[2] += md[2];
         q[0] += qd[0];
         q[1] += qd[1];
     }
-
-    let a = kin.area;
-    let td = a * st.drill;
-    let td_n = td * inv_n;
-    let td_half = half * td;
-    for i in 0..N {
-        let o = &mut out[i];
-        // bending: power A (Mxx kxx + Myy kyy + Mxy kxy)
-        o[3] += a * (-(by[i] * m[1]) - bx[i] * m[2]);
-        o[4] += a * (bx[i] * m[0] + by[i] * m[2]);
-        // shear: power A (Qx gx + Qy gy)
-        o[2] += a * (q[0] * kin.cw[i][0] + q[1] * kin.cw[i][1]);
-        o[3] += a * (q[0] * kin.cx[i][0] + q[1] * kin.cx[i][1]);
-        o[4] += a * (q[0] * kin.cy[i][0] + q[1] * kin.cy[i][1]);
-        // drilling: power A tau d
-        o[5] += td_n;
-        o[0] += td_half * by[i];
-        o[1] -= td_half * bx[i];
-    }
-    (energy, diss)
+    (energy, diss, m, q)
 }

@@ -6,9 +6,16 @@
 //! Plate: BLT bending and centroid shear in the co-rotational frame of the diagonals,
 //! with rate-form hourglass resultants for w and theta. Warped quads are refused at input
 //! (`mesh::WARP_LIMIT`); no warping correction is applied.
+//!
+//! The kernel works with the diagonals d13 = x3 - x1, d24 = x4 - x2. The one-point
+//! gradients are antisymmetric across them (b_1 = -b_3, b_2 = -b_4, for the reference
+//! and the current geometry alike), so every gradient sum over the nodes is a sum of two
+//! terms on diagonal differences, and every nodal force is c_I + gamma_I G with
+//! c_1 = -c_3, c_2 = -c_4: the element never forms per-node local velocities, and each
+//! nodal force and moment costs one scaled vector add (docs/theory.md, section 2.3).
 
-use super::membrane::{gradient, green, membrane_forces};
-use super::plate::{plate_forces, Consts, LocalRates, PlateKin, ShellL};
+use super::membrane::{gradient, green, green_s};
+use super::plate::{plate_update, Consts, ShellL};
 use super::real::{Real, V3};
 use super::reference::{quad_gradients, Frame};
 use super::tri::KernelOut;
@@ -24,6 +31,9 @@ const HG: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct QuadElem {
     pub nodes: [u32; 4],
+    /// Reference gradients, antisymmetric across the diagonals: bx0[0] = -bx0[2] and
+    /// bx0[1] = -bx0[3] exactly (likewise by0; `quad_gradients`). The kernel reads only
+    /// bx0[2..4], by0[2..4].
     pub bx0: [f64; 4],
     pub by0: [f64; 4],
     /// Hourglass shape vector gamma_I = (h_I - (h.X) bx_I - (h.Y) by_I) / 4.
@@ -70,23 +80,22 @@ pub struct HgL<S> {
     pub th: [S; 2],
 }
 
-/// Inputs of the quad kernel (one element, or four in lanes).
+/// Inputs of the quad kernel (one element, or a batch in lanes).
 #[derive(Debug, Clone, Copy)]
 pub struct QuadIn<S> {
     pub x: [V3<S>; 4],
     pub v: [V3<S>; 4],
     pub w: [V3<S>; 4],
-    pub bx0: [S; 4],
-    pub by0: [S; 4],
+    /// Reference gradients of nodes 3 and 4: bx0[2..4], by0[2..4] (those of nodes 1
+    /// and 2 are their negatives, exactly: `quad_gradients`).
+    pub bx0: [S; 2],
+    pub by0: [S; 2],
     pub gamma: [S; 4],
     pub area0: S,
     pub e0: [S; 3],
     pub k_m: S,
     pub k_w: S,
     pub k_th: S,
-    /// 1/(2 k_w), 1/(2 k_theta) (0 when the stiffness is 0).
-    pub hinv_w: S,
-    pub hinv_th: S,
 }
 
 /// Extra outputs of the quad kernel.
@@ -109,96 +118,156 @@ pub fn quad_kernel<S: Real>(
 ) -> (KernelOut<S>, QuadExtra<S>) {
     let zero = S::splat(0.0);
     let one = S::splat(1.0);
+    let half = S::splat(0.5);
     let quarter = S::splat(0.25);
     let x = &e.x;
-    let n = x[2].minus(x[0]).cross(x[3].minus(x[1]));
-    let e3 = n.scale(one / n.norm_squared().sqrt());
+
+    // co-rotational frame: e3 normal to the diagonals, e1 along edge 1-2 in the plane
+    let d13 = x[2].minus(x[0]);
+    let d24 = x[3].minus(x[1]);
+    let n = d13.cross(d24);
+    let two_area = n.norm_squared().sqrt(); // = x31 y42 - x42 y31
+    let e3 = n.scale(one / two_area);
     let r = x[1].minus(x[0]);
     let r = r.minus(e3.scale(r.dot(e3)));
-    let e1 = r.scale(one / r.norm_squared().sqrt());
+    let l12 = r.norm_squared().sqrt();
+    let e1 = r.scale(one / l12);
     let e2 = e3.cross(e1);
-    let c = x[0].plus(x[1]).plus(x[2]).plus(x[3]).scale(quarter);
-    let xl: [S; 4] = std::array::from_fn(|i| x[i].minus(c).dot(e1));
-    let yl: [S; 4] = std::array::from_fn(|i| x[i].minus(c).dot(e2));
-    let (bx, by, area) = quad_gradients(xl, yl);
-    let corners = std::array::from_fn(|i| {
-        let (nx, p) = ((i + 1) % 4, (i + 3) % 4);
-        (xl[nx] - xl[i]) * (yl[p] - yl[i]) - (yl[nx] - yl[i]) * (xl[p] - xl[i])
-    });
+    let area = half * two_area;
 
-    let mut fm = [V3::zero(); 4];
-    let (e_mem, d_mem) = membrane_forces(
-        &k.membrane,
-        k.alpha,
-        &e.bx0,
-        &e.by0,
-        e.area0,
-        &e.e0,
-        x,
-        &e.v,
-        h,
-        &mut fm,
-    );
+    // local diagonals; current gradients of nodes 3, 4 (nodes 1, 2: the negatives)
+    let (x31, y31) = (d13.dot(e1), d13.dot(e2));
+    let (x42, y42) = (d24.dot(e1), d24.dot(e2));
+    let inv = one / two_area;
+    let bx = [y42 * inv, -(y31 * inv)];
+    let by = [-(x42 * inv), x31 * inv];
+    // corner orientation with local nodes 1 = (0, 0), 2 = (l12, 0), 3 = (x31, y31),
+    // 4 = (l12 + x42, y42)
+    let (ax, ay) = (l12 + x42 - x31, y42 - y31);
+    let corners = [
+        l12 * y42,
+        l12 * y31,
+        -(ax * y31) - ay * (l12 - x31),
+        (l12 + x42) * ay - y42 * ax,
+    ];
+
+    // membrane, total Lagrangian: F = sum_I x_I b0_I = b0_3 d13 + b0_4 d24
+    let f1 = d13.scale(e.bx0[0]).plus(d24.scale(e.bx0[1]));
+    let f2 = d13.scale(e.by0[0]).plus(d24.scale(e.by0[1]));
+    let g = green_s(f1, f2);
+    let es = [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]];
+    let mut s = k.membrane.apply(es);
+    let e_mem = half * e.area0 * (s[0] * es[0] + s[1] * es[1] + s[2] * es[2]);
+    let mut d_mem = zero;
+    if k.alpha > 0.0 {
+        let dv13 = e.v[2].minus(e.v[0]);
+        let dv24 = e.v[3].minus(e.v[1]);
+        let d1 = dv13.scale(e.bx0[0]).plus(dv24.scale(e.bx0[1]));
+        let d2 = dv13.scale(e.by0[0]).plus(dv24.scale(e.by0[1]));
+        let ed = [f1.dot(d1), f2.dot(d2), f1.dot(d2) + d1.dot(f2)];
+        let sd = k.membrane.apply_scaled(S::splat(k.alpha), ed);
+        d_mem = h * e.area0 * (sd[0] * ed[0] + sd[1] * ed[1] + sd[2] * ed[2]);
+        s[0] += sd[0];
+        s[1] += sd[1];
+        s[2] += sd[2];
+    }
+    let p1 = f1.scale(s[0]).plus(f2.scale(s[2])).scale(e.area0);
+    let p2 = f1.scale(s[2]).plus(f2.scale(s[1])).scale(e.area0);
 
     // in-plane hourglass, total form
-    let g = &e.gamma;
-    let mut q = V3::zero();
-    for (xi, gi) in x.iter().zip(g) {
-        q = q.plus(xi.scale(*gi));
-    }
+    let gm = &e.gamma;
+    let q = x[0]
+        .scale(gm[0])
+        .plus(x[1].scale(gm[1]))
+        .plus(x[2].scale(gm[2]))
+        .plus(x[3].scale(gm[3]));
     let qt = q.minus(e3.scale(q.dot(e3)));
-    let fq = qt.scale(e.k_m);
-    let mut e_hg = S::splat(0.5) * e.k_m * qt.norm_squared();
+    let mut e_hg = half * e.k_m * qt.norm_squared();
 
-    let loc = |p: V3<S>| [p.dot(e1), p.dot(e2), p.dot(e3)];
-    let rates = LocalRates {
-        v: [loc(e.v[0]), loc(e.v[1]), loc(e.v[2]), loc(e.v[3])],
-        w: [loc(e.w[0]), loc(e.w[1]), loc(e.w[2]), loc(e.w[3])],
-    };
-    // out-of-plane and rotational hourglass, rate form
-    let mut qw = zero;
-    let mut qth = [zero; 2];
-    for i in 0..4 {
-        qw += g[i] * rates.v[i][2];
-        qth[0] += g[i] * rates.w[i][0];
-        qth[1] += g[i] * rates.w[i][1];
-    }
-    hg.w += h * e.k_w * qw;
-    hg.th[0] += h * e.k_th * qth[0];
-    hg.th[1] += h * e.k_th * qth[1];
-    e_hg += hg.w * hg.w * e.hinv_w + (hg.th[0] * hg.th[0] + hg.th[1] * hg.th[1]) * e.hinv_th;
+    // rates: gradient sums of v and w in global axes, then their local components
+    let (v, w) = (&e.v, &e.w);
+    let dv13 = v[2].minus(v[0]);
+    let dv24 = v[3].minus(v[1]);
+    let dw13 = w[2].minus(w[0]);
+    let dw24 = w[3].minus(w[1]);
+    let vbx = dv13.scale(bx[0]).plus(dv24.scale(bx[1])); // sum_I bx_I v_I
+    let vby = dv13.scale(by[0]).plus(dv24.scale(by[1]));
+    let wbx = dw13.scale(bx[0]).plus(dw24.scale(bx[1]));
+    let wby = dw13.scale(by[0]).plus(dw24.scale(by[1]));
+    let wsum = w[0].plus(w[1]).plus(w[2]).plus(w[3]);
+    let vg = v[0]
+        .scale(gm[0])
+        .plus(v[1].scale(gm[1]))
+        .plus(v[2].scale(gm[2]))
+        .plus(v[3].scale(gm[3]));
+    let wg = w[0]
+        .scale(gm[0])
+        .plus(w[1].scale(gm[1]))
+        .plus(w[2].scale(gm[2]))
+        .plus(w[3].scale(gm[3]));
+    let (wbx_x, wbx_y) = (wbx.dot(e1), wbx.dot(e2));
+    let (wby_x, wby_y) = (wby.dot(e1), wby.dot(e2));
+    let kr = [wbx_y, -wby_x, wby_y - wbx_x];
+    let wm = [
+        wsum.dot(e1) * quarter,
+        wsum.dot(e2) * quarter,
+        wsum.dot(e3) * quarter,
+    ];
+    let gr = [vbx.dot(e3) + wm[1], vby.dot(e3) - wm[0]];
+    let spin = vbx.dot(e2) - vby.dot(e1);
+    let drill_rate = wm[2] - half * spin;
 
-    let q4 = S::splat(0.25);
-    let kin = PlateKin {
-        bx,
-        by,
-        area,
-        cw: std::array::from_fn(|i| [bx[i], by[i]]),
-        cx: [[zero, -q4]; 4],
-        cy: [[q4, zero]; 4],
-    };
-    let mut lo = [[zero; 6]; 4];
-    let (e_pl, d_pl) = plate_forces(k, &kin, &rates, h, st, &mut lo);
+    // rate-form plate resultants
+    let (e_pl, d_pl, mm, qq) = plate_update(k, area, kr, gr, drill_rate, h, st);
+
+    // rate-form hourglass resultants (w and rotations)
+    hg.w += h * e.k_w * vg.dot(e3);
+    hg.th[0] += h * e.k_th * wg.dot(e1);
+    hg.th[1] += h * e.k_th * wg.dot(e2);
+    let tiny = S::splat(f64::MIN_POSITIVE);
+    e_hg += hg.w * hg.w * (half / e.k_w.max(tiny))
+        + (hg.th[0] * hg.th[0] + hg.th[1] * hg.th[1]) * (half / e.k_th.max(tiny));
+
+    // nodal forces: f_I = c_I + gamma_I G, with c_1 = -c_3, c_2 = -c_4
+    let td = area * st.drill;
+    let td_half = half * td;
+    let gg = qt.scale(e.k_m).plus(e3.scale(hg.w));
+    let bb = e3.scale(area * qq[0]).minus(e2.scale(td_half));
+    let cc = e3.scale(area * qq[1]).plus(e1.scale(td_half));
+    let c3 = p1
+        .scale(e.bx0[0])
+        .plus(p2.scale(e.by0[0]))
+        .plus(bb.scale(bx[0]))
+        .plus(cc.scale(by[0]));
+    let c4 = p1
+        .scale(e.bx0[1])
+        .plus(p2.scale(e.by0[1]))
+        .plus(bb.scale(bx[1]))
+        .plus(cc.scale(by[1]));
+    // nodal moments: m_I = k + u_I + gamma_I H, with u_1 = -u_3, u_2 = -u_4
+    let mb = e2.scale(area * mm[0]).minus(e1.scale(area * mm[2]));
+    let mc = e2.scale(area * mm[2]).minus(e1.scale(area * mm[1]));
+    let hh = e1.scale(hg.th[0]).plus(e2.scale(hg.th[1]));
+    let aq = area * quarter;
+    let kk = e2
+        .scale(aq * qq[0])
+        .minus(e1.scale(aq * qq[1]))
+        .plus(e3.scale(td * quarter));
+    let u3 = mb.scale(bx[0]).plus(mc.scale(by[0]));
+    let u4 = mb.scale(bx[1]).plus(mc.scale(by[1]));
+    let fs = [
+        gg.scale(gm[0]).minus(c3),
+        gg.scale(gm[1]).minus(c4),
+        c3.plus(gg.scale(gm[2])),
+        c4.plus(gg.scale(gm[3])),
+    ];
+    let ms = [kk.minus(u3), kk.minus(u4), kk.plus(u3), kk.plus(u4)];
     for i in 0..4 {
-        lo[i][2] += g[i] * hg.w;
-        lo[i][3] += g[i] * hg.th[0];
-        lo[i][4] += g[i] * hg.th[1];
-        let f = fm[i]
-            .plus(fq.scale(g[i]))
-            .plus(e1.scale(lo[i][0]))
-            .plus(e2.scale(lo[i][1]))
-            .plus(e3.scale(lo[i][2]));
-        let m = e1
-            .scale(lo[i][3])
-            .plus(e2.scale(lo[i][4]))
-            .plus(e3.scale(lo[i][5]));
+        let (f, m) = (fs[i], ms[i].plus(hh.scale(gm[i])));
         out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
     }
-    let diag = x[2]
-        .minus(x[0])
-        .norm_squared()
-        .max(x[3].minus(x[1]).norm_squared())
-        .sqrt();
+
+    let diag = d13.norm_squared().max(d24.norm_squared()).sqrt();
     (
         KernelOut {
             internal: e_mem + e_pl,
@@ -211,4 +280,26 @@ pub fn quad_kernel<S: Real>(
             corners,
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+
+    #[test]
+    fn reference_gradients_are_exactly_antisymmetric_across_the_diagonals() {
+        let x = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.3, 0.1, 0.01),
+            Vec3::new(1.1, 0.9, -0.02),
+            Vec3::new(-0.2, 0.7, 0.01),
+        ];
+        let sec = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid"), 0.01);
+        let q = QuadElem::new([0, 1, 2, 3], &x, &sec, &Stabilization::default());
+        for i in 0..2 {
+            assert_eq!(q.bx0[i].to_bits(), (-q.bx0[i + 2]).to_bits());
+            assert_eq!(q.by0[i].to_bits(), (-q.by0[i + 2]).to_bits());
+        }
+    }
 }

@@ -1,7 +1,9 @@
 //! Scalar abstraction for the element kernels: the same code runs on one element (`f64`)
-//! or on a batch of four elements in SIMD lanes (`F4`). Each lane performs exactly the
-//! operations the scalar path performs, in the same order (Rust never fuses multiply-adds
-//! on its own), so batched and scalar results are bit-identical.
+//! or on a batch of four or eight elements in SIMD lanes (`F4`, `F8`). Each lane performs
+//! exactly the operations the scalar path performs, in the same order, and only IEEE
+//! operations that are correctly rounded on every instruction set (+, -, *, /, sqrt,
+//! max; Rust never fuses a multiply and an add on its own, so enabling FMA changes no
+//! result): batched and scalar results are bit-identical, whatever the SIMD path.
 
 use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
 
@@ -17,6 +19,7 @@ pub trait Real:
 {
     fn splat(v: f64) -> Self;
     fn sqrt(self) -> Self;
+    /// `f64::max` lane by lane (a NaN operand yields the other one).
     fn max(self, o: Self) -> Self;
 }
 
@@ -35,68 +38,95 @@ impl Real for f64 {
     }
 }
 
-/// Four lanes of f64 (one element per lane).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-#[repr(align(32))]
-pub struct F4(pub [f64; 4]);
+macro_rules! lane_type {
+    ($(#[$doc:meta])* $name:ident, $w:literal, $align:literal, [$($k:literal)*]) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[repr(C, align($align))]
+        pub struct $name(pub [f64; $w]);
 
-macro_rules! lanewise {
-    ($tr:ident, $f:ident, $op:tt) => {
-        impl $tr for F4 {
-            type Output = F4;
+        impl Default for $name {
             #[inline(always)]
-            fn $f(self, o: F4) -> F4 {
-                F4([self.0[0] $op o.0[0], self.0[1] $op o.0[1], self.0[2] $op o.0[2], self.0[3] $op o.0[3]])
+            fn default() -> Self {
+                Self([0.0; $w])
+            }
+        }
+
+        lane_type!(@op $name, [$($k)*], Add, add, +);
+        lane_type!(@op $name, [$($k)*], Sub, sub, -);
+        lane_type!(@op $name, [$($k)*], Mul, mul, *);
+        lane_type!(@op $name, [$($k)*], Div, div, /);
+
+        impl Neg for $name {
+            type Output = $name;
+            #[inline(always)]
+            fn neg(self) -> $name {
+                $name([$(-self.0[$k]),*])
+            }
+        }
+
+        impl AddAssign for $name {
+            #[inline(always)]
+            fn add_assign(&mut self, o: $name) {
+                *self = *self + o;
+            }
+        }
+
+        impl SubAssign for $name {
+            #[inline(always)]
+            fn sub_assign(&mut self, o: $name) {
+                *self = *self - o;
+            }
+        }
+
+        impl Real for $name {
+            #[inline(always)]
+            fn splat(v: f64) -> Self {
+                $name([v; $w])
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                $name([$(self.0[$k].sqrt()),*])
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                $name([$(self.0[$k].max(o.0[$k])),*])
+            }
+        }
+
+        impl Lanes for $name {
+            const W: usize = $w;
+            #[inline(always)]
+            fn from_array(a: [f64; 8]) -> Self {
+                $name([$(a[$k]),*])
+            }
+            #[inline(always)]
+            fn to_array(self) -> [f64; 8] {
+                let mut a = [0.0; 8];
+                $(a[$k] = self.0[$k];)*
+                a
+            }
+        }
+    };
+    (@op $name:ident, [$($k:literal)*], $tr:ident, $f:ident, $op:tt) => {
+        impl $tr for $name {
+            type Output = $name;
+            #[inline(always)]
+            fn $f(self, o: $name) -> $name {
+                $name([$(self.0[$k] $op o.0[$k]),*])
             }
         }
     };
 }
-lanewise!(Add, add, +);
-lanewise!(Sub, sub, -);
-lanewise!(Mul, mul, *);
-lanewise!(Div, div, /);
 
-impl Neg for F4 {
-    type Output = F4;
-    #[inline(always)]
-    fn neg(self) -> F4 {
-        F4([-self.0[0], -self.0[1], -self.0[2], -self.0[3]])
-    }
-}
-
-impl AddAssign for F4 {
-    #[inline(always)]
-    fn add_assign(&mut self, o: F4) {
-        *self = *self + o;
-    }
-}
-
-impl SubAssign for F4 {
-    #[inline(always)]
-    fn sub_assign(&mut self, o: F4) {
-        *self = *self - o;
-    }
-}
-
-impl Real for F4 {
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        F4([v; 4])
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        F4(self.0.map(f64::sqrt))
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        F4([
-            self.0[0].max(o.0[0]),
-            self.0[1].max(o.0[1]),
-            self.0[2].max(o.0[2]),
-            self.0[3].max(o.0[3]),
-        ])
-    }
-}
+lane_type!(
+    /// Four lanes of f64 (one element per lane): one AVX2 register, two SSE2 registers.
+    F4, 4, 32, [0 1 2 3]
+);
+lane_type!(
+    /// Eight lanes of f64: one AVX-512 register.
+    F8, 8, 64, [0 1 2 3 4 5 6 7]
+);
 
 /// A 3-vector of scalars or lanes.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -146,33 +176,50 @@ impl<S: Real> V3<S> {
     }
 }
 
-/// Lane `k` of a value (for scatter after a batch).
+/// Lanes in and out of a batch (gather before the kernel, scatter after it).
 pub trait Lanes: Real {
+    /// Elements per batch (at most 8).
     const W: usize;
-    fn lane(self, k: usize) -> f64;
-    fn set_lane(&mut self, k: usize, v: f64);
+    /// The first W entries of `a` as lanes.
+    fn from_array(a: [f64; 8]) -> Self;
+    /// The lanes, in the first W entries.
+    fn to_array(self) -> [f64; 8];
+
+    /// Whether every lane is >= t (`gt`: > t); false for a NaN lane.
+    #[inline(always)]
+    fn all_above(self, t: f64, gt: bool) -> bool {
+        let a = self.to_array();
+        a[..Self::W]
+            .iter()
+            .all(|&v| if gt { v > t } else { v >= t })
+    }
+
+    /// Six values per lane to six-value rows: `rows[first + stride k][c] = cols[c]` of
+    /// lane k, for k < W (a transpose; SIMD types do it in registers).
+    #[inline(always)]
+    fn scatter_rows6(cols: &[Self; 6], rows: &mut [[f64; 6]], first: usize, stride: usize) {
+        let c = [
+            cols[0].to_array(),
+            cols[1].to_array(),
+            cols[2].to_array(),
+            cols[3].to_array(),
+            cols[4].to_array(),
+            cols[5].to_array(),
+        ];
+        for k in 0..Self::W {
+            rows[first + stride * k] = [c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k]];
+        }
+    }
 }
 
 impl Lanes for f64 {
     const W: usize = 1;
     #[inline(always)]
-    fn lane(self, _k: usize) -> f64 {
-        self
+    fn from_array(a: [f64; 8]) -> Self {
+        a[0]
     }
     #[inline(always)]
-    fn set_lane(&mut self, _k: usize, v: f64) {
-        *self = v;
-    }
-}
-
-impl Lanes for F4 {
-    const W: usize = 4;
-    #[inline(always)]
-    fn lane(self, k: usize) -> f64 {
-        self.0[k]
-    }
-    #[inline(always)]
-    fn set_lane(&mut self, k: usize, v: f64) {
-        self.0[k] = v;
+    fn to_array(self) -> [f64; 8] {
+        [self, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     }
 }

@@ -8,8 +8,8 @@
 //! the centroid; this removes the shear locking of the plain one-point triangle.
 //! The kernel is generic over `Real` so that four elements run in SIMD lanes.
 
-use super::membrane::membrane_forces;
-use super::plate::{plate_forces, Consts, LocalRates, PlateKin, ShellL};
+use super::membrane::membrane_stress;
+use super::plate::{plate_update, Consts, ShellL};
 use super::real::{Real, V3};
 use super::reference::{tri_gradients, Frame};
 use crate::Vec3;
@@ -46,10 +46,9 @@ impl TriElem {
 #[allow(clippy::type_complexity)]
 #[inline(always)]
 pub fn tri_shear_operator<S: Real>(a: S, c: S, d: S) -> ([[S; 2]; 3], [[S; 2]; 3], [[S; 2]; 3]) {
-    // edge e runs from node i to node j with vector E; u_e = l_e * (tangential shear)
-    const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
-    let zero = S::splat(0.0);
-    let ev = [[a, zero], [c - a, d], [-c, -d]];
+    // edge e runs from node i to node j with vector E_e (edges 1->2, 2->3, 3->1);
+    // u_e = l_e * (tangential shear); node I collects +k_e from the edge ending at I and
+    // -k_e from the edge starting there, and half of each adjacent edge's rotation term.
     let third = S::splat(1.0 / 3.0);
     let two_third = S::splat(2.0 / 3.0);
     let (ia, id) = (S::splat(1.0) / a, S::splat(1.0) / d);
@@ -60,22 +59,73 @@ pub fn tri_shear_operator<S: Real>(a: S, c: S, d: S) -> ([[S; 2]; 3], [[S; 2]; 3
         [-(third * ia), -(two_third - third * ca) * id],
     ];
     let half = S::splat(0.5);
-    let mut cw = [[zero; 2]; 3];
-    let mut cx = [[zero; 2]; 3];
-    let mut cy = [[zero; 2]; 3];
-    for (e, &(i, j)) in EDGES.iter().enumerate() {
-        for s in 0..2 {
-            cw[i][s] -= k[e][s];
-            cw[j][s] += k[e][s];
-            let hx = half * k[e][s] * ev[e][0];
-            let hy = half * k[e][s] * ev[e][1];
-            cy[i][s] += hx;
-            cy[j][s] += hx;
-            cx[i][s] -= hy;
-            cx[j][s] -= hy;
-        }
-    }
+    // half k_e E_e for E_1 = (a, 0), E_2 = (c - a, d), E_3 = (-c, -d)
+    let (cma, mc) = (c - a, -c);
+    let hx = [
+        [half * k[0][0] * a, half * k[0][1] * a],
+        [half * k[1][0] * cma, half * k[1][1] * cma],
+        [half * k[2][0] * mc, half * k[2][1] * mc],
+    ];
+    let md = -d;
+    // E_1 has no y component
+    let hy1 = [half * k[1][0] * d, half * k[1][1] * d];
+    let hy2 = [half * k[2][0] * md, half * k[2][1] * md];
+    let cw = [
+        [k[2][0] - k[0][0], k[2][1] - k[0][1]],
+        [k[0][0] - k[1][0], k[0][1] - k[1][1]],
+        [k[1][0] - k[2][0], k[1][1] - k[2][1]],
+    ];
+    let cy = [
+        [hx[0][0] + hx[2][0], hx[0][1] + hx[2][1]],
+        [hx[0][0] + hx[1][0], hx[0][1] + hx[1][1]],
+        [hx[1][0] + hx[2][0], hx[1][1] + hx[2][1]],
+    ];
+    let cx = [
+        [-hy2[0], -hy2[1]],
+        [-hy1[0], -hy1[1]],
+        [-(hy1[0] + hy2[0]), -(hy1[1] + hy2[1])],
+    ];
     (cw, cx, cy)
+}
+
+/// The vectors the nodal forces and moments of a triangle combine (see `tri_kernel`).
+struct NodeForce<S> {
+    p1: V3<S>,
+    p2: V3<S>,
+    fb: V3<S>,
+    fc: V3<S>,
+    mb: V3<S>,
+    mc: V3<S>,
+    mk: V3<S>,
+    e1: V3<S>,
+    e2: V3<S>,
+    e3: V3<S>,
+    aq: [S; 2],
+}
+
+impl<S: Real> NodeForce<S> {
+    /// Force and moment of the node with reference gradients (bx0, by0), current
+    /// gradients (bx, by) and shear-operator rows cw, cx, cy.
+    #[allow(clippy::type_complexity)]
+    #[inline(always)]
+    fn at(&self, (bx0, by0, bx, by, cw, cx, cy): (S, S, S, S, [S; 2], [S; 2], [S; 2])) -> [S; 6] {
+        let aq = self.aq;
+        let f = self
+            .p1
+            .scale(bx0)
+            .plus(self.p2.scale(by0))
+            .plus(self.fb.scale(bx))
+            .plus(self.fc.scale(by))
+            .plus(self.e3.scale(aq[0] * cw[0] + aq[1] * cw[1]));
+        let m = self
+            .mb
+            .scale(bx)
+            .plus(self.mc.scale(by))
+            .plus(self.e1.scale(aq[0] * cx[0] + aq[1] * cx[1]))
+            .plus(self.e2.scale(aq[0] * cy[0] + aq[1] * cy[1]))
+            .plus(self.mk);
+        [f.x, f.y, f.z, m.x, m.y, m.z]
+    }
 }
 
 /// Inputs of the triangle kernel (one element, or four in lanes).
@@ -101,6 +151,10 @@ pub struct KernelOut<S> {
 }
 
 /// Internal forces of a triangle: writes its three slots (global force, moment).
+///
+/// Straight-line code, no per-node accumulation arrays: the compiler keeps everything in
+/// registers (with AVX-512 enabled it otherwise turns such loops into masked
+/// gathers/scatters on the stack).
 #[inline(always)]
 pub fn tri_kernel<S: Real>(
     k: &Consts<S>,
@@ -109,11 +163,15 @@ pub fn tri_kernel<S: Real>(
     st: &mut ShellL<S>,
     out: &mut [[S; 6]; 3],
 ) -> KernelOut<S> {
+    let zero = S::splat(0.0);
     let half = S::splat(0.5);
     let one = S::splat(1.0);
-    let r2 = e.x[1].minus(e.x[0]);
-    let r3 = e.x[2].minus(e.x[0]);
-    let r23 = e.x[2].minus(e.x[1]);
+    let (x, v, w) = (&e.x, &e.v, &e.w);
+
+    // co-rotational frame: e1 along edge 1-2, e3 normal; local nodes (0,0), (a,0), (c,d)
+    let r2 = x[1].minus(x[0]);
+    let r3 = x[2].minus(x[0]);
+    let r23 = x[2].minus(x[1]);
     let n = r2.cross(r3);
     let two_area = n.norm_squared().sqrt();
     let e3 = n.scale(one / two_area);
@@ -123,56 +181,90 @@ pub fn tri_kernel<S: Real>(
     let e2 = e3.cross(e1);
     let c = r3.dot(e1);
     let d = r3.dot(e2);
+    let area = half * two_area;
 
-    let mut fm = [V3::zero(); 3];
-    let zero3 = [S::splat(0.0); 3];
-    let (e_mem, d_mem) = membrane_forces(
+    // membrane, total Lagrangian: f_I = p1 bx0_I + p2 by0_I
+    let (e_mem, d_mem, p1, p2) = membrane_stress(
         &k.membrane,
         k.alpha,
         &e.bx0,
         &e.by0,
         e.area0,
-        &zero3,
-        &e.x,
-        &e.v,
+        &[zero; 3],
+        x,
+        v,
         h,
-        &mut fm,
     );
 
+    // current gradients and the assumed-shear operator
     let (bx, by) = tri_gradients(a, c, d);
     let (cw, cx, cy) = tri_shear_operator(a, c, d);
-    let kin = PlateKin {
-        bx,
-        by,
-        area: half * two_area,
-        cw,
-        cx,
-        cy,
+
+    // local rates
+    let vz = [v[0].dot(e3), v[1].dot(e3), v[2].dot(e3)];
+    let wx = [w[0].dot(e1), w[1].dot(e1), w[2].dot(e1)];
+    let wy = [w[0].dot(e2), w[1].dot(e2), w[2].dot(e2)];
+    let wz = w[0].plus(w[1]).plus(w[2]).dot(e3);
+    let sbx = v[0].scale(bx[0]).plus(v[1].scale(bx[1])); // bx[2] = 0
+    let sby = v[0]
+        .scale(by[0])
+        .plus(v[1].scale(by[1]))
+        .plus(v[2].scale(by[2]));
+    let spin = sbx.dot(e2) - sby.dot(e1);
+    let kr = [
+        bx[0] * wy[0] + bx[1] * wy[1],
+        -(by[0] * wx[0] + by[1] * wx[1] + by[2] * wx[2]),
+        by[0] * wy[0] + by[1] * wy[1] + by[2] * wy[2] - (bx[0] * wx[0] + bx[1] * wx[1]),
+    ];
+    let g = [
+        cw[0][0] * vz[0]
+            + cx[0][0] * wx[0]
+            + cy[0][0] * wy[0]
+            + (cw[1][0] * vz[1] + cx[1][0] * wx[1] + cy[1][0] * wy[1])
+            + (cw[2][0] * vz[2] + cx[2][0] * wx[2] + cy[2][0] * wy[2]),
+        cw[0][1] * vz[0]
+            + cx[0][1] * wx[0]
+            + cy[0][1] * wy[0]
+            + (cw[1][1] * vz[1] + cx[1][1] * wx[1] + cy[1][1] * wy[1])
+            + (cw[2][1] * vz[2] + cx[2][1] * wx[2] + cy[2][1] * wy[2]),
+    ];
+    let drill_rate = wz * S::splat(1.0 / 3.0) - half * spin;
+
+    let (e_pl, d_pl, mm, qq) = plate_update(k, area, kr, g, drill_rate, h, st);
+
+    // nodal forces and moments
+    let td = area * st.drill;
+    let td_half = half * td;
+    let fb = e2.scale(-td_half); // coefficient of bx_I
+    let fc = e1.scale(td_half); // coefficient of by_I
+    let mb = e2.scale(area * mm[0]).minus(e1.scale(area * mm[2]));
+    let mc = e2.scale(area * mm[2]).minus(e1.scale(area * mm[1]));
+    let mk = e3.scale(td * S::splat(1.0 / 3.0));
+    let (aq0, aq1) = (area * qq[0], area * qq[1]);
+    // f_I = p1 bx0_I + p2 by0_I + fb bx_I + fc by_I + e3 A (q . cw_I)
+    // m_I = mb bx_I + mc by_I + e1 A (q . cx_I) + e2 A (q . cy_I) + mk
+    let g = NodeForce {
+        p1,
+        p2,
+        fb,
+        fc,
+        mb,
+        mc,
+        mk,
+        e1,
+        e2,
+        e3,
+        aq: [aq0, aq1],
     };
-    let loc = |p: V3<S>| [p.dot(e1), p.dot(e2), p.dot(e3)];
-    let rates = LocalRates {
-        v: [loc(e.v[0]), loc(e.v[1]), loc(e.v[2])],
-        w: [loc(e.w[0]), loc(e.w[1]), loc(e.w[2])],
-    };
-    let mut lo = [[S::splat(0.0); 6]; 3];
-    let (e_pl, d_pl) = plate_forces(k, &kin, &rates, h, st, &mut lo);
-    for i in 0..3 {
-        let f = fm[i]
-            .plus(e1.scale(lo[i][0]))
-            .plus(e2.scale(lo[i][1]))
-            .plus(e3.scale(lo[i][2]));
-        let m = e1
-            .scale(lo[i][3])
-            .plus(e2.scale(lo[i][4]))
-            .plus(e3.scale(lo[i][5]));
-        out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
-    }
+    out[0] = g.at((e.bx0[0], e.by0[0], bx[0], by[0], cw[0], cx[0], cy[0]));
+    out[1] = g.at((e.bx0[1], e.by0[1], bx[1], by[1], cw[1], cx[1], cy[1]));
+    out[2] = g.at((e.bx0[2], e.by0[2], bx[2], by[2], cw[2], cx[2], cy[2]));
     let longest = l2sq.max(r3.norm_squared()).max(r23.norm_squared()).sqrt();
     KernelOut {
         internal: e_mem + e_pl,
         damping: d_mem + d_pl,
         length: two_area / longest,
-        ratio: half * two_area / e.area0,
+        ratio: area / e.area0,
     }
 }
 

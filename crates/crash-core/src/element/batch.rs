@@ -1,0 +1,512 @@
+//! Element loops in SIMD batches: gather the node data, reference data and resultants of
+//! `S::W` consecutive elements into lanes, run the kernel once for all of them, scatter
+//! the resultants and force slots back; the remainder of a chunk runs one element at a
+//! time (`S = f64`). The arithmetic per element is the same for any lane count, so the
+//! results do not depend on the SIMD path (`simd`) nor on the chunking.
+
+use super::plate::{Consts, ShellL};
+use super::quad::{quad_kernel, HgL, QuadElem, QuadIn};
+use super::real::{Lanes, Real, V3};
+use super::simd::Lanewise;
+use super::tri::{tri_kernel, KernelOut, TriElem, TriIn};
+use super::{ElemFailure, HourglassState, ShellState, Slot, Stabilization, COLLAPSE_RATIO};
+use crate::forces::{ForceSums, DT_SHAPE};
+use crate::material::Section;
+use crate::Vec3;
+
+/// Nodal positions, half-step velocities and angular velocities of a body.
+pub type Nodes<'a> = (&'a [Vec3], &'a [Vec3], &'a [Vec3]);
+
+/// What a chunk reports: its sums, or the first failing element (body-wide index).
+pub type ChunkResult = Result<ForceSums, (usize, ElemFailure)>;
+
+/// Lanes from per-lane values `f(0..W)`.
+#[inline(always)]
+fn gather<S: Lanes>(f: impl Fn(usize) -> f64) -> S {
+    let mut a = [0.0; 8];
+    for (k, v) in a.iter_mut().enumerate().take(S::W) {
+        *v = f(k);
+    }
+    S::from_array(a)
+}
+
+/// One node vector of every lane: `at(k)` is lane k's node.
+#[inline(always)]
+fn gather_v3<S: Lanes>(a: &[Vec3], at: impl Fn(usize) -> usize) -> V3<S> {
+    V3::new(
+        gather(
+            #[inline(always)]
+            |k| a[at(k)].x,
+        ),
+        gather(
+            #[inline(always)]
+            |k| a[at(k)].y,
+        ),
+        gather(
+            #[inline(always)]
+            |k| a[at(k)].z,
+        ),
+    )
+}
+
+#[inline(always)]
+fn gather_shell<S: Lanes>(sts: &[ShellState]) -> ShellL<S> {
+    ShellL {
+        m: [
+            gather(|k| sts[k].m[0]),
+            gather(|k| sts[k].m[1]),
+            gather(|k| sts[k].m[2]),
+        ],
+        q: [gather(|k| sts[k].q[0]), gather(|k| sts[k].q[1])],
+        drill: gather(|k| sts[k].drill),
+    }
+}
+
+#[inline(always)]
+fn scatter_shell<S: Lanes>(l: &ShellL<S>, sts: &mut [ShellState]) {
+    let (m0, m1, m2) = (l.m[0].to_array(), l.m[1].to_array(), l.m[2].to_array());
+    let (q0, q1, dr) = (l.q[0].to_array(), l.q[1].to_array(), l.drill.to_array());
+    for (k, s) in sts.iter_mut().enumerate().take(S::W) {
+        s.m = [m0[k], m1[k], m2[k]];
+        s.q = [q0[k], q1[k]];
+        s.drill = dr[k];
+    }
+}
+
+/// `forces::element_dt` in lanes (the same operations).
+#[inline(always)]
+fn element_dt<S: Real>(sec: &Section, length: S) -> S {
+    let dt = S::splat(DT_SHAPE) * length / S::splat(sec.wave_speed);
+    let a = sec.material.kelvin;
+    if a == 0.0 {
+        return dt; // damping_factor = 1
+    }
+    let xi = S::splat(a * sec.wave_speed) / length;
+    dt * ((S::splat(1.0) + xi * xi).sqrt() - xi)
+}
+
+/// Check every lane for collapse, then add its energies and time step to the sums.
+#[inline(always)]
+fn book<S: Lanes>(
+    sec: &Section,
+    r: &KernelOut<S>,
+    hourglass: S,
+    area0: S,
+    e0: usize,
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
+    if !r.ratio.all_above(COLLAPSE_RATIO, false) {
+        let ratio = r.ratio.to_array();
+        for (l, &ratio) in ratio.iter().enumerate().take(S::W) {
+            if ratio.is_nan() || ratio < COLLAPSE_RATIO {
+                return Err((e0 + l, ElemFailure::Collapsed { ratio }));
+            }
+        }
+    }
+    let dt = element_dt(sec, r.length).to_array();
+    let density = ((r.internal + hourglass) / area0).to_array();
+    let (internal, hourglass) = (r.internal.to_array(), hourglass.to_array());
+    let damping = r.damping.to_array();
+    for l in 0..S::W {
+        sums.add(
+            e0 + l,
+            internal[l],
+            hourglass[l],
+            damping[l],
+            density[l],
+            dt[l],
+        );
+    }
+    Ok(())
+}
+
+/// Lanes of a triangle batch: kernel input, resultants and nodal forces.
+#[derive(Debug, Clone, Copy)]
+struct TriLanes<S> {
+    input: TriIn<S>,
+    st: ShellL<S>,
+    out: [[S; 6]; 3],
+}
+
+impl<S: Real> TriLanes<S> {
+    fn zero() -> Self {
+        let z = S::splat(0.0);
+        let z3 = V3::new(z, z, z);
+        Self {
+            input: TriIn {
+                x: [z3; 3],
+                v: [z3; 3],
+                w: [z3; 3],
+                bx0: [z; 3],
+                by0: [z; 3],
+                area0: z,
+            },
+            st: ShellL {
+                m: [z; 3],
+                q: [z; 2],
+                drill: z,
+            },
+            out: [[z; 6]; 3],
+        }
+    }
+}
+
+/// Gather S::W triangles into `l` (every input and resultant).
+#[inline(always)]
+fn tri_gather<S: Lanes>(
+    els: &[TriElem],
+    nodes: Nodes<'_>,
+    sts: &[ShellState],
+    l: &mut TriLanes<S>,
+) {
+    let (els, sts) = (&els[..S::W], &sts[..S::W]);
+    for i in 0..3 {
+        l.input.x[i] = gather_v3(
+            nodes.0,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        l.input.v[i] = gather_v3(
+            nodes.1,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        l.input.w[i] = gather_v3(
+            nodes.2,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        l.input.bx0[i] = gather(|k| els[k].bx0[i]);
+        l.input.by0[i] = gather(|k| els[k].by0[i]);
+    }
+    l.input.area0 = gather(|k| els[k].area0);
+    l.st = gather_shell(sts);
+}
+
+#[inline(always)]
+fn tri_scatter<S: Lanes>(l: &TriLanes<S>, sts: &mut [ShellState], slots: &mut [Slot]) {
+    scatter_shell(&l.st, &mut sts[..S::W]);
+    for i in 0..3 {
+        S::scatter_rows6(&l.out[i], slots, i, 3);
+    }
+}
+
+#[inline(always)]
+fn tri_compute<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    e0: usize,
+    h: S,
+    l: &mut TriLanes<S>,
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
+    let r = tri_kernel(k, &l.input, h, &mut l.st, &mut l.out);
+    book(sec, &r, S::splat(0.0), l.input.area0, e0, sums)
+}
+
+/// Triangles `els` (at least S::W of them; the first S::W) from element index `e0`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn tri_batch<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    els: &[TriElem],
+    e0: usize,
+    nodes: Nodes<'_>,
+    h: S,
+    sts: &mut [ShellState],
+    slots: &mut [Slot],
+    sums: &mut ForceSums,
+    buf: &mut TriLanes<S>,
+) -> Result<(), (usize, ElemFailure)> {
+    tri_gather(els, nodes, sts, buf);
+    tri_compute(k, sec, e0, h, buf, sums)?;
+    tri_scatter(buf, sts, slots);
+    Ok(())
+}
+
+/// Lanes of a quad batch: kernel input, resultants and nodal forces.
+#[derive(Debug, Clone, Copy)]
+struct QuadLanes<S> {
+    input: QuadIn<S>,
+    st: ShellL<S>,
+    hg: HgL<S>,
+    out: [[S; 6]; 4],
+}
+
+impl<S: Real> QuadLanes<S> {
+    fn zero() -> Self {
+        let z = S::splat(0.0);
+        let z3 = V3::new(z, z, z);
+        Self {
+            input: QuadIn {
+                x: [z3; 4],
+                v: [z3; 4],
+                w: [z3; 4],
+                bx0: [z; 2],
+                by0: [z; 2],
+                gamma: [z; 4],
+                area0: z,
+                e0: [z; 3],
+                k_m: z,
+                k_w: z,
+                k_th: z,
+            },
+            st: ShellL {
+                m: [z; 3],
+                q: [z; 2],
+                drill: z,
+            },
+            hg: HgL { w: z, th: [z; 2] },
+            out: [[z; 6]; 4],
+        }
+    }
+}
+
+/// Gather S::W quads into `l` (every input and resultant).
+#[inline(always)]
+fn quad_gather<S: Lanes>(
+    els: &[QuadElem],
+    nodes: Nodes<'_>,
+    sts: &[ShellState],
+    hgs: &[HourglassState],
+    l: &mut QuadLanes<S>,
+) {
+    let (els, sts, hgs) = (&els[..S::W], &sts[..S::W], &hgs[..S::W]);
+    let q = &mut l.input;
+    for i in 0..4 {
+        q.x[i] = gather_v3(
+            nodes.0,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        q.v[i] = gather_v3(
+            nodes.1,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        q.w[i] = gather_v3(
+            nodes.2,
+            #[inline(always)]
+            |k| els[k].nodes[i] as usize,
+        );
+        q.gamma[i] = gather(|k| els[k].gamma[i]);
+    }
+    q.bx0 = [gather(|k| els[k].bx0[2]), gather(|k| els[k].bx0[3])];
+    q.by0 = [gather(|k| els[k].by0[2]), gather(|k| els[k].by0[3])];
+    q.e0 = [
+        gather(|k| els[k].e0[0]),
+        gather(|k| els[k].e0[1]),
+        gather(|k| els[k].e0[2]),
+    ];
+    q.area0 = gather(|k| els[k].area0);
+    q.k_m = gather(|k| els[k].k_m);
+    q.k_w = gather(|k| els[k].k_w);
+    q.k_th = gather(|k| els[k].k_th);
+    l.st = gather_shell(sts);
+    l.hg = HgL {
+        w: gather(|k| hgs[k].w),
+        th: [gather(|k| hgs[k].th[0]), gather(|k| hgs[k].th[1])],
+    };
+}
+
+#[inline(always)]
+fn quad_scatter<S: Lanes>(
+    l: &QuadLanes<S>,
+    sts: &mut [ShellState],
+    hgs: &mut [HourglassState],
+    slots: &mut [Slot],
+) {
+    scatter_shell(&l.st, &mut sts[..S::W]);
+    let (w, t0, t1) = (
+        l.hg.w.to_array(),
+        l.hg.th[0].to_array(),
+        l.hg.th[1].to_array(),
+    );
+    for (k, h) in hgs[..S::W].iter_mut().enumerate() {
+        h.w = w[k];
+        h.th = [t0[k], t1[k]];
+    }
+    for i in 0..4 {
+        S::scatter_rows6(&l.out[i], slots, i, 4);
+    }
+}
+
+#[inline(always)]
+fn quad_compute<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    e0: usize,
+    h: S,
+    l: &mut QuadLanes<S>,
+    sums: &mut ForceSums,
+) -> Result<(), (usize, ElemFailure)> {
+    let (r, extra) = quad_kernel(k, &l.input, h, &mut l.st, &mut l.hg, &mut l.out);
+    let c = &extra.corners;
+    let convex = c[0].all_above(0.0, true)
+        && c[1].all_above(0.0, true)
+        && c[2].all_above(0.0, true)
+        && c[3].all_above(0.0, true);
+    if !convex {
+        let corners = extra.corners.map(|c| c.to_array());
+        for ln in 0..S::W {
+            for (corner, c) in corners.iter().enumerate() {
+                if c[ln].is_nan() || c[ln] <= 0.0 {
+                    return Err((e0 + ln, ElemFailure::Inverted { corner }));
+                }
+            }
+        }
+    }
+    book(sec, &r, extra.hourglass, l.input.area0, e0, sums)
+}
+
+/// Quads `els` (at least S::W of them; the first S::W) from element index `e0`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn quad_batch<S: Lanes>(
+    k: &Consts<S>,
+    sec: &Section,
+    els: &[QuadElem],
+    e0: usize,
+    nodes: Nodes<'_>,
+    h: S,
+    sts: &mut [ShellState],
+    hgs: &mut [HourglassState],
+    slots: &mut [Slot],
+    sums: &mut ForceSums,
+    buf: &mut QuadLanes<S>,
+) -> Result<(), (usize, ElemFailure)> {
+    quad_gather(els, nodes, sts, hgs, buf);
+    quad_compute(k, sec, e0, h, buf, sums)?;
+    quad_scatter(buf, sts, hgs, slots);
+    Ok(())
+}
+
+/// One chunk of triangles: forces into `slots` (3 per element), resultants updated.
+#[derive(Debug)]
+pub struct TriChunk<'a> {
+    pub sec: &'a Section,
+    pub stab: &'a Stabilization,
+    pub els: &'a [TriElem],
+    pub states: &'a mut [ShellState],
+    pub slots: &'a mut [Slot],
+    pub nodes: Nodes<'a>,
+    pub h: f64,
+    /// Body-wide index of the chunk's first element.
+    pub first: usize,
+}
+
+impl Lanewise for TriChunk<'_> {
+    type Output = ChunkResult;
+
+    #[inline(always)]
+    fn run<S: Lanes>(self) -> ChunkResult {
+        let (kw, k1) = (
+            Consts::<S>::new(self.sec, self.stab),
+            Consts::<f64>::new(self.sec, self.stab),
+        );
+        let (els, sts, slots) = (self.els, self.states, self.slots);
+        let mut sums = ForceSums::default();
+        let (mut buf, mut buf1) = (TriLanes::<S>::zero(), TriLanes::<f64>::zero());
+        let w = S::W;
+        let full = els.len() - els.len() % w;
+        let mut j = 0;
+        while j < full {
+            tri_batch(
+                &kw,
+                self.sec,
+                &els[j..],
+                self.first + j,
+                self.nodes,
+                S::splat(self.h),
+                &mut sts[j..],
+                &mut slots[3 * j..],
+                &mut sums,
+                &mut buf,
+            )?;
+            j += w;
+        }
+        while j < els.len() {
+            tri_batch(
+                &k1,
+                self.sec,
+                &els[j..],
+                self.first + j,
+                self.nodes,
+                self.h,
+                &mut sts[j..],
+                &mut slots[3 * j..],
+                &mut sums,
+                &mut buf1,
+            )?;
+            j += 1;
+        }
+        Ok(sums)
+    }
+}
+
+/// One chunk of quads: forces into `slots` (4 per element), resultants updated.
+#[derive(Debug)]
+pub struct QuadChunk<'a> {
+    pub sec: &'a Section,
+    pub stab: &'a Stabilization,
+    pub els: &'a [QuadElem],
+    pub states: &'a mut [ShellState],
+    pub hourglass: &'a mut [HourglassState],
+    pub slots: &'a mut [Slot],
+    pub nodes: Nodes<'a>,
+    pub h: f64,
+    /// Body-wide index of the chunk's first element.
+    pub first: usize,
+}
+
+impl Lanewise for QuadChunk<'_> {
+    type Output = ChunkResult;
+
+    #[inline(always)]
+    fn run<S: Lanes>(self) -> ChunkResult {
+        let (kw, k1) = (
+            Consts::<S>::new(self.sec, self.stab),
+            Consts::<f64>::new(self.sec, self.stab),
+        );
+        let (els, sts, hgs, slots) = (self.els, self.states, self.hourglass, self.slots);
+        let mut sums = ForceSums::default();
+        let (mut buf, mut buf1) = (QuadLanes::<S>::zero(), QuadLanes::<f64>::zero());
+        let w = S::W;
+        let full = els.len() - els.len() % w;
+        let mut j = 0;
+        while j < full {
+            quad_batch(
+                &kw,
+                self.sec,
+                &els[j..],
+                self.first + j,
+                self.nodes,
+                S::splat(self.h),
+                &mut sts[j..],
+                &mut hgs[j..],
+                &mut slots[4 * j..],
+                &mut sums,
+                &mut buf,
+            )?;
+            j += w;
+        }
+        while j < els.len() {
+            quad_batch(
+                &k1,
+                self.sec,
+                &els[j..],
+                self.first + j,
+                self.nodes,
+                self.h,
+                &mut sts[j..],
+                &mut hgs[j..],
+                &mut slots[4 * j..],
+                &mut sums,
+                &mut buf1,
+            )?;
+            j += 1;
+        }
+        Ok(sums)
+    }
+}

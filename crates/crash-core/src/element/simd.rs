@@ -1,0 +1,634 @@
+//! Run-time choice of the instruction set for the element loops, so that one binary
+//! runs on every x86-64 and uses what the CPU has:
+//!
+//! | path       | lanes per batch          | target features                                   |
+//! | ---------- | ------------------------ | ------------------------------------------------- |
+//! | `avx512`   | 8 (`Avx8`, one zmm)      | AVX-512 F/VL/DQ/BW + AVX2 + FMA (x86-64-v4 level) |
+//! | `avx2`     | 4 (`Avx4`, one ymm)      | AVX + AVX2 + FMA (x86-64-v3 level)                |
+//! | `baseline` | 4 (`Sse4`, two xmm)      | none beyond x86-64's own SSE2                     |
+//!
+//! The kernels are generic (`Real`, `Lanes`) and `#[inline(always)]`; each path is one
+//! `#[target_feature]` function that instantiates them with its lane type, so the
+//! compiler generates the same source three times for three instruction sets. `Sse4`,
+//! `Avx4` and `Avx8` wrap `__m128d` pairs, `__m256d` and `__m512d` and do their
+//! arithmetic with `core::arch` intrinsics: every operation is one vector instruction
+//! whatever the size of the kernel (plain `[f64; N]` lanes rely on the compiler's SLP
+//! vectorizer, which gave up on parts of the triangle kernel after unrelated edits, and
+//! under AVX-512 features turned lane gathers into slow `vgatherqpd`).
+//!
+//! Every path gives the same bits: the kernels use only correctly rounded IEEE
+//! operations (+, -, *, /, sqrt, max, negation), element by element in the same order,
+//! and never a fused multiply-add (Rust does not contract `a * b + c`, and no FMA
+//! intrinsic is used). `tests/simd_paths.rs` checks this on every path the machine has.
+//!
+//! Unsafe code: this module only (`#[allow(unsafe_code)]` on the items that need it).
+//! The intrinsics need AVX2 / AVX-512; calling them is sound because `Avx4` and `Avx8`
+//! are private to this module and instantiated only in `run_avx2` / `run_avx512`, which
+//! `dispatch` calls only after `Path::supported` detected every feature they enable; so a
+//! value of these types exists only on a CPU that has them. `Sse4` needs SSE2, which
+//! every x86-64 CPU has. On other architectures the baseline path runs `F4` (plain
+//! arrays, no unsafe code).
+//!
+//! The path is detected once (`is_x86_feature_detected!`). `CRASH_SIMD=baseline|avx2|
+//! avx512|auto` in the environment, read at that moment, or [`force`] overrides it; a
+//! path the CPU lacks is never taken.
+
+use super::real::Lanes;
+#[cfg(not(target_arch = "x86_64"))]
+use super::real::F4;
+use std::sync::atomic::{AtomicU8, Ordering};
+
+/// An instruction-set path of the element kernels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Path {
+    Baseline,
+    Avx2,
+    Avx512,
+}
+
+impl Path {
+    /// Every path, slowest first.
+    pub const ALL: [Path; 3] = [Path::Baseline, Path::Avx2, Path::Avx512];
+
+    /// "baseline", "avx2" or "avx512".
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::Baseline => "baseline",
+            Path::Avx2 => "avx2",
+            Path::Avx512 => "avx512",
+        }
+    }
+
+    /// Parse a name as written by [`Path::name`].
+    pub fn from_name(s: &str) -> Option<Path> {
+        Path::ALL.into_iter().find(|p| p.name() == s)
+    }
+
+    /// Elements per SIMD batch on this path.
+    pub fn lanes(self) -> usize {
+        match self {
+            Path::Avx512 => 8,
+            _ => 4,
+        }
+    }
+
+    /// Whether this CPU (and OS) can run the path: every feature its entry point
+    /// enables (`x86::run_avx2`, `x86::run_avx512`) is detected.
+    pub fn supported(self) -> bool {
+        match self {
+            Path::Baseline => true,
+            #[cfg(target_arch = "x86_64")]
+            Path::Avx2 => {
+                is_x86_feature_detected!("avx")
+                    && is_x86_feature_detected!("avx2")
+                    && is_x86_feature_detected!("fma")
+            }
+            #[cfg(target_arch = "x86_64")]
+            Path::Avx512 => {
+                Path::Avx2.supported()
+                    && is_x86_feature_detected!("avx512f")
+                    && is_x86_feature_detected!("avx512vl")
+                    && is_x86_feature_detected!("avx512dq")
+                    && is_x86_feature_detected!("avx512bw")
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+
+    fn code(self) -> u8 {
+        match self {
+            Path::Baseline => 1,
+            Path::Avx2 => 2,
+            Path::Avx512 => 3,
+        }
+    }
+}
+
+/// The fastest path this CPU supports.
+pub fn best() -> Path {
+    Path::ALL
+        .into_iter()
+        .rev()
+        .find(|p| p.supported())
+        .unwrap_or(Path::Baseline)
+}
+
+/// The paths this CPU supports, slowest first.
+pub fn available() -> Vec<Path> {
+    Path::ALL.into_iter().filter(|p| p.supported()).collect()
+}
+
+/// The path in use: 0 = not chosen yet, else `Path::code`. Invariant: a non-zero value
+/// is always a path whose `supported()` returned true (what makes `dispatch` sound).
+static CURRENT: AtomicU8 = AtomicU8::new(0);
+
+/// The path the element loops use (chosen on first call: `CRASH_SIMD`, else the best).
+pub fn path() -> Path {
+    match CURRENT.load(Ordering::Relaxed) {
+        1 => Path::Baseline,
+        2 => Path::Avx2,
+        3 => Path::Avx512,
+        _ => {
+            let p = from_env();
+            CURRENT.store(p.code(), Ordering::Relaxed);
+            p
+        }
+    }
+}
+
+/// Name of the path in use: "avx512", "avx2" or "baseline" (for the run's log and
+/// summary).
+pub fn path_name() -> &'static str {
+    path().name()
+}
+
+/// The path `CRASH_SIMD` asks for, if this CPU supports it; otherwise the best one.
+fn from_env() -> Path {
+    let Ok(v) = std::env::var("CRASH_SIMD") else {
+        return best();
+    };
+    let v = v.trim().to_ascii_lowercase();
+    if v.is_empty() || v == "auto" {
+        return best();
+    }
+    match Path::from_name(&v) {
+        Some(p) if p.supported() => p,
+        Some(p) => {
+            tracing::warn!(
+                "CRASH_SIMD={v}: this CPU lacks {}; using {}",
+                p.name(),
+                best().name()
+            );
+            best()
+        }
+        None => {
+            tracing::warn!(
+                "CRASH_SIMD={v} is not one of auto, baseline, avx2, avx512; using {}",
+                best().name()
+            );
+            best()
+        }
+    }
+}
+
+/// A path this CPU cannot run was requested.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Unsupported(pub Path);
+
+impl std::fmt::Display for Unsupported {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "this CPU does not support the {} path", self.0.name())
+    }
+}
+
+impl std::error::Error for Unsupported {}
+
+/// Use `p` from now on (every thread). Results do not depend on the path; this is for
+/// tests and measurements.
+pub fn force(p: Path) -> Result<(), Unsupported> {
+    if !p.supported() {
+        return Err(Unsupported(p));
+    }
+    CURRENT.store(p.code(), Ordering::Relaxed);
+    Ok(())
+}
+
+/// Work that runs with any lane type: an element loop, instantiated once per path.
+pub trait Lanewise {
+    type Output;
+    /// Run with batches of `S::W` elements (and the remainder one by one).
+    fn run<S: Lanes>(self) -> Self::Output;
+}
+
+/// Run `work` on the current path.
+#[inline]
+#[allow(unsafe_code)]
+pub fn dispatch<K: Lanewise>(work: K) -> K::Output {
+    match path() {
+        // SAFETY: `path()` returns Avx512 or Avx2 only if `Path::supported` detected
+        // every target feature the called function enables (invariant of `CURRENT`).
+        #[cfg(target_arch = "x86_64")]
+        Path::Avx512 => unsafe { x86::run_avx512(work) },
+        #[cfg(target_arch = "x86_64")]
+        Path::Avx2 => unsafe { x86::run_avx2(work) },
+        #[cfg(target_arch = "x86_64")]
+        Path::Baseline => x86::run_baseline(work),
+        #[cfg(not(target_arch = "x86_64"))]
+        _ => work.run::<F4>(),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+mod x86 {
+    //! The lane types of the three x86-64 paths and their entry points (two of them
+    //! `#[target_feature]`). See the module documentation above for why the intrinsic
+    //! calls are sound: every `unsafe` block below relies on that one invariant (the CPU
+    //! has the features of the entry point that instantiated the type; SSE2 always),
+    //! plus, for stores, on pointers into local `[f64; 8]` arrays or `[f64; 6]` slots,
+    //! valid for the writes made.
+
+    use super::super::real::{Lanes, Real};
+    use super::Lanewise;
+    use std::arch::x86_64::*;
+    use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
+
+    // exactly the features `Path::Avx512.supported()` detects
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,avx,fma")]
+    pub(super) fn run_avx512<K: Lanewise>(work: K) -> K::Output {
+        work.run::<Avx8>()
+    }
+
+    // exactly the features `Path::Avx2.supported()` detects
+    #[target_feature(enable = "avx2,avx,fma")]
+    pub(super) fn run_avx2<K: Lanewise>(work: K) -> K::Output {
+        work.run::<Avx4>()
+    }
+
+    /// SSE2 is part of x86-64 itself: no detection needed.
+    pub(super) fn run_baseline<K: Lanewise>(work: K) -> K::Output {
+        work.run::<Sse4>()
+    }
+
+    /// Four lanes in two SSE2 registers (the baseline path). SSE2 belongs to every
+    /// x86-64 CPU, so the intrinsics below are always available.
+    #[derive(Debug, Clone, Copy)]
+    struct Sse4([__m128d; 2]);
+
+    macro_rules! sse_op {
+        ($tr:ident, $f:ident, $op:ident) => {
+            impl $tr for Sse4 {
+                type Output = Sse4;
+                #[inline(always)]
+                fn $f(self, o: Sse4) -> Sse4 {
+                    // SAFETY: SSE2 is in the x86-64 baseline.
+                    unsafe { Sse4([$op(self.0[0], o.0[0]), $op(self.0[1], o.0[1])]) }
+                }
+            }
+        };
+    }
+    sse_op!(Add, add, _mm_add_pd);
+    sse_op!(Sub, sub, _mm_sub_pd);
+    sse_op!(Mul, mul, _mm_mul_pd);
+    sse_op!(Div, div, _mm_div_pd);
+
+    impl Neg for Sse4 {
+        type Output = Sse4;
+        #[inline(always)]
+        fn neg(self) -> Sse4 {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe {
+                let m = _mm_set1_pd(-0.0);
+                Sse4([_mm_xor_pd(self.0[0], m), _mm_xor_pd(self.0[1], m)])
+            }
+        }
+    }
+    impl AddAssign for Sse4 {
+        #[inline(always)]
+        fn add_assign(&mut self, o: Sse4) {
+            *self = *self + o;
+        }
+    }
+    impl SubAssign for Sse4 {
+        #[inline(always)]
+        fn sub_assign(&mut self, o: Sse4) {
+            *self = *self - o;
+        }
+    }
+    impl Real for Sse4 {
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe { Sse4([_mm_set1_pd(v); 2]) }
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe { Sse4([_mm_sqrt_pd(self.0[0]), _mm_sqrt_pd(self.0[1])]) }
+        }
+        #[inline(always)]
+        fn max(self, o: Self) -> Self {
+            // as for Avx4: self where o is NaN (and-not/or blend, SSE2 has no blendv)
+            let half = |a: __m128d, b: __m128d| {
+                // SAFETY: SSE2 is in the x86-64 baseline.
+                unsafe {
+                    let nan = _mm_cmpunord_pd(b, b);
+                    let m = _mm_max_pd(a, b);
+                    _mm_or_pd(_mm_and_pd(nan, a), _mm_andnot_pd(nan, m))
+                }
+            };
+            Sse4([half(self.0[0], o.0[0]), half(self.0[1], o.0[1])])
+        }
+    }
+    impl Lanes for Sse4 {
+        const W: usize = 4;
+        #[inline(always)]
+        fn from_array(a: [f64; 8]) -> Self {
+            // SAFETY: SSE2 is in the x86-64 baseline.
+            unsafe { Sse4([_mm_setr_pd(a[0], a[1]), _mm_setr_pd(a[2], a[3])]) }
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f64; 8] {
+            let mut a = [0.0; 8];
+            // SAFETY: SSE2 is in the x86-64 baseline; a has 8 writable f64.
+            unsafe {
+                _mm_storeu_pd(a.as_mut_ptr(), self.0[0]);
+                _mm_storeu_pd(a.as_mut_ptr().add(2), self.0[1]);
+            }
+            a
+        }
+    }
+
+    macro_rules! lane_type {
+        ($name:ident, $v:ty, $w:literal, $set1:ident, $add:ident, $sub:ident, $mul:ident,
+         $div:ident, $sqrt:ident, $xor:ident, $max:ident, $load:ident, $store:ident,
+         $blend_nan:expr, $quarter:ident, $above:ident) => {
+            /// Lanes in one vector register (see the module documentation).
+            #[derive(Debug, Clone, Copy)]
+            struct $name($v);
+
+            impl Add for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn add(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $add(self.0, o.0) })
+                }
+            }
+            impl Sub for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn sub(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $sub(self.0, o.0) })
+                }
+            }
+            impl Mul for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn mul(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $mul(self.0, o.0) })
+                }
+            }
+            impl Div for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn div(self, o: $name) -> $name {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $div(self.0, o.0) })
+                }
+            }
+            impl Neg for $name {
+                type Output = $name;
+                #[inline(always)]
+                fn neg(self) -> $name {
+                    // flips the sign bit, as scalar negation does
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $xor(self.0, $set1(-0.0)) })
+                }
+            }
+            impl AddAssign for $name {
+                #[inline(always)]
+                fn add_assign(&mut self, o: $name) {
+                    *self = *self + o;
+                }
+            }
+            impl SubAssign for $name {
+                #[inline(always)]
+                fn sub_assign(&mut self, o: $name) {
+                    *self = *self - o;
+                }
+            }
+            impl Real for $name {
+                #[inline(always)]
+                fn splat(v: f64) -> Self {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $set1(v) })
+                }
+                #[inline(always)]
+                fn sqrt(self) -> Self {
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $sqrt(self.0) })
+                }
+                #[inline(always)]
+                fn max(self, o: Self) -> Self {
+                    // max_pd returns its second operand when either is NaN; f64::max
+                    // returns the operand that is not NaN: take self where o is NaN.
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $blend_nan($max(self.0, o.0), self.0, o.0) })
+                }
+            }
+            impl Lanes for $name {
+                const W: usize = $w;
+                #[inline(always)]
+                fn from_array(a: [f64; 8]) -> Self {
+                    // built in registers (a store-and-reload would stall on the
+                    // store-to-load forwarding of the scalar stores)
+                    // SAFETY: see the module documentation.
+                    $name(unsafe { $load(a) })
+                }
+                #[inline(always)]
+                fn to_array(self) -> [f64; 8] {
+                    let mut a = [0.0; 8];
+                    // SAFETY: see the module documentation (8 writable f64).
+                    unsafe { $store(a.as_mut_ptr(), self.0) };
+                    a
+                }
+                #[inline(always)]
+                fn all_above(self, t: f64, gt: bool) -> bool {
+                    // SAFETY: see the module documentation.
+                    unsafe { $above(self.0, t, gt) }
+                }
+                #[inline(always)]
+                fn scatter_rows6(
+                    cols: &[Self; 6],
+                    rows: &mut [[f64; 6]],
+                    first: usize,
+                    stride: usize,
+                ) {
+                    for k in 0..$w / 4 {
+                        // SAFETY: see the module documentation.
+                        let t = unsafe { transpose4x6($quarter(cols, k)) };
+                        for (j, (lo, hi)) in t.into_iter().enumerate() {
+                            let r = &mut rows[first + stride * (4 * k + j)];
+                            // SAFETY: see the module documentation; `r` has 6 f64.
+                            unsafe { store_row6(r, lo, hi) };
+                        }
+                    }
+                }
+            }
+        };
+    }
+
+    #[inline(always)]
+    unsafe fn from4(a: [f64; 8]) -> __m256d {
+        // SAFETY: called only from Avx4 methods (see the module documentation).
+        unsafe { _mm256_setr_pd(a[0], a[1], a[2], a[3]) }
+    }
+
+    #[inline(always)]
+    unsafe fn from8(a: [f64; 8]) -> __m512d {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe { _mm512_setr_pd(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]) }
+    }
+
+    /// Every lane > t (gt) or >= t; ordered compares, so false for NaN.
+    #[inline(always)]
+    unsafe fn above4(v: __m256d, t: f64, gt: bool) -> bool {
+        // SAFETY: called only from Avx4 methods (see the module documentation).
+        unsafe {
+            let t = _mm256_set1_pd(t);
+            let m = if gt {
+                _mm256_cmp_pd::<_CMP_GT_OQ>(v, t)
+            } else {
+                _mm256_cmp_pd::<_CMP_GE_OQ>(v, t)
+            };
+            _mm256_movemask_pd(m) == 0xf
+        }
+    }
+
+    /// Every lane > t (gt) or >= t; ordered compares, so false for NaN.
+    #[inline(always)]
+    unsafe fn above8(v: __m512d, t: f64, gt: bool) -> bool {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe {
+            let t = _mm512_set1_pd(t);
+            let m = if gt {
+                _mm512_cmp_pd_mask::<_CMP_GT_OQ>(v, t)
+            } else {
+                _mm512_cmp_pd_mask::<_CMP_GE_OQ>(v, t)
+            };
+            m == 0xff
+        }
+    }
+
+    /// Lanes 4k..4k+4 of six columns (k = 0 for Avx4).
+    #[inline(always)]
+    unsafe fn quarter4(c: &[Avx4; 6], _k: usize) -> [__m256d; 6] {
+        [c[0].0, c[1].0, c[2].0, c[3].0, c[4].0, c[5].0]
+    }
+
+    /// Lanes 4k..4k+4 of six columns (k = 0, 1 for Avx8).
+    #[inline(always)]
+    unsafe fn quarter8(c: &[Avx8; 6], k: usize) -> [__m256d; 6] {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe {
+            if k == 0 {
+                c.map(|v| _mm512_castpd512_pd256(v.0))
+            } else {
+                c.map(|v| _mm512_extractf64x4_pd::<1>(v.0))
+            }
+        }
+    }
+
+    /// Rows of a 4-lane x 6-column block: lane j gets (c0..c3 of lane j, c4 c5 of lane j).
+    #[inline(always)]
+    unsafe fn transpose4x6(c: [__m256d; 6]) -> [(__m256d, __m128d); 4] {
+        // SAFETY: called only from Avx4/Avx8 methods (see the module documentation).
+        unsafe {
+            let t0 = _mm256_unpacklo_pd(c[0], c[1]); // a0 b0 a2 b2
+            let t1 = _mm256_unpackhi_pd(c[0], c[1]); // a1 b1 a3 b3
+            let t2 = _mm256_unpacklo_pd(c[2], c[3]);
+            let t3 = _mm256_unpackhi_pd(c[2], c[3]);
+            let u0 = _mm256_unpacklo_pd(c[4], c[5]);
+            let u1 = _mm256_unpackhi_pd(c[4], c[5]);
+            [
+                (
+                    _mm256_permute2f128_pd::<0x20>(t0, t2),
+                    _mm256_castpd256_pd128(u0),
+                ),
+                (
+                    _mm256_permute2f128_pd::<0x20>(t1, t3),
+                    _mm256_castpd256_pd128(u1),
+                ),
+                (
+                    _mm256_permute2f128_pd::<0x31>(t0, t2),
+                    _mm256_extractf128_pd::<1>(u0),
+                ),
+                (
+                    _mm256_permute2f128_pd::<0x31>(t1, t3),
+                    _mm256_extractf128_pd::<1>(u1),
+                ),
+            ]
+        }
+    }
+
+    /// Store (lo, hi) as the six values of `r`.
+    #[inline(always)]
+    unsafe fn store_row6(r: &mut [f64; 6], lo: __m256d, hi: __m128d) {
+        let p = r.as_mut_ptr();
+        // SAFETY: p points to 6 writable f64: 4 at p, 2 at p + 4; AVX is available
+        // (called only from Avx4/Avx8 methods, see the module documentation).
+        unsafe {
+            _mm256_storeu_pd(p, lo);
+            _mm_storeu_pd(p.add(4), hi);
+        }
+    }
+
+    /// r where o is not NaN, s where it is.
+    #[inline(always)]
+    unsafe fn keep_if_nan4(r: __m256d, s: __m256d, o: __m256d) -> __m256d {
+        // SAFETY: called only from Avx4 methods (see the module documentation).
+        unsafe { _mm256_blendv_pd(r, s, _mm256_cmp_pd::<_CMP_UNORD_Q>(o, o)) }
+    }
+
+    /// r where o is not NaN, s where it is.
+    #[inline(always)]
+    unsafe fn keep_if_nan8(r: __m512d, s: __m512d, o: __m512d) -> __m512d {
+        // SAFETY: called only from Avx8 methods (see the module documentation).
+        unsafe { _mm512_mask_blend_pd(_mm512_cmp_pd_mask::<_CMP_UNORD_Q>(o, o), r, s) }
+    }
+
+    lane_type!(
+        Avx4,
+        __m256d,
+        4,
+        _mm256_set1_pd,
+        _mm256_add_pd,
+        _mm256_sub_pd,
+        _mm256_mul_pd,
+        _mm256_div_pd,
+        _mm256_sqrt_pd,
+        _mm256_xor_pd,
+        _mm256_max_pd,
+        from4,
+        _mm256_storeu_pd,
+        keep_if_nan4,
+        quarter4,
+        above4
+    );
+    lane_type!(
+        Avx8,
+        __m512d,
+        8,
+        _mm512_set1_pd,
+        _mm512_add_pd,
+        _mm512_sub_pd,
+        _mm512_mul_pd,
+        _mm512_div_pd,
+        _mm512_sqrt_pd,
+        _mm512_xor_pd,
+        _mm512_max_pd,
+        from8,
+        _mm512_storeu_pd,
+        keep_if_nan8,
+        quarter8,
+        above8
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_baseline_is_always_available() {
+        for p in Path::ALL {
+            assert_eq!(Path::from_name(p.name()), Some(p));
+        }
+        assert!(available().contains(&Path::Baseline));
+        assert!(best().supported());
+    }
+}
