@@ -6,7 +6,7 @@ use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-pub(crate) fn temp_path(path: &Path) -> PathBuf {
+fn temp_path(path: &Path) -> PathBuf {
     let mut name = path
         .file_name()
         .map(|n| n.to_os_string())
@@ -20,18 +20,52 @@ pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), IoError> {
-    let tmp = temp_path(path);
-    let file = File::create(&tmp).at(&tmp)?;
-    let mut w = BufWriter::new(file);
-    fill(&mut w).at(&tmp)?;
-    let file = w
-        .into_inner()
-        .map_err(|e| IoError::io(&tmp, e.into_error()))?;
-    file.sync_all().at(&tmp)?;
-    drop(file);
-    fs::rename(&tmp, path).at(path)?;
-    sync_dir(path);
-    Ok(())
+    let mut f = AtomicFile::create(path)?;
+    fill(f.writer()).at(f.temp())?;
+    f.commit()
+}
+
+/// A file written under a temporary name that takes its own name only when complete
+/// (`commit`): for files written piece by piece, e.g. a frame as its bodies arrive.
+#[derive(Debug)]
+pub struct AtomicFile {
+    path: PathBuf,
+    tmp: PathBuf,
+    w: BufWriter<File>,
+}
+
+impl AtomicFile {
+    pub fn create(path: &Path) -> Result<Self, IoError> {
+        let tmp = temp_path(path);
+        let w = BufWriter::new(File::create(&tmp).at(&tmp)?);
+        Ok(Self {
+            path: path.to_path_buf(),
+            tmp,
+            w,
+        })
+    }
+
+    pub fn writer(&mut self) -> &mut dyn Write {
+        &mut self.w
+    }
+
+    /// The temporary name (for errors while writing).
+    pub fn temp(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Flush, sync and rename to the final name.
+    pub fn commit(self) -> Result<(), IoError> {
+        let Self { path, tmp, w } = self;
+        let file = w
+            .into_inner()
+            .map_err(|e| IoError::io(&tmp, e.into_error()))?;
+        file.sync_all().at(&tmp)?;
+        drop(file);
+        fs::rename(&tmp, &path).at(&path)?;
+        sync_dir(&path);
+        Ok(())
+    }
 }
 
 /// Make the rename durable. Best effort: not every platform can open a directory.

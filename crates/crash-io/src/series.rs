@@ -3,13 +3,11 @@
 //! still leaves a valid series. Restart keeps the frames up to the restart time and
 //! continues the numbering.
 
-use crate::atomic::{temp_path, write_atomic};
+use crate::atomic::{write_atomic, AtomicFile};
 use crate::error::{AtPath, IoError};
 use crate::frame::{Frame, FrameBody};
 use crate::vtu::{write_vtu_footer, write_vtu_header, write_vtu_piece, Encoding};
 use roxmltree::Document;
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 /// Name of the collection file inside the output directory.
@@ -41,8 +39,7 @@ struct OpenFrame {
     time: f64,
     file: String,
     path: PathBuf,
-    tmp: PathBuf,
-    w: BufWriter<File>,
+    out: AtomicFile,
 }
 
 fn frame_file(index: u64) -> String {
@@ -178,15 +175,13 @@ impl SeriesWriter {
         }
         let file = frame_file(self.next_index);
         let path = self.dir.join(&file);
-        let tmp = temp_path(&path);
-        let mut w = BufWriter::new(File::create(&tmp).at(&tmp)?);
-        write_vtu_header(&mut w, time, step).at(&tmp)?;
+        let mut out = AtomicFile::create(&path)?;
+        write_vtu_header(out.writer(), time, step).at(out.temp())?;
         self.open = Some(OpenFrame {
             time,
             file,
             path,
-            tmp,
-            w,
+            out,
         });
         Ok(())
     }
@@ -198,7 +193,7 @@ impl SeriesWriter {
             .open
             .as_mut()
             .ok_or_else(|| IoError::Invalid("a frame body arrived outside a frame".into()))?;
-        write_vtu_piece(&mut f.w, body, enc).at(&f.tmp)
+        write_vtu_piece(f.out.writer(), body, enc).at(f.out.temp())
     }
 
     /// Finish the frame begun last: close and rename its .vtu, list it in the .pvd.
@@ -207,19 +202,13 @@ impl SeriesWriter {
             time,
             file,
             path,
-            tmp,
-            mut w,
+            mut out,
         } = self
             .open
             .take()
             .ok_or_else(|| IoError::Invalid("end of a frame that was not begun".into()))?;
-        write_vtu_footer(&mut w).at(&tmp)?;
-        let f = w
-            .into_inner()
-            .map_err(|e| IoError::io(&tmp, e.into_error()))?;
-        f.sync_all().at(&tmp)?;
-        drop(f);
-        std::fs::rename(&tmp, &path).at(&path)?;
+        write_vtu_footer(out.writer()).at(out.temp())?;
+        out.commit()?;
         let mut replaced = Vec::new();
         if self.entries.last().is_some_and(|e| e.time >= time) {
             let (keep, drop): (Vec<_>, Vec<_>) =

@@ -286,15 +286,8 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
     }
     let ids: Vec<u32> = bodies.iter().map(|b| b.def.id).collect();
     let outputs = outputs::resolve(ctx, &scene.spec, &ids, &tags)?;
-    let mut notes = Vec::new();
-    let dt = g.safety * bodies.iter().map(dt_estimate).fold(f64::INFINITY, f64::min);
-    let mut output_interval = g.output_interval;
-    if dt.is_finite() && output_interval < dt {
-        notes.push(format!(
-            "output_interval {output_interval:.3e} s is below the time step (about {dt:.3e} s): a frame is written every step"
-        ));
-        output_interval = output_interval.max(OUTPUT_FLOOR_FRACTION * dt);
-    }
+    let dt = bodies.iter().map(dt_estimate).fold(f64::INFINITY, f64::min);
+    let (output_interval, notes) = output_interval(g, dt);
     let mut contact = g.contact;
     if !g.margin_given && contact.enabled {
         contact.margin = default_margin(&bodies, g.gravity, g.end_time, g.safety);
@@ -317,6 +310,21 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
         outputs,
         notes,
     })
+}
+
+/// The output interval to use given the smallest element time step estimate (no
+/// safety factor): one below the time step means every step, with a note.
+pub(crate) fn output_interval(g: &crate::globals::Globals, dt_estimate: f64) -> (f64, Vec<String>) {
+    let dt = g.safety * dt_estimate;
+    let mut notes = Vec::new();
+    let mut output_interval = g.output_interval;
+    if dt.is_finite() && output_interval < dt {
+        notes.push(format!(
+            "output_interval {output_interval:.3e} s is below the time step (about {dt:.3e} s): a frame is written every step"
+        ));
+        output_interval = output_interval.max(OUTPUT_FLOOR_FRACTION * dt);
+    }
+    (output_interval, notes)
 }
 
 /// The error for two bodies that interpenetrate at t = 0, located at the later body.

@@ -6,7 +6,7 @@
 //! ([`Scene::body`]), so it never holds more than two bodies. Bodies, margin, hash and
 //! errors are exactly those of [`Scene::build`].
 
-use crate::build::{body, check_memory, overlap_error, BodyInfo, OUTPUT_FLOOR_FRACTION};
+use crate::build::{body, check_memory, output_interval, overlap_error, BodyInfo};
 use crate::error::SceneError;
 use crate::margin::{default_margin_of, MarginInputs};
 use crate::outputs::{self, Outputs};
@@ -95,19 +95,11 @@ impl Scene {
         }
         let ids: Vec<u32> = briefs.iter().map(|b| b.id).collect();
         let outputs = outputs::resolve(ctx, &self.spec, &ids, &tags)?;
-        let mut notes = Vec::new();
-        let dt = g.safety
-            * inputs
-                .iter()
-                .map(|m| m.dt_estimate)
-                .fold(f64::INFINITY, f64::min);
-        let mut output_interval = g.output_interval;
-        if dt.is_finite() && output_interval < dt {
-            notes.push(format!(
-                "output_interval {output_interval:.3e} s is below the time step (about {dt:.3e} s): a frame is written every step"
-            ));
-            output_interval = output_interval.max(OUTPUT_FLOOR_FRACTION * dt);
-        }
+        let dt = inputs
+            .iter()
+            .map(|m| m.dt_estimate)
+            .fold(f64::INFINITY, f64::min);
+        let (output_interval, notes) = output_interval(g, dt);
         let mut contact = g.contact;
         if !g.margin_given && contact.enabled {
             contact.margin = default_margin_of(&inputs, g.gravity, g.end_time, g.safety);
