@@ -232,6 +232,11 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                     "a second Welcome in one session".into(),
                 ))
             }
+            PbCommand::Challenge(_) => {
+                return Err(ProtoError::Invalid(
+                    "a second Challenge in one session".into(),
+                ))
+            }
             PbCommand::Setup(s) => {
                 let g = s
                     .gravity

@@ -15,6 +15,7 @@ pub mod assign;
 pub mod checkpoint;
 pub mod error;
 pub mod file_sink;
+pub mod guard;
 pub mod input;
 mod master;
 pub mod meim;

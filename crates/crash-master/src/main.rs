@@ -2,6 +2,7 @@
 
 use anyhow::Context;
 use clap::Parser;
+use crash_link::{Secret, SECRET_ENV};
 use crash_master::{
     read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput,
     RunOptions, RESTART_FILE,
@@ -21,8 +22,18 @@ struct Args {
     /// The scene file (TOML).
     scene: PathBuf,
     /// Address to listen on for workers (port 0: any free port, printed at start).
-    #[arg(long, default_value = "0.0.0.0:50051")]
+    /// Loopback by default: give e.g. 0.0.0.0:50051 to admit workers on other hosts.
+    #[arg(long, default_value = "127.0.0.1:50051")]
     listen: SocketAddr,
+    /// File holding the cluster's shared secret (at least 16 bytes; else the
+    /// CRASH_SECRET environment variable): only workers that prove it are admitted.
+    /// Without either, any peer that reaches the port may attach.
+    #[arg(long, value_name = "PATH")]
+    secret_file: Option<PathBuf>,
+    /// A connection on which no worker completes the handshake within this time is
+    /// closed [s].
+    #[arg(long, default_value_t = 5.0)]
+    handshake_timeout: f64,
     /// Number of workers to wait for.
     #[arg(long)]
     workers: usize,
@@ -98,16 +109,27 @@ fn run(args: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
         .with_checkpoints(args.out.join(RESTART_FILE));
+    let secret = Secret::configured(args.secret_file.as_deref())?;
     let mut cluster = Cluster::bind(
         args.listen,
         args.workers,
         RemoteOptions {
             accept_timeout: Duration::from_secs_f64(args.accept_timeout.max(0.0)),
             reply_timeout: Duration::from_secs_f64(args.reply_timeout.max(0.001)),
+            handshake_timeout: Duration::from_secs_f64(args.handshake_timeout.clamp(0.1, 3600.0)),
+            secret,
         },
     )?;
-    // Tests and scripts read this line to learn the port.
+    // Tests and scripts read this line to learn the port (the address ends it).
     eprintln!("crash-master: listening on {}", cluster.local_addr());
+    if cluster.secret_required() {
+        eprintln!("crash-master: workers must prove the shared secret");
+    } else {
+        eprintln!(
+            "crash-master: warning: no shared secret (--secret-file or {SECRET_ENV}): any peer that reaches {} can attach as a worker and receive the scene",
+            cluster.local_addr()
+        );
+    }
     cluster.accept()?;
     eprintln!(
         "crash-master: {} workers attached, running '{}'",

@@ -27,6 +27,13 @@ struct Args {
     /// Give up when the master cannot be reached for this long [s].
     #[arg(long, default_value_t = 60.0)]
     connect_timeout: f64,
+    /// File holding the cluster's shared secret (else the CRASH_SECRET environment
+    /// variable), proved to the master in Hello; never give it on the command line.
+    #[arg(long, value_name = "PATH")]
+    secret_file: Option<std::path::PathBuf>,
+    /// Announce this host name in Hello instead of $HOSTNAME (tests of escaping).
+    #[arg(long, hide = true)]
+    host: Option<String>,
     /// Announce this protocol version instead of the built-in one (tests of refusal).
     #[arg(long, hide = true)]
     protocol_version: Option<u32>,
@@ -68,6 +75,16 @@ fn main() -> ExitCode {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let mut opts = crash_worker::WorkerOptions::new(master, threads);
     opts.connect_timeout = Duration::from_secs_f64(args.connect_timeout.max(0.0));
+    opts.secret = match crash_link::Secret::configured(args.secret_file.as_deref()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("crash-worker: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if let Some(h) = args.host {
+        opts.host = h;
+    }
     if let Some(v) = args.protocol_version {
         opts.protocol_version = v;
     }
