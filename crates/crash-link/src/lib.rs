@@ -16,18 +16,19 @@ pub mod text;
 pub mod version;
 pub mod wire;
 
+pub use auth::{HelloFields, Secret, SecretError, SECRET_ENV};
 pub use command::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
 pub use link::{LinkError, WorkerLink};
-pub use auth::{HelloFields, Secret, SecretError, SECRET_ENV};
 pub use text::escape_peer;
 pub use version::{check_version, VersionError, PROTOCOL_VERSION};
 
 /// Largest message either end decodes once a worker is admitted [bytes]. The largest
 /// real message is one body's definition and state (a Load carries one body; a
 /// migration's Load and Unloaded, and a checkpoint's States, one body per message):
-/// 5.5 MB for a 20 480-triangle sphere of scenes/bench/million-shells.toml
+/// 6.6 MB for a 20 480-triangle sphere of scenes/bench/million-shells.toml (4.7 MB
+/// for its state alone)
 /// (tests/tests/trust.rs `largest_body_message_fits_the_limit`), so 64 MiB leaves
-/// room for bodies of about 240 000 elements. docs/reliability.md.
+/// room for bodies of about 200 000 elements. docs/reliability.md.
 pub const MAX_MESSAGE: usize = 64 << 20;
 /// Largest message the master accepts before a worker is admitted (its Hello).
 pub const HELLO_LIMIT: usize = 4 << 10;

@@ -52,6 +52,9 @@ mod tests {
         assert_eq!(escape_peer("host-1.lan"), "host-1.lan");
         let long = "a".repeat(10_000);
         let e = escape_peer(&long);
-        assert!(e.len() < PEER_TEXT_MAX + 32 && e.ends_with("[9744 more chars]"), "{e}");
+        assert!(
+            e.len() < PEER_TEXT_MAX + 32 && e.ends_with("[9744 more chars]"),
+            "{e}"
+        );
     }
 }

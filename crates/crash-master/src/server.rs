@@ -21,8 +21,7 @@ use crate::error::MasterError;
 use crate::guard::{limit_request, ConnInfo, Gate};
 use crate::remote_link::{Outbound, RemoteWorker};
 use crash_link::{
-    check_version, escape_peer, HelloFields, Secret, HEALTH_SERVICE, MAX_MESSAGE,
-    PROTOCOL_VERSION,
+    check_version, escape_peer, HelloFields, Secret, HEALTH_SERVICE, MAX_MESSAGE, PROTOCOL_VERSION,
 };
 use crash_proto::pb::coordinator_server::{Coordinator, CoordinatorServer};
 use crash_proto::pb::worker_message::Reply as PbReply;
@@ -210,12 +209,13 @@ impl Coordinator for Service {
             })),
         };
         let _ = outbound.send(Ok(challenge));
-        let (attach, secret, timeout) =
-            (self.attach.clone(), self.secret.clone(), self.handshake);
+        let (attach, secret, timeout) = (self.attach.clone(), self.secret.clone(), self.handshake);
         tokio::spawn(async move {
             let out = outbound.clone();
-            if let Err(s) =
-                handshake(attach, secret, timeout, conn, peer, nonce, inbound, outbound).await
+            if let Err(s) = handshake(
+                attach, secret, timeout, conn, peer, nonce, inbound, outbound,
+            )
+            .await
             {
                 let _ = out.send(Err(s));
             }
@@ -345,9 +345,11 @@ impl Cluster {
                     match rx.recv().await {
                         Some(a) => {
                             tracing::info!(
-                                "worker {} attached from {} ({} threads)",
+                                "worker {} attached from {} ('{}', pid {}, {} threads)",
                                 got.len(),
                                 a.peer,
+                                escape_peer(&a.hello.host),
+                                a.hello.pid,
                                 a.hello.threads
                             );
                             got.push(a);

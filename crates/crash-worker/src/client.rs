@@ -8,8 +8,7 @@
 use crate::engine::Engine;
 use crash_link::wire::{command_from_pb, reply_to_pb};
 use crash_link::{
-    check_version, escape_peer, Command, HelloFields, Reply, Secret, MAX_MESSAGE,
-    PROTOCOL_VERSION,
+    check_version, escape_peer, Command, HelloFields, Reply, Secret, MAX_MESSAGE, PROTOCOL_VERSION,
 };
 use crash_proto::pb::coordinator_client::CoordinatorClient;
 use crash_proto::pb::master_message::Command as PbCommand;
@@ -222,7 +221,11 @@ async fn attach(
             command: Some(PbCommand::Challenge(c)),
         })) => c,
         Ok(Some(_)) => return Err(protocol("the first message was not Challenge")),
-        Ok(None) => return Err(lost("the master closed the session before its Challenge".into())),
+        Ok(None) => {
+            return Err(lost(
+                "the master closed the session before its Challenge".into(),
+            ))
+        }
         Err(s) => return Err(refused_or_lost(url, &s)),
     };
     if opts.protocol_version == PROTOCOL_VERSION {
