@@ -8,11 +8,11 @@
 //!   closed as soon as they are accepted.
 //! - Every request body is wrapped in [`LimitBody`], which reads the 5-byte gRPC
 //!   frame headers as the bytes arrive and fails the stream when a message announces
-//!   more than `HELLO_LIMIT` (before admission) or `MAX_MESSAGE` (after), before
+//!   more than `HELLO_LIMIT` (before admission) or the run's limit (after), before
 //!   tonic's decoder sees the length and reserves a buffer for it.
 
 use bytes::Bytes;
-use crash_link::{HELLO_LIMIT, MAX_MESSAGE};
+use crash_link::HELLO_LIMIT;
 use std::future::Future;
 use std::io;
 use std::net::SocketAddr;
@@ -33,6 +33,8 @@ pub const MAX_PENDING: usize = 32;
 pub struct ConnInfo {
     pub remote: Option<SocketAddr>,
     admitted: Arc<AtomicBool>,
+    /// The message limit once admitted.
+    limit: usize,
 }
 
 impl ConnInfo {
@@ -138,11 +140,13 @@ pub struct Gate {
     pending: Arc<AtomicUsize>,
     handshake: Duration,
     refused: Arc<AtomicUsize>,
+    limit: usize,
 }
 
 impl Gate {
-    pub fn new(handshake: Duration) -> Self {
+    pub fn new(handshake: Duration, limit: usize) -> Self {
         Self {
+            limit,
             pending: Arc::new(AtomicUsize::new(0)),
             handshake,
             refused: Arc::new(AtomicUsize::new(0)),
@@ -166,6 +170,7 @@ impl Gate {
             info: ConnInfo {
                 remote: io.peer_addr().ok(),
                 admitted: Arc::new(AtomicBool::new(false)),
+                limit: self.limit,
             },
             io,
             deadline: Box::pin(tokio::time::sleep(self.handshake)),
@@ -199,7 +204,8 @@ impl LimitBody {
     fn limit(&self) -> usize {
         match &self.info {
             Some(i) if !i.admitted() => HELLO_LIMIT,
-            _ => MAX_MESSAGE,
+            Some(i) => i.limit,
+            None => crash_link::MAX_MESSAGE,
         }
     }
 

@@ -120,6 +120,9 @@ fn run(args: Args) -> anyhow::Result<()> {
             reply_timeout: Duration::from_secs_f64(args.reply_timeout.max(0.001)),
             handshake_timeout: Duration::from_secs_f64(args.handshake_timeout.clamp(0.1, 3600.0)),
             secret,
+            max_message: crash_link::message_limit(
+                input.briefs.iter().map(|b| b.elements).max().unwrap_or(0),
+            ),
         },
     )?;
     // Tests and scripts read this line to learn the port (the address ends it).

@@ -21,7 +21,8 @@ use crate::error::MasterError;
 use crate::guard::{limit_request, ConnInfo, Gate};
 use crate::remote_link::{Outbound, RemoteWorker};
 use crash_link::{
-    check_version, escape_peer, HelloFields, Secret, HEALTH_SERVICE, MAX_MESSAGE, PROTOCOL_VERSION,
+    check_version, escape_peer, HelloFields, Secret, HEALTH_SERVICE, MAX_MESSAGE, MAX_MESSAGE_CAP,
+    PROTOCOL_VERSION,
 };
 use crash_proto::pb::coordinator_server::{Coordinator, CoordinatorServer};
 use crash_proto::pb::worker_message::Reply as PbReply;
@@ -47,6 +48,9 @@ pub struct RemoteOptions {
     /// The shared secret a worker must prove (None: any peer that reaches the port
     /// and speaks the protocol may attach).
     pub secret: Option<Secret>,
+    /// Largest message decoded from an admitted worker (`crash_link::message_limit`);
+    /// before admission only `HELLO_LIMIT`.
+    pub max_message: usize,
 }
 
 impl Default for RemoteOptions {
@@ -56,6 +60,7 @@ impl Default for RemoteOptions {
             reply_timeout: Duration::from_secs(60),
             handshake_timeout: Duration::from_secs(5),
             secret: None,
+            max_message: MAX_MESSAGE,
         }
     }
 }
@@ -270,8 +275,8 @@ impl Cluster {
             handshake: opts.handshake_timeout,
         });
         let server = CoordinatorServer::from_arc(service.clone())
-            .max_decoding_message_size(MAX_MESSAGE)
-            .max_encoding_message_size(MAX_MESSAGE);
+            .max_decoding_message_size(opts.max_message)
+            .max_encoding_message_size(MAX_MESSAGE_CAP);
         // grpc.health.v1.Health: SERVING for the coordinator while this cluster lives
         let (reporter, health) = tonic_health::server::health_reporter();
         rt.block_on(
@@ -279,7 +284,7 @@ impl Cluster {
         );
         let (stop, stopped) = oneshot::channel::<()>();
         // every connection is guarded until a worker on it is admitted (guard.rs)
-        let gate = Gate::new(opts.handshake_timeout);
+        let gate = Gate::new(opts.handshake_timeout, opts.max_message);
         let incoming = TcpListenerStream::new(listener).filter_map(move |r| match r {
             Ok(tcp) => {
                 set_keepalive(&tcp);

@@ -8,7 +8,8 @@
 use crate::engine::Engine;
 use crash_link::wire::{command_from_pb, reply_to_pb};
 use crash_link::{
-    check_version, escape_peer, Command, HelloFields, Reply, Secret, MAX_MESSAGE, PROTOCOL_VERSION,
+    check_version, escape_peer, Command, HelloFields, Reply, Secret, MAX_MESSAGE_CAP,
+    PROTOCOL_VERSION,
 };
 use crash_proto::pb::coordinator_client::CoordinatorClient;
 use crash_proto::pb::master_message::Command as PbCommand;
@@ -207,9 +208,11 @@ async fn attach(
         reason: reason.into(),
     };
     let channel = connect(url, opts.connect_timeout).await?;
+    // The worker trusts the master it was pointed at: it accepts what the master's
+    // run needs (the master bounds what it accepts from workers, docs/reliability.md).
     let mut client = CoordinatorClient::new(channel)
-        .max_decoding_message_size(MAX_MESSAGE)
-        .max_encoding_message_size(MAX_MESSAGE);
+        .max_decoding_message_size(MAX_MESSAGE_CAP)
+        .max_encoding_message_size(MAX_MESSAGE_CAP);
     let (tx, rx) = mpsc::unbounded_channel();
     let mut inbound = match client.attach(UnboundedReceiverStream::new(rx)).await {
         Ok(r) => r.into_inner(),
