@@ -243,3 +243,39 @@ fn largest_body_message_fits_the_limit() {
     assert!(elements == 20_480);
     assert!(with_def * 8 < crash_link::MAX_MESSAGE, "{with_def} B");
 }
+
+/// SIGTERM stops crash-master cleanly: the current step finishes, then a checkpoint,
+/// the last frame, summary.json marked interrupted; the workers are told to stop
+/// (exit 0); the master exits with 130.
+#[test]
+fn sigterm_stops_the_master_cleanly() {
+    let out = out_dir("trust-sigterm");
+    let (mut m, url) = master(
+        &test_scene("ten-spheres-tiny.toml"),
+        1,
+        &out,
+        &["--estimated-costs", "--end-time", "1.0"],
+    );
+    let mut w = worker(&url, 1, &[]);
+    m.expect_line("workers attached", Duration::from_secs(30));
+    std::thread::sleep(Duration::from_millis(1500));
+    m.signal("TERM");
+    let status = m.wait(Duration::from_secs(60));
+    assert_eq!(status.code(), Some(130), "{}", m.log());
+    assert!(w.wait(Duration::from_secs(30)).success(), "{}", w.log());
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    let fault = s.fault.clone().unwrap_or_default();
+    assert!(fault.contains("interrupted at step"), "{fault}");
+    assert!(s.steps > 0 && s.end_time < 1.0, "{} steps", s.steps);
+    assert_ne!(
+        s.final_state_hash,
+        format!("{:016x}", 0),
+        "the last frame's hash"
+    );
+    let ckp = crash_master::read_restart(&out.join(crash_master::RESTART_FILE)).unwrap();
+    assert_eq!(
+        ckp.master.clock.step, s.steps,
+        "checkpoint at the last step"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -4,8 +4,8 @@ use anyhow::Context;
 use clap::Parser;
 use crash_link::{Secret, SECRET_ENV};
 use crash_master::{
-    read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput,
-    RunOptions, RESTART_FILE,
+    read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, MasterError,
+    RemoteOptions, RunInput, RunOptions, RESTART_FILE,
 };
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -81,9 +81,23 @@ fn main() -> ExitCode {
         // colour codes only on a terminal: logs kept in files stay plain text
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
+    // SIGTERM, SIGINT: finish the step, checkpoint, last frame, summary, exit 130;
+    // a second signal ends the process at once (exit 130)
+    let stop = crash_master::stop::flag();
+    for sig in [signal_hook::consts::SIGTERM, signal_hook::consts::SIGINT] {
+        let registered = signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())
+            .and_then(|_| signal_hook::flag::register(sig, stop.clone()));
+        if let Err(e) = registered {
+            eprintln!("crash-master: warning: cannot handle signal {sig}: {e}");
+        }
+    }
     match run(Args::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            if let Some(i @ MasterError::Interrupted { .. }) = e.downcast_ref::<MasterError>() {
+                eprintln!("crash-master: {i}");
+                return ExitCode::from(130);
+            }
             eprintln!("crash-master: error: {e:#}");
             ExitCode::FAILURE
         }

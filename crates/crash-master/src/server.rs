@@ -346,8 +346,14 @@ impl Cluster {
         let attached: Vec<Attached> = self.rt.block_on(async {
             let mut got = Vec::new();
             let _ = tokio::time::timeout(t, async {
-                while got.len() < n {
-                    match rx.recv().await {
+                while got.len() < n && !crate::stop::requested() {
+                    // look at the stop flag (SIGTERM) every 100 ms
+                    let Ok(next) =
+                        tokio::time::timeout(Duration::from_millis(100), rx.recv()).await
+                    else {
+                        continue;
+                    };
+                    match next {
                         Some(a) => {
                             tracing::info!(
                                 "worker {} attached from {} ('{}', pid {}, {} threads)",
@@ -371,6 +377,9 @@ impl Cluster {
             *g = None;
         }
         drop(rx);
+        if crate::stop::requested() {
+            return Err(MasterError::Interrupted { step: 0, time: 0.0 });
+        }
         if attached.len() < n {
             return Err(MasterError::Network(format!(
                 "only {} of {n} workers attached to {} within {:.0} s",
