@@ -10,24 +10,19 @@ pub const PEER_TEXT_MAX: usize = 256;
 /// `PEER_TEXT_MAX` characters kept (then `...[N more chars]`).
 pub fn escape_peer(s: &str) -> String {
     let mut out = String::with_capacity(s.len().min(PEER_TEXT_MAX * 2));
-    let mut kept = 0usize;
     let mut chars = s.chars();
-    for c in chars.by_ref() {
-        if kept == PEER_TEXT_MAX {
-            let rest = 1 + chars.count();
-            out.push_str(&format!("...[{rest} more chars]"));
-            return out;
-        }
-        kept += 1;
-        if c.is_control() || is_invisible_format(c) || c == '\\' {
-            if c == '\\' {
-                out.push_str("\\\\");
-            } else {
-                out.extend(c.escape_unicode());
-            }
+    for c in chars.by_ref().take(PEER_TEXT_MAX) {
+        if c == '\\' {
+            out.push_str("\\\\");
+        } else if c.is_control() || is_invisible_format(c) {
+            out.extend(c.escape_unicode());
         } else {
             out.push(c);
         }
+    }
+    let rest = chars.count();
+    if rest > 0 {
+        out.push_str(&format!("...[{rest} more chars]"));
     }
     out
 }

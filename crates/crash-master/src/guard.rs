@@ -158,7 +158,11 @@ impl Gate {
         let n = self.pending.fetch_add(1, Ordering::AcqRel);
         if n >= MAX_PENDING {
             self.pending.fetch_sub(1, Ordering::AcqRel);
-            if self.refused.fetch_add(1, Ordering::Relaxed) % 1000 == 0 {
+            if self
+                .refused
+                .fetch_add(1, Ordering::Relaxed)
+                .is_multiple_of(1000)
+            {
                 tracing::warn!(
                     "closed a new connection: {MAX_PENDING} connections are already waiting for their handshake"
                 );
