@@ -187,7 +187,8 @@ fn a_huge_message_before_hello_is_refused_without_growing_memory() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-/// A TCP connection that never says anything is closed after the handshake timeout.
+/// A TCP connection that never says anything is closed after the handshake timeout;
+/// a flood of idle connections does not keep the real worker out.
 #[test]
 fn an_idle_connection_is_closed_after_the_handshake_timeout() {
     let out = out_dir("trust-idle");
@@ -216,9 +217,23 @@ fn an_idle_connection_is_closed_after_the_handshake_timeout() {
         waited >= Duration::from_millis(800) && waited < Duration::from_secs(5),
         "closed after {waited:?}"
     );
+    // a flood of 200 idle connections (more than the 32 that may wait for a
+    // handshake): the extra ones are closed at once, the rest after the timeout, and the
+    // real worker attaches (it retries with backoff while the slots are full)
+    let flood: Vec<std::net::TcpStream> = (0..200)
+        .filter_map(|_| std::net::TcpStream::connect(addr).ok())
+        .collect();
+    let t1 = Instant::now();
     let mut w = worker(&url, 1, &[]);
+    m.expect_line("workers attached", Duration::from_secs(30));
+    eprintln!(
+        "the worker attached {:?} after a flood of {} idle connections",
+        t1.elapsed(),
+        flood.len()
+    );
     assert!(m.wait(RUN_TIMEOUT).success(), "{}", m.log());
     assert!(w.wait(Duration::from_secs(30)).success(), "{}", w.log());
+    drop(flood);
     let _ = std::fs::remove_dir_all(&out);
 }
 

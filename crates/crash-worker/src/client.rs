@@ -207,16 +207,37 @@ async fn attach(
         url: url.into(),
         reason: reason.into(),
     };
-    let channel = connect(url, opts.connect_timeout).await?;
-    // The worker trusts the master it was pointed at: it accepts what the master's
-    // run needs (the master bounds what it accepts from workers, docs/reliability.md).
-    let mut client = CoordinatorClient::new(channel)
-        .max_decoding_message_size(MAX_MESSAGE_CAP)
-        .max_encoding_message_size(MAX_MESSAGE_CAP);
-    let (tx, rx) = mpsc::unbounded_channel();
-    let mut inbound = match client.attach(UnboundedReceiverStream::new(rx)).await {
-        Ok(r) => r.into_inner(),
-        Err(s) => return Err(refused_or_lost(url, &s)),
+    // Connect and open the session, retrying with backoff within the connect timeout:
+    // a master whose pending-connection slots are full (guard.rs) closes a new
+    // connection at once, which fails the call before any answer.
+    let t0 = Instant::now();
+    let mut wait = Duration::from_millis(100);
+    let (tx, mut inbound) = loop {
+        let left = opts.connect_timeout.saturating_sub(t0.elapsed());
+        let channel = connect(url, left).await?;
+        // The worker trusts the master it was pointed at: it accepts what the master's
+        // run needs (the master bounds what it accepts from workers, docs/reliability.md).
+        let mut client = CoordinatorClient::new(channel)
+            .max_decoding_message_size(MAX_MESSAGE_CAP)
+            .max_encoding_message_size(MAX_MESSAGE_CAP);
+        let (tx, rx) = mpsc::unbounded_channel();
+        match client.attach(UnboundedReceiverStream::new(rx)).await {
+            Ok(r) => break (tx, r.into_inner()),
+            Err(s)
+                if matches!(
+                    s.code(),
+                    Code::Unknown | Code::Unavailable | Code::Cancelled
+                ) =>
+            {
+                if t0.elapsed() + wait > opts.connect_timeout {
+                    return Err(refused_or_lost(url, &s));
+                }
+                tracing::debug!("the master at {url} closed the connection ({s}); retrying");
+                tokio::time::sleep(wait).await;
+                wait = (wait * 2).min(Duration::from_secs(2));
+            }
+            Err(s) => return Err(refused_or_lost(url, &s)),
+        }
     };
     // Handshake: the master's Challenge, our Hello with the proof, its Welcome.
     let challenge = match inbound.message().await {
