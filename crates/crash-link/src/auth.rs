@@ -118,6 +118,21 @@ impl Secret {
     }
 }
 
+/// Whether a secret file may be read by other users (group or others have any
+/// permission); callers warn. Always false where permissions are not Unix modes.
+pub fn readable_by_others(path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::metadata(path).is_ok_and(|m| m.permissions().mode() & 0o077 != 0)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        false
+    }
+}
+
 /// A fresh random nonce from the operating system.
 pub fn nonce() -> Result<[u8; NONCE_LEN], SecretError> {
     let mut n = [0u8; NONCE_LEN];

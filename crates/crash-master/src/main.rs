@@ -126,6 +126,14 @@ fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
         .with_checkpoints(args.out.join(RESTART_FILE));
     let secret = Secret::configured(args.secret_file.as_deref())?;
+    if let Some(p) = args.secret_file.as_deref() {
+        if crash_link::auth::readable_by_others(p) {
+            eprintln!(
+                "crash-master: warning: the secret file {} is readable by other users (chmod 600 it)",
+                p.display()
+            );
+        }
+    }
     let mut cluster = Cluster::bind(
         args.listen,
         args.workers,

@@ -77,6 +77,14 @@ fn main() -> ExitCode {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let mut opts = crash_worker::WorkerOptions::new(master, threads);
     opts.connect_timeout = Duration::from_secs_f64(args.connect_timeout.max(0.0));
+    if let Some(p) = args.secret_file.as_deref() {
+        if crash_link::auth::readable_by_others(p) {
+            eprintln!(
+                "crash-worker: warning: the secret file {} is readable by other users (chmod 600 it)",
+                p.display()
+            );
+        }
+    }
     opts.secret = match crash_link::Secret::configured(args.secret_file.as_deref()) {
         Ok(s) => s,
         Err(e) => {
