@@ -52,6 +52,9 @@ tmp="$(mktemp -d "${TMPDIR:-/tmp}/crash-smoke.XXXXXX")"
 mkdir -p "$tmp/local" "$tmp/cluster"
 uid="$(id -u)"
 gid="$(id -g)"
+# a fresh shared secret: the workers prove it, the master admits only them
+CRASH_SECRET="$(head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n')"
+export CRASH_SECRET
 export CRASH_IMAGE="$image" CRASH_SCENES="$repo/scenes" CRASH_SCENE="$scene" \
   CRASH_OUT="$tmp/cluster" CRASH_WORKERS="$workers" CRASH_THREADS=1 \
   CRASH_UID="$uid" CRASH_GID="$gid"

@@ -86,15 +86,6 @@ fn echo_worker(url: String) {
             return;
         };
         let (tx, rx) = tokio::sync::mpsc::unbounded_channel();
-        tx.send(pb::WorkerMessage {
-            reply: Some(pb::worker_message::Reply::Hello(pb::Hello {
-                protocol_version: crash_link::PROTOCOL_VERSION,
-                threads: 1,
-                host: "echo".into(),
-                pid: 0,
-            })),
-        })
-        .unwrap();
         let Ok(resp) = client
             .attach(tokio_stream::wrappers::UnboundedReceiverStream::new(rx))
             .await
@@ -102,6 +93,18 @@ fn echo_worker(url: String) {
             return;
         };
         let mut inbound = resp.into_inner();
+        // no secret: the Challenge's nonce is not used
+        let _challenge = inbound.message().await;
+        tx.send(pb::WorkerMessage {
+            reply: Some(pb::worker_message::Reply::Hello(pb::Hello {
+                protocol_version: crash_link::PROTOCOL_VERSION,
+                threads: 1,
+                host: "echo".into(),
+                pid: 0,
+                proof: Vec::new(),
+            })),
+        })
+        .unwrap();
         let _welcome = inbound.message().await;
         let report = pb::WorkerMessage {
             reply: Some(pb::worker_message::Reply::Report(pb::Report {

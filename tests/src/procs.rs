@@ -51,9 +51,17 @@ pub struct Proc {
 
 impl Proc {
     pub fn spawn(name: &str, exe: &str, args: &[&str]) -> Proc {
+        Self::spawn_env(name, exe, args, &[])
+    }
+
+    /// As `spawn`, with these environment variables set (CRASH_SECRET is removed
+    /// unless given here, so a developer's environment does not leak into a test).
+    pub fn spawn_env(name: &str, exe: &str, args: &[&str], env: &[(&str, &str)]) -> Proc {
         let mut child = Command::new(exe)
             .args(args)
             .env("RUST_LOG", "info")
+            .env_remove("CRASH_SECRET")
+            .envs(env.iter().copied())
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -186,9 +194,53 @@ pub fn master(scene: &Path, workers: usize, out: &Path, extra: &[&str]) -> (Proc
     (m, format!("http://{addr}"))
 }
 
+/// As `master`, with environment variables set (e.g. CRASH_SECRET).
+pub fn master_env(
+    scene: &Path,
+    workers: usize,
+    out: &Path,
+    extra: &[&str],
+    env: &[(&str, &str)],
+) -> (Proc, String) {
+    let w = workers.to_string();
+    let mut args = vec![
+        scene.to_str().unwrap(),
+        "--listen",
+        "127.0.0.1:0",
+        "--workers",
+        &w,
+        "--out",
+        out.to_str().unwrap(),
+        "--accept-timeout",
+        "60",
+    ];
+    args.extend_from_slice(extra);
+    let m = Proc::spawn_env("crash-master", &master_bin(), &args, env);
+    let line = m.expect_line("listening on", Duration::from_secs(60));
+    let addr = line.rsplit(' ').next().unwrap().trim().to_string();
+    (m, format!("http://{addr}"))
+}
+
 pub fn worker(url: &str, threads: usize, extra: &[&str]) -> Proc {
     let t = threads.to_string();
     let mut args = vec!["--master", url, "--threads", &t, "--connect-timeout", "30"];
     args.extend_from_slice(extra);
     Proc::spawn("crash-worker", &worker_bin(), &args)
+}
+
+/// As `worker`, with environment variables set (e.g. CRASH_SECRET).
+pub fn worker_env(url: &str, threads: usize, extra: &[&str], env: &[(&str, &str)]) -> Proc {
+    let t = threads.to_string();
+    let mut args = vec!["--master", url, "--threads", &t, "--connect-timeout", "30"];
+    args.extend_from_slice(extra);
+    Proc::spawn_env("crash-worker", &worker_bin(), &args, env)
+}
+
+/// A field of /proc/PID/status in kB (VmRSS, VmSize, ...).
+pub fn proc_status_kb(pid: u32, field: &str) -> u64 {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap();
+    s.lines()
+        .find_map(|l| l.strip_prefix(field)?.strip_prefix(':'))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+        .unwrap()
 }

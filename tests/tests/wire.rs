@@ -248,7 +248,7 @@ fn commands_round_trip() {
             bodies: loads(),
         },
         Command::Frame(vec![1, 0]),
-        Command::States,
+        Command::States(vec![3, 1]),
         Command::Shutdown("done".into()),
     ];
     for c in cmds {

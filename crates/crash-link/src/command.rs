@@ -80,8 +80,9 @@ pub enum Command {
     },
     /// What an output frame shows of these bodies (held by the worker).
     Frame(Vec<u32>),
-    /// The state of every body held (a checkpoint).
-    States,
+    /// The state of these bodies (held by the worker; empty: every body held), for a
+    /// checkpoint. The master asks in pieces of bounded size (MAX_MESSAGE).
+    States(Vec<u32>),
     Shutdown(String),
 }
 

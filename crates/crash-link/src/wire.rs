@@ -212,7 +212,7 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
             dt: *dt,
         }),
         Command::Frame(ids) => PbCommand::Frame(pb::FrameRequest { ids: ids.clone() }),
-        Command::States => PbCommand::States(pb::StatesRequest {}),
+        Command::States(ids) => PbCommand::States(pb::StatesRequest { ids: ids.clone() }),
         Command::Shutdown(reason) => PbCommand::Shutdown(pb::Shutdown {
             reason: reason.clone(),
         }),
@@ -230,6 +230,11 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
             PbCommand::Welcome(_) => {
                 return Err(ProtoError::Invalid(
                     "a second Welcome in one session".into(),
+                ))
+            }
+            PbCommand::Challenge(_) => {
+                return Err(ProtoError::Invalid(
+                    "a second Challenge in one session".into(),
                 ))
             }
             PbCommand::Setup(s) => {
@@ -280,7 +285,7 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                 dt: s.dt,
             },
             PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
-            PbCommand::States(_) => Command::States,
+            PbCommand::States(s) => Command::States(s.ids.clone()),
             PbCommand::Shutdown(s) => Command::Shutdown(s.reason.clone()),
         },
     )

@@ -41,6 +41,10 @@ pub enum MasterError {
     Sink(String),
     #[error("network: {0}")]
     Network(String),
+    /// Stopped on request (SIGTERM, SIGINT) after a complete step: a checkpoint and
+    /// the final frame of that step were written.
+    #[error("interrupted at step {step} (t = {time:.6e} s) by a signal; continue with --resume")]
+    Interrupted { step: u64, time: f64 },
 }
 
 /// What a sink's writers may fail with (boxed: each sink has its own errors).

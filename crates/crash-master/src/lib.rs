@@ -15,6 +15,7 @@ pub mod assign;
 pub mod checkpoint;
 pub mod error;
 pub mod file_sink;
+pub mod guard;
 pub mod input;
 mod master;
 pub mod meim;
@@ -24,6 +25,7 @@ pub mod server;
 pub mod session;
 pub mod sink;
 pub mod stats;
+pub mod stop;
 
 pub use checkpoint::MasterCheckpoint;
 pub use error::MasterError;
@@ -89,6 +91,19 @@ fn drive<L: WorkerLink>(
     let result = (|| {
         while !s.finished() {
             s.step(sink)?;
+            if stop::requested() {
+                // the step is complete: checkpoint, then the final frame and summary
+                let t = Instant::now();
+                s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
+                let state = s.checkpoint()?;
+                sink.checkpoint(&state).map_err(MasterError::sink)?;
+                s.stats_mut().stages.output_ns += t.elapsed().as_nanos() as u64;
+                let c = s.clock();
+                return Err(MasterError::Interrupted {
+                    step: c.step,
+                    time: c.time,
+                });
+            }
             if every > 0 && s.clock().step.is_multiple_of(every) && !s.finished() {
                 let t = Instant::now();
                 s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
@@ -99,7 +114,12 @@ fn drive<L: WorkerLink>(
         }
         Ok(())
     })();
-    let result = result.and_then(|()| s.finish(sink));
+    let result = match result {
+        Ok(()) => s.finish(sink),
+        // a clean stop: the final frame (its hash) as at the end of a run
+        Err(e @ MasterError::Interrupted { .. }) => s.finish(sink).and(Err(e)),
+        Err(e) => Err(e),
+    };
     s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
     s.end(result.as_ref().err());
     match result {
@@ -107,6 +127,11 @@ fn drive<L: WorkerLink>(
             let stats = s.stats().clone();
             sink.finish(&stats, None).map_err(MasterError::sink)?;
             Ok(stats)
+        }
+        Err(e @ MasterError::Interrupted { .. }) => {
+            let stats = s.stats().clone();
+            let _ = sink.finish(&stats, Some(&e));
+            Err(e)
         }
         Err(e) => {
             let mut stats = s.stats().clone();

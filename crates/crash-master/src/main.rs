@@ -2,9 +2,10 @@
 
 use anyhow::Context;
 use clap::Parser;
+use crash_link::{Secret, SECRET_ENV};
 use crash_master::{
-    read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, RemoteOptions, RunInput,
-    RunOptions, RESTART_FILE,
+    read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, MasterError,
+    RemoteOptions, RunInput, RunOptions, RESTART_FILE,
 };
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -21,8 +22,18 @@ struct Args {
     /// The scene file (TOML).
     scene: PathBuf,
     /// Address to listen on for workers (port 0: any free port, printed at start).
-    #[arg(long, default_value = "0.0.0.0:50051")]
+    /// Loopback by default: give e.g. 0.0.0.0:50051 to admit workers on other hosts.
+    #[arg(long, default_value = "127.0.0.1:50051")]
     listen: SocketAddr,
+    /// File holding the cluster's shared secret (at least 16 bytes; else the
+    /// CRASH_SECRET environment variable): only workers that prove it are admitted.
+    /// Without either, any peer that reaches the port may attach.
+    #[arg(long, value_name = "PATH")]
+    secret_file: Option<PathBuf>,
+    /// A connection on which no worker completes the handshake within this time is
+    /// closed [s].
+    #[arg(long, default_value_t = 5.0)]
+    handshake_timeout: f64,
     /// Number of workers to wait for.
     #[arg(long)]
     workers: usize,
@@ -67,10 +78,26 @@ fn main() -> ExitCode {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
         )
         .with_writer(std::io::stderr)
+        // colour codes only on a terminal: logs kept in files stay plain text
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
+    // SIGTERM, SIGINT: finish the step, checkpoint, last frame, summary, exit 130;
+    // a second signal ends the process at once (exit 130)
+    let stop = crash_master::stop::flag();
+    for sig in [signal_hook::consts::SIGTERM, signal_hook::consts::SIGINT] {
+        let registered = signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())
+            .and_then(|_| signal_hook::flag::register(sig, stop.clone()));
+        if let Err(e) = registered {
+            eprintln!("crash-master: warning: cannot handle signal {sig}: {e}");
+        }
+    }
     match run(Args::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            if let Some(i @ MasterError::Interrupted { .. }) = e.downcast_ref::<MasterError>() {
+                eprintln!("crash-master: {i}");
+                return ExitCode::from(130);
+            }
             eprintln!("crash-master: error: {e:#}");
             ExitCode::FAILURE
         }
@@ -98,16 +125,38 @@ fn run(args: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
         .with_checkpoints(args.out.join(RESTART_FILE));
+    let secret = Secret::configured(args.secret_file.as_deref())?;
+    if let Some(p) = args.secret_file.as_deref() {
+        if crash_link::auth::readable_by_others(p) {
+            eprintln!(
+                "crash-master: warning: the secret file {} is readable by other users (chmod 600 it)",
+                p.display()
+            );
+        }
+    }
     let mut cluster = Cluster::bind(
         args.listen,
         args.workers,
         RemoteOptions {
             accept_timeout: Duration::from_secs_f64(args.accept_timeout.max(0.0)),
             reply_timeout: Duration::from_secs_f64(args.reply_timeout.max(0.001)),
+            handshake_timeout: Duration::from_secs_f64(args.handshake_timeout.clamp(0.1, 3600.0)),
+            secret,
+            max_message: crash_link::message_limit(
+                input.briefs.iter().map(|b| b.elements).max().unwrap_or(0),
+            ),
         },
     )?;
-    // Tests and scripts read this line to learn the port.
+    // Tests and scripts read this line to learn the port (the address ends it).
     eprintln!("crash-master: listening on {}", cluster.local_addr());
+    if cluster.secret_required() {
+        eprintln!("crash-master: workers must prove the shared secret");
+    } else {
+        eprintln!(
+            "crash-master: warning: no shared secret (--secret-file or {SECRET_ENV}): any peer that reaches {} can attach as a worker and receive the scene",
+            cluster.local_addr()
+        );
+    }
     cluster.accept()?;
     eprintln!(
         "crash-master: {} workers attached, running '{}'",

@@ -3,7 +3,7 @@
 //! so a body moving back travels as its state; it keeps no body data.
 
 use crash_link::wire::{command_to_pb, reply_from_pb};
-use crash_link::{Command, LinkError, Reply, WorkerLink};
+use crash_link::{escape_peer, Command, LinkError, Reply, WorkerLink};
 use crash_proto::pb;
 use std::collections::BTreeSet;
 use std::sync::Arc;
@@ -55,11 +55,22 @@ impl RemoteWorker {
                     seconds: timeout.as_secs_f64(),
                 })
             }
-            Ok(Err(s)) => return Err(LinkError::Lost(format!("{}: {}", s.code(), s.message()))),
+            Ok(Err(s)) => {
+                return Err(LinkError::Lost(format!(
+                    "{}: {}",
+                    s.code(),
+                    escape_peer(s.message())
+                )))
+            }
             Ok(Ok(None)) => return Err(LinkError::Lost("the worker closed its stream".into())),
             Ok(Ok(Some(m))) => m,
         };
-        reply_from_pb(&msg).map_err(|e| LinkError::Protocol(e.to_string()))
+        // a worker's error text reaches the master's log: escaped
+        match reply_from_pb(&msg) {
+            Ok(Reply::Error(e)) => Ok(Reply::Error(escape_peer(&e))),
+            Ok(r) => Ok(r),
+            Err(e) => Err(LinkError::Protocol(escape_peer(&e.to_string()))),
+        }
     }
 }
 

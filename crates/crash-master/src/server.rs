@@ -8,10 +8,22 @@
 //! master's loop, the tonic server and all connections thus share one thread: a step
 //! exchange costs no thread hand-over on the master side. TCP keepalive (answered by
 //! the kernel) keeps connections alive while the master is busy between steps.
+//!
+//! Admission (docs/reliability.md): the master opens each session with a Challenge
+//! (a fresh nonce); the worker's Hello carries `HMAC-SHA256(secret, nonce || fields)`
+//! when a secret is configured, checked in constant time. A peer that fails is refused
+//! before it takes a worker slot or sees anything of the scene. Until a worker is
+//! admitted on a connection, `guard` bounds what it can cost: a handshake deadline,
+//! a Hello-sized message limit, a cap on pending connections. Peer text is escaped
+//! (`crash_link::escape_peer`) before it is logged.
 
 use crate::error::MasterError;
+use crate::guard::{limit_request, ConnInfo, Gate};
 use crate::remote_link::{Outbound, RemoteWorker};
-use crash_link::{check_version, HEALTH_SERVICE, PROTOCOL_VERSION};
+use crash_link::{
+    check_version, escape_peer, HelloFields, Secret, HEALTH_SERVICE, MAX_MESSAGE, MAX_MESSAGE_CAP,
+    PROTOCOL_VERSION,
+};
 use crash_proto::pb::coordinator_server::{Coordinator, CoordinatorServer};
 use crash_proto::pb::worker_message::Reply as PbReply;
 use crash_proto::pb::{self, master_message};
@@ -22,17 +34,23 @@ use std::time::Duration;
 use tokio::runtime::Runtime;
 use tokio::sync::{mpsc, oneshot};
 use tokio_stream::wrappers::{TcpListenerStream, UnboundedReceiverStream};
+use tokio_stream::StreamExt;
 use tonic::{Request, Response, Status, Streaming};
 
-/// Largest message accepted (a Load of big bodies can be hundreds of MB).
-pub const MAX_MESSAGE: usize = 1 << 31;
-
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct RemoteOptions {
     /// How long to wait for all workers to attach.
     pub accept_timeout: Duration,
     /// A worker that does not answer a command within this time ends the run.
     pub reply_timeout: Duration,
+    /// A connection on which no worker is admitted within this time is closed.
+    pub handshake_timeout: Duration,
+    /// The shared secret a worker must prove (None: any peer that reaches the port
+    /// and speaks the protocol may attach).
+    pub secret: Option<Secret>,
+    /// Largest message decoded from an admitted worker (`crash_link::message_limit`);
+    /// before admission only `HELLO_LIMIT`.
+    pub max_message: usize,
 }
 
 impl Default for RemoteOptions {
@@ -40,6 +58,9 @@ impl Default for RemoteOptions {
         Self {
             accept_timeout: Duration::from_secs(300),
             reply_timeout: Duration::from_secs(60),
+            handshake_timeout: Duration::from_secs(5),
+            secret: None,
+            max_message: MAX_MESSAGE,
         }
     }
 }
@@ -53,7 +74,119 @@ struct Attached {
 }
 
 struct Service {
-    attach: Mutex<Option<mpsc::UnboundedSender<Attached>>>,
+    attach: Arc<Mutex<Option<mpsc::UnboundedSender<Attached>>>>,
+    secret: Option<Arc<Secret>>,
+    handshake: Duration,
+}
+
+/// Why a peer was refused: the log line (escaped peer text) and the status it gets.
+fn refuse(who: &str, status: Status) -> Status {
+    tracing::warn!("refused {who}: {}", status.message());
+    status
+}
+
+/// The handshake of one session after the Challenge went out: the Hello, its version
+/// and proof; then the worker waits for `Cluster::accept`'s Welcome.
+#[allow(clippy::too_many_arguments)] // one call site; the parts of one session
+async fn handshake(
+    attach: Arc<Mutex<Option<mpsc::UnboundedSender<Attached>>>>,
+    secret: Option<Arc<Secret>>,
+    timeout: Duration,
+    conn: Option<ConnInfo>,
+    peer: String,
+    nonce: [u8; crash_link::auth::NONCE_LEN],
+    mut inbound: Streaming<pb::WorkerMessage>,
+    outbound: Outbound,
+) -> Result<(), Status> {
+    let first = tokio::time::timeout(timeout, inbound.message()).await;
+    let hello = match first {
+        Ok(Ok(Some(pb::WorkerMessage {
+            reply: Some(PbReply::Hello(h)),
+        }))) => h,
+        Ok(Err(s)) => {
+            return Err(refuse(
+                &format!("a connection from {peer}"),
+                Status::invalid_argument(format!(
+                    "the first message was not a valid Hello: {}",
+                    escape_peer(s.message())
+                )),
+            ))
+        }
+        Err(_) => {
+            return Err(refuse(
+                &format!("a connection from {peer}"),
+                Status::deadline_exceeded(format!(
+                    "no Hello within {:.0} s",
+                    timeout.as_secs_f64()
+                )),
+            ))
+        }
+        _ => {
+            return Err(refuse(
+                &format!("a connection from {peer}"),
+                Status::invalid_argument("the first message must be Hello"),
+            ))
+        }
+    };
+    let who = format!(
+        "worker '{}' (pid {}) at {peer}",
+        escape_peer(&hello.host),
+        hello.pid
+    );
+    if let Err(e) = check_version(hello.protocol_version, &who, "master") {
+        return Err(refuse(&who, Status::failed_precondition(e.to_string())));
+    }
+    if let Some(secret) = &secret {
+        let fields = HelloFields {
+            protocol_version: hello.protocol_version,
+            threads: hello.threads,
+            host: &hello.host,
+            pid: hello.pid,
+        };
+        if hello.proof.is_empty() {
+            return Err(refuse(
+                &who,
+                Status::unauthenticated(
+                    "this master admits only workers that hold its shared secret, and this worker has none: start crash-worker with --secret-file FILE or CRASH_SECRET set to the master's secret",
+                ),
+            ));
+        }
+        if !secret.verify(&nonce, &fields, &hello.proof) {
+            return Err(refuse(
+                &who,
+                Status::unauthenticated(
+                    "the worker's proof of the shared secret is wrong: its secret differs from the master's",
+                ),
+            ));
+        }
+    }
+    let sender = attach.lock().ok().and_then(|g| g.clone());
+    let Some(sender) = sender else {
+        return Err(refuse(
+            &who,
+            Status::unavailable(
+                "this master is not accepting workers: its run already has all its workers",
+            ),
+        ));
+    };
+    if let Some(c) = &conn {
+        c.admit();
+    }
+    let failed = sender.send(Attached {
+        hello,
+        peer,
+        inbound,
+        outbound,
+    });
+    if let Err(mpsc::error::SendError(a)) = failed {
+        let _ = a.outbound.send(Err(refuse(
+            &who,
+            Status::unavailable(
+                "this master is not accepting workers: its run already has all its workers",
+            ),
+        )));
+    }
+    Ok(())
 }
 
 #[tonic::async_trait]
@@ -64,42 +197,34 @@ impl Coordinator for Service {
         &self,
         req: Request<Streaming<pb::WorkerMessage>>,
     ) -> Result<Response<Self::AttachStream>, Status> {
-        let peer = req
-            .remote_addr()
+        let conn = req.extensions().get::<ConnInfo>().cloned();
+        let peer = conn
+            .as_ref()
+            .and_then(|c| c.remote)
+            .or_else(|| req.remote_addr())
             .map_or_else(|| "unknown address".to_string(), |a| a.to_string());
-        let mut inbound = req.into_inner();
-        let first = tokio::time::timeout(Duration::from_secs(30), inbound.message()).await;
-        let hello = match first {
-            Ok(Ok(Some(pb::WorkerMessage {
-                reply: Some(PbReply::Hello(h)),
-            }))) => h,
-            _ => {
-                tracing::warn!("refused a connection from {peer}: it did not start with Hello");
-                return Err(Status::invalid_argument("the first message must be Hello"));
-            }
-        };
-        let who = format!("worker {}:{} at {peer}", hello.host, hello.pid);
-        if let Err(e) = check_version(hello.protocol_version, &who, "master") {
-            tracing::error!("refused {who}: {e}");
-            return Err(Status::failed_precondition(e.to_string()));
-        }
+        let nonce = crash_link::auth::nonce().map_err(|e| Status::internal(e.to_string()))?;
+        let inbound = req.into_inner();
         let (outbound, rx) = mpsc::unbounded_channel();
-        let sender = self.attach.lock().ok().and_then(|g| g.clone());
-        let accepted = sender.is_some_and(|s| {
-            s.send(Attached {
-                hello,
-                peer: peer.clone(),
-                inbound,
-                outbound,
-            })
-            .is_ok()
+        let challenge = pb::MasterMessage {
+            command: Some(master_message::Command::Challenge(pb::Challenge {
+                protocol_version: PROTOCOL_VERSION,
+                nonce: nonce.to_vec(),
+                secret_required: self.secret.is_some(),
+            })),
+        };
+        let _ = outbound.send(Ok(challenge));
+        let (attach, secret, timeout) = (self.attach.clone(), self.secret.clone(), self.handshake);
+        tokio::spawn(async move {
+            let out = outbound.clone();
+            if let Err(s) = handshake(
+                attach, secret, timeout, conn, peer, nonce, inbound, outbound,
+            )
+            .await
+            {
+                let _ = out.send(Err(s));
+            }
         });
-        if !accepted {
-            tracing::warn!("refused {who}: the run has all its workers");
-            return Err(Status::unavailable(
-                "this master is not accepting workers: its run already has all its workers",
-            ));
-        }
         Ok(Response::new(UnboundedReceiverStream::new(rx)))
     }
 }
@@ -145,24 +270,38 @@ impl Cluster {
             .map_err(|e| MasterError::Network(format!("listening address: {e}")))?;
         let (tx, rx) = mpsc::unbounded_channel();
         let service = Arc::new(Service {
-            attach: Mutex::new(Some(tx)),
+            attach: Arc::new(Mutex::new(Some(tx))),
+            secret: opts.secret.clone().map(Arc::new),
+            handshake: opts.handshake_timeout,
         });
         let server = CoordinatorServer::from_arc(service.clone())
-            .max_decoding_message_size(MAX_MESSAGE)
-            .max_encoding_message_size(MAX_MESSAGE);
+            .max_decoding_message_size(opts.max_message)
+            .max_encoding_message_size(MAX_MESSAGE_CAP);
         // grpc.health.v1.Health: SERVING for the coordinator while this cluster lives
         let (reporter, health) = tonic_health::server::health_reporter();
         rt.block_on(
             reporter.set_service_status(HEALTH_SERVICE, tonic_health::ServingStatus::Serving),
         );
         let (stop, stopped) = oneshot::channel::<()>();
-        let incoming = TcpListenerStream::new(listener);
+        // every connection is guarded until a worker on it is admitted (guard.rs)
+        let gate = Gate::new(opts.handshake_timeout, opts.max_message);
+        let incoming = TcpListenerStream::new(listener).filter_map(move |r| match r {
+            Ok(tcp) => {
+                set_keepalive(&tcp);
+                gate.admit_tcp(tcp).map(Ok::<_, std::io::Error>)
+            }
+            Err(e) => {
+                tracing::debug!("accept failed: {e}");
+                None
+            }
+        });
         rt.spawn(async move {
             let r = tonic::transport::Server::builder()
-                .tcp_nodelay(true)
-                .tcp_keepalive(Some(Duration::from_secs(10)))
-                .tcp_keepalive_interval(Some(Duration::from_secs(5)))
-                .tcp_keepalive_retries(Some(3))
+                // one Attach (and a health check) per connection
+                .concurrency_limit_per_connection(4)
+                .max_concurrent_streams(4)
+                .http2_max_header_list_size(16 << 10)
+                .layer(tower::util::MapRequestLayer::new(limit_request))
                 .initial_stream_window_size(8 << 20)
                 .initial_connection_window_size(16 << 20)
                 .add_service(server)
@@ -187,6 +326,11 @@ impl Cluster {
         })
     }
 
+    /// Whether workers must prove the shared secret.
+    pub fn secret_required(&self) -> bool {
+        self.service.secret.is_some()
+    }
+
     pub fn local_addr(&self) -> SocketAddr {
         self.addr
     }
@@ -202,13 +346,21 @@ impl Cluster {
         let attached: Vec<Attached> = self.rt.block_on(async {
             let mut got = Vec::new();
             let _ = tokio::time::timeout(t, async {
-                while got.len() < n {
-                    match rx.recv().await {
+                while got.len() < n && !crate::stop::requested() {
+                    // look at the stop flag (SIGTERM) every 100 ms
+                    let Ok(next) =
+                        tokio::time::timeout(Duration::from_millis(100), rx.recv()).await
+                    else {
+                        continue;
+                    };
+                    match next {
                         Some(a) => {
                             tracing::info!(
-                                "worker {} attached from {} ({} threads)",
+                                "worker {} attached from {} ('{}', pid {}, {} threads)",
                                 got.len(),
                                 a.peer,
+                                escape_peer(&a.hello.host),
+                                a.hello.pid,
                                 a.hello.threads
                             );
                             got.push(a);
@@ -225,6 +377,9 @@ impl Cluster {
             *g = None;
         }
         drop(rx);
+        if crate::stop::requested() {
+            return Err(MasterError::Interrupted { step: 0, time: 0.0 });
+        }
         if attached.len() < n {
             return Err(MasterError::Network(format!(
                 "only {} of {n} workers attached to {} within {:.0} s",
@@ -247,7 +402,12 @@ impl Cluster {
             self.links.push(RemoteWorker {
                 rt: self.rt.clone(),
                 index: i,
-                peer: format!("{} (pid {} on '{}')", a.peer, a.hello.pid, a.hello.host),
+                peer: format!(
+                    "{} (pid {} on '{}')",
+                    a.peer,
+                    a.hello.pid,
+                    escape_peer(&a.hello.host)
+                ),
                 threads: a.hello.threads,
                 tx: Some(a.outbound),
                 inbound: a.inbound,
@@ -269,5 +429,18 @@ impl Drop for Cluster {
         if let Some(s) = self.stop.take() {
             let _ = s.send(());
         }
+    }
+}
+
+/// TCP keepalive (10 s, then 3 probes 5 s apart, answered by the kernel): notices a
+/// vanished worker host even while this process is busy. Set on the accepted socket,
+/// since the server's own option applies only to connections it accepts itself.
+fn set_keepalive(tcp: &tokio::net::TcpStream) {
+    let ka = socket2::TcpKeepalive::new()
+        .with_time(Duration::from_secs(10))
+        .with_interval(Duration::from_secs(5))
+        .with_retries(3);
+    if let Err(e) = socket2::SockRef::from(tcp).set_tcp_keepalive(&ka) {
+        tracing::debug!("cannot set TCP keepalive: {e}");
     }
 }

@@ -7,7 +7,10 @@
 
 use crate::engine::Engine;
 use crash_link::wire::{command_from_pb, reply_to_pb};
-use crash_link::{check_version, Command, Reply, PROTOCOL_VERSION};
+use crash_link::{
+    check_version, escape_peer, Command, HelloFields, Reply, Secret, MAX_MESSAGE_CAP,
+    PROTOCOL_VERSION,
+};
 use crash_proto::pb::coordinator_client::CoordinatorClient;
 use crash_proto::pb::master_message::Command as PbCommand;
 use crash_proto::pb::{self, worker_message};
@@ -17,9 +20,6 @@ use tokio::sync::mpsc;
 use tokio_stream::wrappers::UnboundedReceiverStream;
 use tonic::transport::{Channel, Endpoint};
 use tonic::{Code, Streaming};
-
-/// Largest message accepted (a Load of big bodies can be hundreds of MB).
-pub const MAX_MESSAGE: usize = 1 << 31;
 
 #[derive(Debug, Clone)]
 pub struct WorkerOptions {
@@ -31,6 +31,10 @@ pub struct WorkerOptions {
     pub connect_timeout: Duration,
     /// Protocol version announced in Hello (tests of the refusal path set another).
     pub protocol_version: u32,
+    /// The cluster's shared secret, proved in Hello (never sent).
+    pub secret: Option<Secret>,
+    /// Host name announced in Hello (default: $HOSTNAME).
+    pub host: String,
 }
 
 impl WorkerOptions {
@@ -40,6 +44,8 @@ impl WorkerOptions {
             threads,
             connect_timeout: Duration::from_secs(60),
             protocol_version: PROTOCOL_VERSION,
+            secret: None,
+            host: std::env::var("HOSTNAME").unwrap_or_default(),
         }
     }
 }
@@ -136,18 +142,53 @@ fn error_chain(e: &dyn std::error::Error) -> String {
     s
 }
 
-fn hello(opts: &WorkerOptions) -> pb::WorkerMessage {
+fn hello(opts: &WorkerOptions, nonce: &[u8]) -> pb::WorkerMessage {
+    let (protocol_version, threads, pid) = (
+        opts.protocol_version,
+        opts.threads as u32,
+        std::process::id(),
+    );
+    let proof = opts.secret.as_ref().map_or_else(Vec::new, |s| {
+        s.prove(
+            nonce,
+            &HelloFields {
+                protocol_version,
+                threads,
+                host: &opts.host,
+                pid,
+            },
+        )
+    });
     pb::WorkerMessage {
         reply: Some(worker_message::Reply::Hello(pb::Hello {
-            protocol_version: opts.protocol_version,
-            threads: opts.threads as u32,
-            host: std::env::var("HOSTNAME").unwrap_or_default(),
-            pid: std::process::id(),
+            protocol_version,
+            threads,
+            host: opts.host.clone(),
+            pid,
+            proof,
         })),
     }
 }
 
-/// Dial the master, say Hello, check its Welcome.
+/// A status from the master as this worker's error (its text escaped).
+fn refused_or_lost(url: &str, s: &tonic::Status) -> WorkerError {
+    let reason = escape_peer(s.message());
+    match s.code() {
+        Code::FailedPrecondition
+        | Code::Unavailable
+        | Code::Unauthenticated
+        | Code::ResourceExhausted => WorkerError::Refused {
+            url: url.into(),
+            reason,
+        },
+        c => WorkerError::Lost {
+            url: url.into(),
+            reason: format!("{c}: {reason}"),
+        },
+    }
+}
+
+/// Dial the master, answer its Challenge with Hello, check its Welcome.
 async fn attach(
     opts: &WorkerOptions,
 ) -> Result<
@@ -162,24 +203,70 @@ async fn attach(
         url: url.into(),
         reason,
     };
-    let channel = connect(url, opts.connect_timeout).await?;
-    let mut client = CoordinatorClient::new(channel)
-        .max_decoding_message_size(MAX_MESSAGE)
-        .max_encoding_message_size(MAX_MESSAGE);
-    let (tx, rx) = mpsc::unbounded_channel();
-    tx.send(hello(opts))
-        .map_err(|_| WorkerError::Start("outbound stream closed".into()))?;
-    let mut inbound = match client.attach(UnboundedReceiverStream::new(rx)).await {
-        Ok(r) => r.into_inner(),
-        Err(s) if s.code() == Code::FailedPrecondition || s.code() == Code::Unavailable => {
-            return Err(WorkerError::Refused {
-                url: url.into(),
-                reason: s.message().to_string(),
-            })
-        }
-        Err(s) => return Err(lost(format!("{}: {}", s.code(), s.message()))),
+    let protocol = |reason: &str| WorkerError::Protocol {
+        url: url.into(),
+        reason: reason.into(),
     };
-    // Handshake: the master's Welcome must name our protocol version.
+    // Connect and open the session, retrying with backoff within the connect timeout:
+    // a master whose pending-connection slots are full (guard.rs) closes a new
+    // connection at once, which fails the call before any answer.
+    let t0 = Instant::now();
+    let mut wait = Duration::from_millis(100);
+    let (tx, mut inbound) = loop {
+        let left = opts.connect_timeout.saturating_sub(t0.elapsed());
+        let channel = connect(url, left).await?;
+        // The worker trusts the master it was pointed at: it accepts what the master's
+        // run needs (the master bounds what it accepts from workers, docs/reliability.md).
+        let mut client = CoordinatorClient::new(channel)
+            .max_decoding_message_size(MAX_MESSAGE_CAP)
+            .max_encoding_message_size(MAX_MESSAGE_CAP);
+        let (tx, rx) = mpsc::unbounded_channel();
+        match client.attach(UnboundedReceiverStream::new(rx)).await {
+            Ok(r) => break (tx, r.into_inner()),
+            Err(s)
+                if matches!(
+                    s.code(),
+                    Code::Unknown | Code::Unavailable | Code::Cancelled
+                ) =>
+            {
+                if t0.elapsed() + wait > opts.connect_timeout {
+                    return Err(refused_or_lost(url, &s));
+                }
+                tracing::debug!("the master at {url} closed the connection ({s}); retrying");
+                tokio::time::sleep(wait).await;
+                wait = (wait * 2).min(Duration::from_secs(2));
+            }
+            Err(s) => return Err(refused_or_lost(url, &s)),
+        }
+    };
+    // Handshake: the master's Challenge, our Hello with the proof, its Welcome.
+    let challenge = match inbound.message().await {
+        Ok(Some(pb::MasterMessage {
+            command: Some(PbCommand::Challenge(c)),
+        })) => c,
+        Ok(Some(_)) => return Err(protocol("the first message was not Challenge")),
+        Ok(None) => {
+            return Err(lost(
+                "the master closed the session before its Challenge".into(),
+            ))
+        }
+        Err(s) => return Err(refused_or_lost(url, &s)),
+    };
+    if opts.protocol_version == PROTOCOL_VERSION {
+        check_version(challenge.protocol_version, "the master", "worker").map_err(|e| {
+            WorkerError::Refused {
+                url: url.into(),
+                reason: e.to_string(),
+            }
+        })?;
+    }
+    if challenge.secret_required && opts.secret.is_none() {
+        tracing::warn!(
+            "the master requires a shared secret and this worker has none (--secret-file or CRASH_SECRET)"
+        );
+    }
+    tx.send(hello(opts, &challenge.nonce))
+        .map_err(|_| WorkerError::Start("outbound stream closed".into()))?;
     match inbound.message().await {
         Ok(Some(pb::MasterMessage {
             command: Some(PbCommand::Welcome(w)),
@@ -198,14 +285,9 @@ async fn attach(
                 w.workers
             );
         }
-        Ok(Some(_)) => {
-            return Err(WorkerError::Protocol {
-                url: url.into(),
-                reason: "the first message was not Welcome".into(),
-            })
-        }
+        Ok(Some(_)) => return Err(protocol("the message after Hello was not Welcome")),
         Ok(None) => return Err(lost("the master closed the session before Welcome".into())),
-        Err(s) => return Err(lost(format!("{}: {}", s.code(), s.message()))),
+        Err(s) => return Err(refused_or_lost(url, &s)),
     }
     Ok((tx, inbound))
 }
@@ -236,12 +318,12 @@ fn serve(
                     "the master ended the session without a shutdown".into(),
                 ))
             }
-            Err(s) => return Err(lost(format!("{}: {}", s.code(), s.message()))),
+            Err(s) => return Err(refused_or_lost(url, &s)),
         };
         let (reply, shutdown) = match command_from_pb(&msg) {
             Ok(cmd) => {
                 let shutdown = match &cmd {
-                    Command::Shutdown(r) => Some(r.clone()),
+                    Command::Shutdown(r) => Some(escape_peer(r)),
                     _ => None,
                 };
                 (pool.install(|| reply_to_pb(&engine.handle(cmd))), shutdown)

@@ -103,7 +103,8 @@ impl Engine {
                 }
             }
             Command::Frame(ids) => self.frame(&ids).map(Reply::Frame),
-            Command::States => Ok(Reply::States(self.states())),
+            Command::States(ids) if ids.is_empty() => Ok(Reply::States(self.states())),
+            Command::States(ids) => self.states_of(&ids).map(Reply::States),
             Command::Shutdown(_) => Ok(Reply::Ack),
         };
         res.unwrap_or_else(|e| Reply::Error(e.to_string()))
@@ -344,6 +345,21 @@ impl Engine {
                     .ok_or(EngineError::NotHeld {
                         id: *id,
                         what: "a frame",
+                    })
+            })
+            .collect()
+    }
+
+    /// The state of these bodies, in the order asked.
+    pub fn states_of(&self, ids: &[u32]) -> Result<Vec<(u32, BodyState)>, EngineError> {
+        let held: BTreeMap<u32, &Body> = self.held().into_iter().map(|b| (b.def.id, b)).collect();
+        ids.iter()
+            .map(|id| {
+                held.get(id)
+                    .map(|b| (*id, b.state.clone()))
+                    .ok_or(EngineError::NotHeld {
+                        id: *id,
+                        what: "the state",
                     })
             })
             .collect()

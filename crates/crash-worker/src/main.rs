@@ -27,6 +27,13 @@ struct Args {
     /// Give up when the master cannot be reached for this long [s].
     #[arg(long, default_value_t = 60.0)]
     connect_timeout: f64,
+    /// File holding the cluster's shared secret (else the CRASH_SECRET environment
+    /// variable), proved to the master in Hello; never give it on the command line.
+    #[arg(long, value_name = "PATH")]
+    secret_file: Option<std::path::PathBuf>,
+    /// Announce this host name in Hello instead of $HOSTNAME (tests of escaping).
+    #[arg(long, hide = true)]
+    host: Option<String>,
     /// Announce this protocol version instead of the built-in one (tests of refusal).
     #[arg(long, hide = true)]
     protocol_version: Option<u32>,
@@ -39,6 +46,8 @@ fn main() -> ExitCode {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
         )
         .with_writer(std::io::stderr)
+        // colour codes only on a terminal: logs kept in files stay plain text
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let args = Args::parse();
     if let Some(url) = &args.probe {
@@ -72,6 +81,24 @@ fn main() -> ExitCode {
     );
     let mut opts = crash_worker::WorkerOptions::new(master, threads);
     opts.connect_timeout = Duration::from_secs_f64(args.connect_timeout.max(0.0));
+    if let Some(p) = args.secret_file.as_deref() {
+        if crash_link::auth::readable_by_others(p) {
+            eprintln!(
+                "crash-worker: warning: the secret file {} is readable by other users (chmod 600 it)",
+                p.display()
+            );
+        }
+    }
+    opts.secret = match crash_link::Secret::configured(args.secret_file.as_deref()) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("crash-worker: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if let Some(h) = args.host {
+        opts.host = h;
+    }
     if let Some(v) = args.protocol_version {
         opts.protocol_version = v;
     }

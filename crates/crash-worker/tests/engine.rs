@@ -85,7 +85,7 @@ fn steps_give_the_core_groups_bits() {
         assert_eq!(rep.bodies, core);
         clock = clock.after(1e-7);
     }
-    let Reply::States(states) = e.handle(Command::States) else {
+    let Reply::States(states) = e.handle(Command::States(Vec::new())) else {
         panic!("no states")
     };
     let held: Vec<Body> = states

@@ -16,7 +16,7 @@ pub const FRAME_PIECE: usize = 100_000;
 impl<L: WorkerLink> Master<'_, L> {
     /// Runs of consecutive body indices on one worker, each of at most `FRAME_PIECE`
     /// elements (or one body).
-    fn frame_pieces(&self) -> Vec<(usize, Vec<u32>)> {
+    pub(super) fn frame_pieces(&self) -> Vec<(usize, Vec<u32>)> {
         let mut out: Vec<(usize, Vec<u32>, usize)> = Vec::new();
         for (i, inf) in self.info.iter().enumerate() {
             let w = self.worker_of[i].unwrap_or(0);

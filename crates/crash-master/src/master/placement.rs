@@ -198,15 +198,18 @@ impl<L: WorkerLink> Master<'_, L> {
             let cmds = unload
                 .iter()
                 .zip(with_def)
+                // one body per message: each reply stays under MAX_MESSAGE
                 .map(|(ids, with_def)| {
-                    if ids.is_empty() {
-                        Vec::new()
-                    } else {
-                        vec![Command::Unload {
-                            ids: ids.clone(),
-                            with_def,
-                        }]
-                    }
+                    ids.iter()
+                        .map(|&id| Command::Unload {
+                            ids: vec![id],
+                            with_def: if with_def.contains(&id) {
+                                vec![id]
+                            } else {
+                                Vec::new()
+                            },
+                        })
+                        .collect()
                 })
                 .collect();
             for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
@@ -226,8 +229,11 @@ impl<L: WorkerLink> Master<'_, L> {
         let at = self.clock;
         let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
         for (w, bodies) in load.into_iter().enumerate() {
-            if !bodies.is_empty() {
-                cmds[w].push(Command::Load { at, bodies });
+            for b in bodies {
+                cmds[w].push(Command::Load {
+                    at,
+                    bodies: vec![b],
+                });
             }
             if layout[w] != self.layout[w] || !cmds[w].is_empty() || !unload[w].is_empty() {
                 cmds[w].push(Command::Regroup(layout[w].clone()));

@@ -13,12 +13,19 @@ impl<L: WorkerLink> Master<'_, L> {
     /// The state after the current step (body states gathered from the workers).
     pub(crate) fn checkpoint(&mut self) -> Result<MasterCheckpoint, MasterError> {
         let nw = self.links.len();
-        let replies = self.exchange((0..nw).map(|_| vec![Command::States]).collect())?;
+        // in the frame's pieces (bounded size: each reply stays under MAX_MESSAGE)
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for (w, ids) in self.frame_pieces() {
+            cmds[w].push(Command::States(ids));
+        }
+        let replies = self.exchange(cmds)?;
         let mut states = Vec::with_capacity(self.info.len());
-        for (w, mut r) in replies.into_iter().enumerate() {
-            match r.pop() {
-                Some(Reply::States(s)) => states.extend(s),
-                _ => return Err(self.bad_reply(w, "States")),
+        for (w, r) in replies.into_iter().enumerate() {
+            for reply in r {
+                match reply {
+                    Reply::States(s) => states.extend(s),
+                    _ => return Err(self.bad_reply(w, "States")),
+                }
             }
         }
         states.sort_by_key(|s| s.0);
