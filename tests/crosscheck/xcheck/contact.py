@@ -12,6 +12,19 @@ from .vec import dot, cross, norm
 from .body import Fault
 
 REFERENCE_SAFETY = 0.9
+CLOSING_FRACTION = 0.2
+
+
+def closing_speed(a, b):
+    """Upper bound of the speed of a node of a relative to a point of b: the smaller of
+    max|v_a - u| + max|v_b - u| with u the centre-of-mass velocity of a, then of b."""
+    def com(x):
+        return (x.v * x.mass[:, None]).sum(axis=0) / x.mass.sum()
+
+    def bound(u):
+        return float(norm(a.v - u).max()) + float(norm(b.v - u).max())
+
+    return min(bound(com(a)), bound(com(b)))
 
 
 def margin_for(cfg, body):
@@ -368,10 +381,18 @@ class ContactStage:
                 d = min(_element_form_dt(cfg, sa, sb), _element_form_dt(cfg, sb, sa))
                 dt[ia] = min(dt[ia], d)
                 dt[ib] = min(dt[ib], d)
-            dt_ref = REFERENCE_SAFETY * min(element_dt[ia], element_dt[ib])
-            if cfg["penalty"] == "soft" and not (math.isfinite(dt_ref) and dt_ref > 0.0):
-                continue
             self_pair = ia == ib
+            pair_dt = min(element_dt[ia], element_dt[ib])
+            if cfg["penalty"] == "soft" and not (math.isfinite(pair_dt) and pair_dt > 0.0):
+                continue
+            if cfg.get("speed_rule", "limit_dt") == "limit_dt" and not self_pair:
+                v = closing_speed(a, b)
+                if v > 0.0:
+                    d = CLOSING_FRACTION * 0.5 * (a.thickness + b.thickness) / v
+                    dt[ia] = min(dt[ia], d)
+                    dt[ib] = min(dt[ib], d)
+                    pair_dt = min(pair_dt, d)
+            dt_ref = REFERENCE_SAFETY * pair_dt
             first = pushes(search(a, b, sb, self_pair), a, b, sb, cfg, dt_ref)
             second = None if self_pair else pushes(search(b, a, sa, False), b, a, sa, cfg, dt_ref)
             st = dict(a=ida, b=idb, active=0, max_penetration=0.0, normal_force=0.0)
