@@ -14,7 +14,14 @@ const T_PLATE: f64 = 1e-3;
 
 fn thrown(speed: f64, rule: SpeedRule) -> Run {
     let z = R + 0.5 * (T_SPHERE + T_PLATE) + 1e-3;
-    let s = sphere(0, R, T_SPHERE, 3, Vec3::new(0.0, 0.0, z), Vec3::new(0.0, 0.0, -speed));
+    let s = sphere(
+        0,
+        R,
+        T_SPHERE,
+        3,
+        Vec3::new(0.0, 0.0, z),
+        Vec3::new(0.0, 0.0, -speed),
+    );
     let p = fixed_plate(1, 0.2, 20, T_PLATE, 0.0);
     let cfg = ContactConfig {
         margin: (2e-5 * speed).max(2e-3),
@@ -46,7 +53,9 @@ fn lowest_over_plate(run: &Run) -> f64 {
 #[test]
 fn crossing_at_2000_m_s_stops_the_run_naming_both_bodies_under_the_stop_rule() {
     let mut run = thrown(2000.0, SpeedRule::Stop);
-    let err = run.run(|_| {}).expect_err("a pass-through must stop the run");
+    let err = run
+        .run(|_| {})
+        .expect_err("a pass-through must stop the run");
     println!("{err}");
     match &err {
         Fault::PassThrough {
@@ -105,7 +114,8 @@ fn closing_speed_limit_changes_nothing_at_2_m_s() {
         let mut run = thrown(2.0, rule);
         run.cfg.end_time = 2e-3;
         let mut e = Vec::new();
-        run.run(|r| e.push(r.energy.total().to_bits())).expect("runs");
+        run.run(|r| e.push(r.energy.total().to_bits()))
+            .expect("runs");
         (e, run.dt_min)
     };
     let (a, dta) = energies(SpeedRule::LimitDt);

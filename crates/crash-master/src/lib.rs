@@ -108,6 +108,7 @@ fn drive<L: WorkerLink>(
         }
         Err(e) => {
             tracing::error!("run stopped at step {}: {e}", m.clock().step);
+            m.record_progress();
             m.shutdown(&format!("the run stopped: {e}"));
             m.stats.final_hash = 0;
             let _ = sink.finish(&m.stats, Some(&e));

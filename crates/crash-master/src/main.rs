@@ -82,7 +82,14 @@ fn run(args: Args) -> anyhow::Result<()> {
         end_time: args.end_time,
         output_interval: args.output_interval,
     })?;
-    let input = RunInput::from_built(scene.build()?);
+    let built = scene.build()?;
+    let energy_limit = built.energy_limit;
+    let input = RunInput::from_built(built);
+    let names: Vec<(u32, String)> = input
+        .bodies
+        .iter()
+        .map(|b| (b.def.id, b.def.name.clone()))
+        .collect();
     let restart = match &args.resume {
         Some(path) => Some(read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?),
         None => None,
@@ -94,7 +101,10 @@ fn run(args: Args) -> anyhow::Result<()> {
     let mut sink = sink
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
-        .with_checkpoints(args.out.join(RESTART_FILE));
+        .with_checkpoints(args.out.join(RESTART_FILE))
+        .with_energy_limit(energy_limit)
+        .with_body_names(names)
+        .with_echo(true);
     let mut cluster = Cluster::bind(
         args.listen,
         args.workers,

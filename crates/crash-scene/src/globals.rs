@@ -108,10 +108,7 @@ pub fn globals(
         Some("limit_dt") => SpeedRule::LimitDt,
         Some("stop") => SpeedRule::Stop,
         Some(_) => {
-            return Err(ctx.invalid(
-                "contact.speed_rule",
-                "must be \"limit_dt\" or \"stop\"",
-            ))
+            return Err(ctx.invalid("contact.speed_rule", "must be \"limit_dt\" or \"stop\""))
         }
     };
     Ok(Globals {

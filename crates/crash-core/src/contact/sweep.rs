@@ -45,11 +45,7 @@ fn mean_velocity(b: &Body) -> Vec3 {
 }
 
 fn max_speed_rel(b: &Body, u: &Vec3) -> f64 {
-    b.state
-        .v
-        .iter()
-        .map(|v| (v - u).norm())
-        .fold(0.0, f64::max)
+    b.state.v.iter().map(|v| (v - u).norm()).fold(0.0, f64::max)
 }
 
 /// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
@@ -142,12 +138,7 @@ pub fn first_crossing(
         .zip(&sb.state.v)
         .map(|(x, v)| x - v * h)
         .collect();
-    let seg_move = sb
-        .state
-        .v
-        .iter()
-        .map(|v| v.norm() * h)
-        .fold(0.0, f64::max);
+    let seg_move = sb.state.v.iter().map(|v| v.norm() * h).fold(0.0, f64::max);
     let (lo, hi) = super::narrow::reach_box(sb, nb);
     let chunks: Vec<Option<Crossing>> = nb
         .state
