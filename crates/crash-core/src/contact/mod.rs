@@ -6,6 +6,7 @@ pub mod broad;
 pub mod config;
 pub mod narrow;
 pub mod segment;
+pub mod smooth;
 pub mod stage;
 pub mod surface;
 pub mod sweep;

@@ -11,6 +11,7 @@ use super::broad::{candidate_pairs, BodyBox};
 use super::config::{ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY};
 use super::narrow::{forces, search, Hit, Push};
 use super::segment::Segment;
+use super::smooth::nodal_normals;
 use super::surface::Surface;
 use super::sweep::{closing_speed, first_crossing};
 use crate::body::Body;
@@ -201,11 +202,29 @@ pub fn contact_forces(
         if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
             continue;
         }
-        let first = forces(&search(a, b, sb, self_pair), a, b, sb, cfg, dt_ref);
+        let first = forces(
+            &search(a, b, sb, self_pair),
+            a,
+            b,
+            sb,
+            cfg,
+            dt_ref,
+            &nodal_normals(b),
+            &nodal_normals(a),
+        );
         let second = if self_pair {
             Vec::new()
         } else {
-            forces(&search(b, a, sa, false), b, a, sa, cfg, dt_ref)
+            forces(
+                &search(b, a, sa, false),
+                b,
+                a,
+                sa,
+                cfg,
+                dt_ref,
+                &nodal_normals(a),
+                &nodal_normals(b),
+            )
         };
         let mut st = PairStats {
             a: a.def.id,
@@ -248,7 +267,7 @@ fn apply(
         bodies[inode].state.f_contact[p.hit.node as usize] += p.force;
         let fc = &mut bodies[iseg].state.f_contact;
         for (q, &n) in seg.nodes().iter().enumerate() {
-            fc[n as usize] -= p.force * p.hit.proj.weights[q];
+            fc[n as usize] -= p.force * p.weights[q];
         }
         st.max_penetration = st.max_penetration.max(p.hit.depth);
         st.normal_force += p.normal_force;
