@@ -125,13 +125,14 @@ fn shortened_last_step_enters_neither_dt_min_nor_the_energy_figure() {
     // a full run of 40 steps, then the same run with a sliver of a 41st step
     let o = crash(&sc, &d.join("probe"), &["--end-time", "1e-5"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let probe = crash_io::read_summary(d.join("probe").join(crash_io::SUMMARY_JSON)).unwrap();
+    let probe =
+        crash_io::read_summary(d.join("probe").join(crash_io::SUMMARY_JSON)).expect("summary");
     let dt = probe.dt_max_s;
     let full = 40.0 * dt;
     let run = |name: &str, end: f64| {
         let o = crash(&sc, &d.join(name), &["--end-time", &format!("{end:e}")]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        crash_io::read_summary(d.join(name).join(crash_io::SUMMARY_JSON)).unwrap()
+        crash_io::read_summary(d.join(name).join(crash_io::SUMMARY_JSON)).expect("summary")
     };
     let a = run("full", full * (1.0 - 1e-13));
     let b = run("sliver", full + 1e-4 * dt);
@@ -144,4 +145,53 @@ fn shortened_last_step_enters_neither_dt_min_nor_the_energy_figure() {
     assert!(b.last_dt_s > 0.0 && b.last_dt_s < 1e-3 * dt);
     assert_eq!(b.dt_min_s, a.dt_min_s);
     assert_eq!(b.energy_balance_error, a.energy_balance_error);
+}
+
+#[test]
+fn two_plates_with_a_1e4_density_ratio_draw_no_contact_energy_warning() {
+    let d = dir("report-two-plates");
+    let sc = d.join("scene.toml");
+    std::fs::write(
+        &sc,
+        r#"name = "two-plates"
+end_time = 4.0e-4
+output_interval = 1.0e-4
+[materials.steel]
+density = 7800.0
+young = 200.0e9
+poisson = 0.3
+[materials.heavy]
+density = 7.8e7
+young = 200.0e9
+poisson = 0.3
+[[bodies]]
+name = "light"
+material = "steel"
+thickness = 1.0e-3
+plate = { size = [0.05, 0.05], cells = [5, 5] }
+[[bodies]]
+name = "heavy"
+material = "heavy"
+thickness = 1.0e-3
+plate = { size = [0.05, 0.05], cells = [5, 5] }
+position = [0.0, 0.0, 1.1e-3]
+velocity = [0.0, 0.0, -1.0]
+"#,
+    )
+    .expect("scene");
+    let out = d.join("out");
+    let o = crash(&sc, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).expect("summary");
+    let ind = s.indicators;
+    println!(
+        "contact flow {:.3e} J, peak internal {:.3e} J, made by contact {:.3e}",
+        ind.contact_flow_j, ind.peak_internal_j, ind.contact_generated_ratio
+    );
+    // the contact stores far more than the plates' internal energy (the old rule,
+    // |E_c| against the peak internal energy, fired here) and makes none
+    assert!(ind.contact_flow_j > 10.0 * ind.peak_internal_j);
+    assert!(ind.contact_generated_ratio < 0.01);
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
 }

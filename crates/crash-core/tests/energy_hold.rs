@@ -31,7 +31,10 @@ fn precession_error(kind: ElementKind) -> f64 {
         .expect("start");
         run.run(|_| {}).expect("run");
         let err = run.ledger.max_error();
-        println!("{kind:?}: {} steps, energy-balance error {err:.3e}", run.clock.step);
+        println!(
+            "{kind:?}: {} steps, energy-balance error {err:.3e}",
+            run.clock.step
+        );
         err
     }
 }

@@ -323,11 +323,7 @@ pub fn cells() -> Vec<Cell> {
                 out.push(cell(
                     "thrown tube, R/t, elements, speed [m/s]",
                     format!("R/t {:.0}, {name}, {v}", 0.025 / t),
-                    Scenario::Thrown(Thrown {
-                        speed: v,
-                        t,
-                        kind,
-                    }),
+                    Scenario::Thrown(Thrown { speed: v, t, kind }),
                     CompletedOrStopped,
                     quick,
                 ));

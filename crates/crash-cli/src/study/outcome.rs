@@ -134,12 +134,11 @@ impl Sink for Watch {
                 ));
             }
             if let Some(g) = self.guard.filter(|g| g.body == b.id) {
-                self.lowest = b
-                    .x
-                    .iter()
-                    .filter(|p| p.x.abs() < g.half_size && p.y.abs() < g.half_size)
-                    .map(|p| p.z - g.z)
-                    .fold(f64::INFINITY, f64::min);
+                self.lowest =
+                    b.x.iter()
+                        .filter(|p| p.x.abs() < g.half_size && p.y.abs() < g.half_size)
+                        .map(|p| p.z - g.z)
+                        .fold(f64::INFINITY, f64::min);
             }
         }
         Ok(())

@@ -127,6 +127,13 @@ pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit>
     chunks.into_iter().flatten().collect()
 }
 
+/// Nodal normals of a pass: of the segment body and of the node body.
+#[derive(Debug, Clone, Copy)]
+pub struct Normals<'a> {
+    pub segment: &'a [Vec3],
+    pub node: &'a [Vec3],
+}
+
 /// The penalty force of a hit, acting on the node (the segment nodes get minus it times
 /// their weights).
 #[derive(Debug, Clone, Copy)]
@@ -161,9 +168,9 @@ pub fn stiffness(cfg: &ContactConfig, surf: &Surface, m_star: f64, seg: u32, dt_
 
 /// Forces of the hits, f = (k depth - c_d v_n)+ n, in hit order. The depth is the exact
 /// closest-point one; n and the point of the reaction come from the projection along the
-/// smoothed normal (`smooth::along_normal`, `normals` the nodal normals of `sb`, or the
-/// closest point where that fails), averaged with the node's own normal
-/// (`smooth::common_normal`, `own_normals` those of `nb`).
+/// smoothed normal (`smooth::along_normal`, `normals.segment` the nodal normals of `sb`,
+/// or the closest point where that fails), averaged with the node's own normal
+/// (`smooth::common_normal`, `normals.node` those of `nb`).
 pub fn forces(
     hits: &[Hit],
     nb: &Body,
@@ -171,8 +178,7 @@ pub fn forces(
     surf: &Surface,
     cfg: &ContactConfig,
     dt_ref: f64,
-    normals: &[Vec3],
-    own_normals: &[Vec3],
+    normals: Normals<'_>,
 ) -> Vec<Push> {
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     hits.iter()
@@ -187,8 +193,8 @@ pub fn forces(
                 seg,
                 &h.proj,
                 &sb.state.x,
-                normals,
-                &own_normals[i],
+                normals.segment,
+                &normals.node[i],
                 &n_cp,
                 c,
             ) {

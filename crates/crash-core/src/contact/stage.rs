@@ -9,7 +9,7 @@
 
 use super::broad::{candidate_pairs, BodyBox};
 use super::config::{ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY};
-use super::narrow::{forces, search, Hit, Push};
+use super::narrow::{forces, search, Hit, Normals, Push};
 use super::segment::Segment;
 use super::smooth::nodal_normals;
 use super::surface::Surface;
@@ -202,6 +202,7 @@ pub fn contact_forces(
         if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
             continue;
         }
+        let (na, nb_) = (nodal_normals(a), nodal_normals(b));
         let first = forces(
             &search(a, b, sb, self_pair),
             a,
@@ -209,8 +210,10 @@ pub fn contact_forces(
             sb,
             cfg,
             dt_ref,
-            &nodal_normals(b),
-            &nodal_normals(a),
+            Normals {
+                segment: &nb_,
+                node: &na,
+            },
         );
         let second = if self_pair {
             Vec::new()
@@ -222,8 +225,10 @@ pub fn contact_forces(
                 sa,
                 cfg,
                 dt_ref,
-                &nodal_normals(a),
-                &nodal_normals(b),
+                Normals {
+                    segment: &na,
+                    node: &nb_,
+                },
             )
         };
         let mut st = PairStats {
