@@ -73,6 +73,17 @@ impl Progress {
         }
     }
 
+    /// A line of its own (a warning): clears the bar first; the bar is redrawn at the
+    /// next update.
+    pub fn message(&self, line: &str) {
+        let mut err = std::io::stderr().lock();
+        if self.bar {
+            let _ = write!(err, "\r\x1b[K");
+        }
+        let _ = writeln!(err, "{line}");
+        let _ = err.flush();
+    }
+
     pub fn finish(&self) {
         if self.bar {
             eprintln!();

@@ -54,12 +54,22 @@ pub struct RunArgs {
     /// instead of refusing them.
     #[arg(long)]
     pub ignore_friction: bool,
+    /// Exit 0 even when the run finished with warnings that make its results doubtful
+    /// (they are still printed and listed in summary.json).
+    #[arg(long)]
+    pub allow_warnings: bool,
 }
 
-/// Exit code of a finished run whose energy-balance error exceeded the scene's limit.
-pub const EXIT_ENERGY: u8 = 3;
-/// Exit code of a run stopped by a fault (instability, tunnelling, collapse...).
-pub const EXIT_FAULT: u8 = 1;
+/// Exit code of a run that stopped on something else than physics: a worker lost, an
+/// output file that could not be written.
+pub const EXIT_FAILED: u8 = 1;
+/// Exit code of a run stopped by a physical fault (a pass-through, tunnelling, an
+/// instability, a collapsed element...): the results from that point on are wrong.
+pub const EXIT_FAULT: u8 = 3;
+/// Exit code of a run that finished with a warning that makes its results doubtful
+/// (energy balance beyond the scene's `energy_limit`, hourglass, contact energy,
+/// penetration; docs/output.md), unless `--allow-warnings`.
+pub const EXIT_WARNINGS: u8 = 4;
 
 /// The file sink plus the progress display.
 struct CliSink {
@@ -68,12 +78,23 @@ struct CliSink {
     last_time: f64,
 }
 
+impl CliSink {
+    /// Print the warnings raised by the last call, once each.
+    fn print_fresh(&mut self) {
+        for w in self.files.take_fresh() {
+            self.progress.message(&format!("crash: warning: {w}"));
+        }
+    }
+}
+
 impl Sink for CliSink {
     fn energy(&mut self, step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError> {
         let dt = time - self.last_time;
         self.last_time = time;
-        self.progress.update(step, time, dt, totals.balance_error);
-        self.files.energy(step, time, totals)
+        self.progress.update(step, time, dt, totals.run_error);
+        let r = self.files.energy(step, time, totals);
+        self.print_fresh();
+        r
     }
 
     fn contacts(&mut self, step: u64, time: f64, pairs: &[(u32, u32)]) -> Result<(), SinkError> {
@@ -86,7 +107,9 @@ impl Sink for CliSink {
         time: f64,
         stats: &[PairStats],
     ) -> Result<(), SinkError> {
-        self.files.contact_stats(step, time, stats)
+        let r = self.files.contact_stats(step, time, stats);
+        self.print_fresh();
+        r
     }
 
     fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
@@ -184,6 +207,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
             .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
         (None, None) => PathBuf::from("out").join(&built.name),
     };
+    let names: Vec<(u32, String)> = built
+        .bodies
+        .iter()
+        .map(|b| (b.def.id, b.def.name.clone()))
+        .collect();
     let input = RunInput::from_built(built);
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(t) = args.threads {
@@ -201,7 +229,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let simd = crash_core::element::simd::path_name();
     let files = files
         .with_checkpoints(out.join(RESTART_FILE))
-        .with_simd_path(simd);
+        .with_simd_path(simd)
+        .with_energy_limit(energy_limit)
+        .with_body_names(names);
     let mut sink = CliSink {
         files,
         progress: Progress::new(input.config.end_time, args.quiet),
@@ -236,13 +266,21 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let stats = match result {
         Ok(s) => s,
         Err(e) => {
+            let (clock_step, clock_time) = sink_progress(&out);
             eprintln!("crash: run stopped: {e}");
-            eprintln!("crash: the frames written so far are in {}", out.display());
-            return Ok(ExitCode::from(EXIT_FAULT));
+            eprintln!(
+                "crash: {clock_step} steps done, t = {clock_time:.4e} s reached; the frames written so far and summary.json are in {}",
+                out.display()
+            );
+            let code = match e {
+                MasterError::Fault(_) | MasterError::Margin { .. } => EXIT_FAULT,
+                _ => EXIT_FAILED,
+            };
+            return Ok(ExitCode::from(code));
         }
     };
     eprintln!(
-        "crash: done: {} steps, dt {:.3e}..{:.3e} s, {:.2} s wall, largest energy-balance error {:.3e}, final state hash {:016x}",
+        "crash: done: {} steps, dt {:.3e}..{:.3e} s, {:.2} s wall, energy-balance error {:.3e} (limit {energy_limit:.3e}), final state hash {:016x}",
         stats.steps, stats.dt_min, stats.dt_max, stats.wall_s, stats.max_energy_error, stats.final_hash
     );
     if !args.no_pictures {
@@ -255,17 +293,22 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
             Err(e) => eprintln!("crash: warning: pictures failed: {e}"),
         }
     }
-    if stats.max_energy_error > energy_limit {
-        let warning = format!(
-            "energy-balance error {:.3e} exceeds the scene's limit {energy_limit:.3e} (energy_limit)",
-            stats.max_energy_error
+    let warnings = sink.files.warnings();
+    let doubtful = warnings.iter().filter(|w| w.doubtful).count();
+    if doubtful > 0 {
+        eprintln!(
+            "crash: the run finished with {doubtful} warning(s) that make its results doubtful (listed in {})",
+            out.join(crash_io::SUMMARY_JSON).display()
         );
-        eprintln!("crash: warning: {warning}");
-        let path = out.join(crash_io::SUMMARY_JSON);
-        let mut summary = crash_io::read_summary(&path)?;
-        summary.warnings.push(warning);
-        crash_io::write_summary(&path, &summary)?;
-        return Ok(ExitCode::from(EXIT_ENERGY));
+        if !args.allow_warnings {
+            return Ok(ExitCode::from(EXIT_WARNINGS));
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Steps done and time reached, as summary.json records them (after a fault too).
+fn sink_progress(out: &Path) -> (u64, f64) {
+    crash_io::read_summary(out.join(crash_io::SUMMARY_JSON))
+        .map_or((0, f64::NAN), |s| (s.steps, s.time_reached_s))
 }

@@ -93,12 +93,12 @@ fn assert_same_run(a: &Path, b: &Path) {
     assert!(!sa.final_state_hash.is_empty());
     assert_eq!(sa.final_state_hash, sb.final_state_hash);
     assert_eq!(sa.steps, sb.steps);
-    assert_eq!(sa.end_time.to_bits(), sb.end_time.to_bits());
-    assert_eq!(sa.dt_min.to_bits(), sb.dt_min.to_bits());
-    assert_eq!(sa.dt_max.to_bits(), sb.dt_max.to_bits());
+    assert_eq!(sa.time_reached_s.to_bits(), sb.time_reached_s.to_bits());
+    assert_eq!(sa.dt_min_s.to_bits(), sb.dt_min_s.to_bits());
+    assert_eq!(sa.dt_max_s.to_bits(), sb.dt_max_s.to_bits());
     assert_eq!(
-        sa.max_energy_balance_error.to_bits(),
-        sb.max_energy_balance_error.to_bits()
+        sa.energy_balance_error.to_bits(),
+        sb.energy_balance_error.to_bits()
     );
     assert_eq!(sa.indicators, sb.indicators);
 }

@@ -74,7 +74,8 @@ fn stage_bench(c: &mut Criterion, name: &str, mut bodies: Vec<Body>) {
     };
     let dts: Vec<f64> = bodies.iter().map(|_| 1e-6).collect();
     let mut state = ContactState::default();
-    contact_forces(&mut bodies, &cfg, &mut state, &dts);
+    contact_forces(&mut bodies, &cfg, &mut state, &dts, 0.0, 0)
+        .expect("no crossing check at h = 0");
     let nodes: usize = bodies.iter().map(|b| b.state.x.len()).sum();
     let active: usize = state.stats().iter().map(|s| s.active_nodes).sum();
     println!(
@@ -88,7 +89,7 @@ fn stage_bench(c: &mut Criterion, name: &str, mut bodies: Vec<Body>) {
         .warm_up_time(Duration::from_secs(1));
     g.throughput(Throughput::Elements(nodes as u64));
     g.bench_function(name, |b| {
-        b.iter(|| black_box(contact_forces(&mut bodies, &cfg, &mut state, &dts)))
+        b.iter(|| black_box(contact_forces(&mut bodies, &cfg, &mut state, &dts, 0.0, 0)))
     });
     g.finish();
 }

@@ -31,6 +31,17 @@ impl Default for RunConfig {
     }
 }
 
+/// The step to take: `next_dt`, or what is `left` to the end time when that is shorter
+/// (then `true`: the record of a shortened last step enters neither dt_min/dt_max nor the
+/// run's energy figure, see `EnergyLedger::record`). The same rule in every loop.
+pub fn step_length(next_dt: f64, left: f64) -> (f64, bool) {
+    if left < next_dt && left > 0.0 {
+        (left, true)
+    } else {
+        (next_dt, false)
+    }
+}
+
 /// Consecutive steps above the runaway limit that stop a run.
 pub const RUNAWAY_PERSIST: u32 = 3;
 
@@ -157,18 +168,17 @@ impl Run {
 
     /// Take one step; the last step is shortened to land on the end time.
     pub fn step(&mut self) -> Result<(), Fault> {
-        let mut h = self.next_dt;
-        let left = self.cfg.end_time - self.clock.time;
-        if left < h && left > 0.0 {
-            h = left;
+        let (h, short) = step_length(self.next_dt, self.cfg.end_time - self.clock.time);
+        if !short {
+            self.dt_min = self.dt_min.min(h);
+            self.dt_max = self.dt_max.max(h);
         }
-        self.dt_min = self.dt_min.min(h);
-        self.dt_max = self.dt_max.max(h);
         self.reports = self.group.advance(&self.clock, h)?;
         self.clock = self.clock.after(h);
-        self.energy = self
-            .ledger
-            .update(EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)));
+        self.energy = self.ledger.record(
+            EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)),
+            !short,
+        );
         check_runaway(
             &self.cfg,
             &mut self.ledger,

@@ -98,4 +98,16 @@ pub enum Fault {
         distance: f64,
         budget: f64,
     },
+    #[error("step {step}: node {node} of body '{body_name}' (#{body}) passed through the mid-surface of body '{other_name}' (#{other}, segment {segment}) at a closing speed of {closing_speed:.3e} m/s: the contact did not hold; the results after this point would be wrong (lower dt_safety, use contact.speed_rule = \"limit_dt\", or raise the penalty scale)")]
+    PassThrough {
+        step: u64,
+        body: u32,
+        body_name: String,
+        node: usize,
+        other: u32,
+        other_name: String,
+        segment: usize,
+        /// Normal relative speed of the node and the segment point it crossed [m/s].
+        closing_speed: f64,
+    },
 }

@@ -68,17 +68,21 @@ impl Group {
 
     /// Contact forces at the current positions; lowers each report's stable dt where
     /// contact requires it.
-    fn contact_pass(&mut self, out: &mut [BodyReport]) {
+    /// `h`, `step`: the step that led here (0, 0 at the start), for the crossing check.
+    fn contact_pass(&mut self, out: &mut [BodyReport], h: f64, step: u64) -> Result<(), Fault> {
         let dts: Vec<f64> = out.iter().map(|r| r.stable_dt).collect();
         let limit = crate::contact::contact_forces(
             &mut self.bodies,
             &self.contact,
             &mut self.contact_state,
             &dts,
-        );
+            h,
+            step,
+        )?;
         for (r, d) in out.iter_mut().zip(limit) {
             r.stable_dt = r.stable_dt.min(d);
         }
+        Ok(())
     }
 
     /// Per body pair contact statistics of the last force pass, sorted by pair.
@@ -98,7 +102,7 @@ impl Group {
             b.state.energy.kinetic = b.kinetic_energy_now();
             out.push(report(b, &f, lo, hi, 0.0));
         }
-        self.contact_pass(&mut out);
+        self.contact_pass(&mut out, 0.0, 0)?;
         Ok(out)
     }
 
@@ -118,7 +122,7 @@ impl Group {
             let f = b.internal_forces(h, step)?;
             out.push(report(b, &f, s.lo, s.hi, s.max_move));
         }
-        self.contact_pass(&mut out);
+        self.contact_pass(&mut out, h, step)?;
         Ok(out)
     }
 }

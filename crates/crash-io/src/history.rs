@@ -209,6 +209,7 @@ pub fn read_energy_csv(path: impl AsRef<Path>) -> Result<Vec<EnergyRow>, IoError
                 damping: r[5],
                 external: r[6],
                 balance_error: r[7],
+                run_error: 0.0, // not a column of energy.csv
             },
         })
         .collect())

@@ -42,6 +42,7 @@ fn totals(v: &[f64]) -> EnergyTotals {
         damping: v[4],
         external: v[5],
         balance_error: v[6],
+        run_error: 0.0,
     }
 }
 

@@ -172,6 +172,7 @@ fn energy_rows() -> Vec<EnergyRow> {
                     damping,
                     external: 0.0,
                     balance_error: 0.0,
+                    run_error: 0.0,
                 },
             }
         })

@@ -3,7 +3,7 @@
 //! conversions); the clock travels in Step and Load.
 
 use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
-use crash_core::contact::{ContactConfig, PenaltyKind};
+use crash_core::contact::{ContactConfig, PenaltyKind, SpeedRule};
 use crash_core::{Clock, Vec3};
 use crash_io::FrameBody;
 use crash_proto::pb;
@@ -25,6 +25,11 @@ fn contact_to_pb(c: &ContactConfig) -> pb::ContactConfig {
         }
         .into(),
         damping_ratio: c.damping_ratio,
+        speed_rule: match c.speed_rule {
+            SpeedRule::LimitDt => "limit_dt",
+            SpeedRule::Stop => "stop",
+        }
+        .into(),
     }
 }
 
@@ -43,6 +48,15 @@ fn contact_from_pb(c: &pb::ContactConfig) -> Result<ContactConfig, ProtoError> {
             }
         },
         damping_ratio: c.damping_ratio,
+        speed_rule: match c.speed_rule.as_str() {
+            "" | "limit_dt" => SpeedRule::LimitDt,
+            "stop" => SpeedRule::Stop,
+            other => {
+                return Err(ProtoError::Invalid(format!(
+                    "unknown contact speed rule '{other}'"
+                )))
+            }
+        },
     })
 }
 

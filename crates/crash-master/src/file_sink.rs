@@ -9,11 +9,13 @@ use crate::sink::{Sink, SinkError};
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
+use crash_io::summary::{penetration_message, PENETRATION_LIMIT};
 use crash_io::{
     hash_hex, write_summary, ContactHistory, ContactRow, EnergyHistory, FrameBody, Indicators,
-    SeriesWriter, Summary, CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
+    SeriesWriter, Summary, Warning, WarningKind, CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
 };
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Name of the restart file inside the run directory (one file, replaced atomically at
@@ -21,12 +23,14 @@ use std::path::{Path, PathBuf};
 pub const RESTART_FILE: &str = "restart.ckp";
 
 /// What a restart file holds: the master loop's state and the sink's own (the
-/// summary's running indicators).
+/// summary's running indicators and the warnings raised so far).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RestartFile {
     pub master: MasterCheckpoint,
     #[serde(with = "IndicatorsBits")]
     pub indicators: Indicators,
+    #[serde(with = "warnings_bits")]
+    pub warnings: Vec<Warning>,
 }
 
 /// The same layout as `RestartFile`, borrowed (no copy of the bodies to write it).
@@ -35,6 +39,8 @@ struct RestartRef<'a> {
     master: &'a MasterCheckpoint,
     #[serde(with = "IndicatorsBits")]
     indicators: &'a Indicators,
+    #[serde(with = "warnings_bits")]
+    warnings: &'a Vec<Warning>,
 }
 
 /// `Indicators` as plain f64s: its own Deserialize reads JSON nulls (Option<f64>),
@@ -42,15 +48,34 @@ struct RestartRef<'a> {
 #[derive(Serialize, Deserialize)]
 #[serde(remote = "Indicators")]
 struct IndicatorsBits {
+    energy_limit: f64,
+    energy_balance_error: f64,
     final_balance_error: f64,
-    peak_balance_error: f64,
     hourglass_internal_ratio: f64,
-    contact_internal_ratio: f64,
+    contact_generated_ratio: f64,
     max_penetration_ratio: f64,
-    min_contact_energy: f64,
-    peak_internal: f64,
-    peak_hourglass: f64,
-    peak_contact: f64,
+    contact_energy_j: f64,
+    min_contact_energy_j: f64,
+    contact_flow_j: f64,
+    peak_internal_j: f64,
+    peak_hourglass_j: f64,
+}
+
+/// Warnings in a checkpoint: the JSON form as one string (its floats read back with
+/// nulls as NaN, which the binary format could not pair).
+mod warnings_bits {
+    use crash_io::Warning;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(w: &Vec<Warning>, s: S) -> Result<S::Ok, S::Error> {
+        let text = serde_json::to_string(w).map_err(serde::ser::Error::custom)?;
+        s.serialize_str(&text)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Warning>, D::Error> {
+        let text = String::deserialize(d)?;
+        serde_json::from_str(&text).map_err(serde::de::Error::custom)
+    }
 }
 
 /// Read a restart file (errors name the file: missing, not a checkpoint, truncated,
@@ -66,6 +91,13 @@ pub struct FileSink {
     contacts: ContactHistory,
     series: SeriesWriter,
     indicators: Indicators,
+    /// Warnings raised so far (each once), and those not yet taken by `take_fresh`.
+    warnings: Vec<Warning>,
+    fresh: Vec<Warning>,
+    /// Print each warning on stderr as it is raised.
+    echo: bool,
+    /// Body names by id (warnings name bodies).
+    names: BTreeMap<u32, String>,
     summary: Summary,
     /// Where checkpoints go (None: they are ignored).
     restart: Option<PathBuf>,
@@ -86,6 +118,10 @@ impl FileSink {
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
             series: SeriesWriter::create(dir)?,
             indicators: Indicators::default(),
+            warnings: Vec::new(),
+            fresh: Vec::new(),
+            echo: false,
+            names: BTreeMap::new(),
             summary: Self::summary(scene, scene_hash, size),
             restart: None,
         })
@@ -108,6 +144,10 @@ impl FileSink {
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
             series: SeriesWriter::reopen(dir, t)?,
             indicators: restart.indicators,
+            warnings: restart.warnings.clone(),
+            fresh: Vec::new(),
+            echo: false,
+            names: BTreeMap::new(),
             summary: Self::summary(scene, scene_hash, size),
             restart: None,
         })
@@ -125,6 +165,72 @@ impl FileSink {
         self
     }
 
+    /// Judge the energy balance against this limit (the scene's `energy_limit`; the
+    /// one limit of the warning and of the exit code).
+    pub fn with_energy_limit(mut self, limit: f64) -> Self {
+        self.indicators.energy_limit = limit;
+        self
+    }
+
+    /// Name bodies in warnings.
+    pub fn with_body_names(mut self, names: impl IntoIterator<Item = (u32, String)>) -> Self {
+        self.names = names.into_iter().collect();
+        self
+    }
+
+    /// Print every warning on stderr once, as it is raised.
+    pub fn with_echo(mut self, echo: bool) -> Self {
+        self.echo = echo;
+        self
+    }
+
+    /// Warnings raised since the last call (each warning is handed out once).
+    pub fn take_fresh(&mut self) -> Vec<Warning> {
+        std::mem::take(&mut self.fresh)
+    }
+
+    /// Every warning raised so far.
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    fn name(&self, id: u32) -> String {
+        self.names
+            .get(&id)
+            .cloned()
+            .unwrap_or_else(|| format!("#{id}"))
+    }
+
+    fn raise(
+        &mut self,
+        kind: WarningKind,
+        step: u64,
+        time: f64,
+        bodies: Vec<String>,
+        message: String,
+    ) {
+        if self
+            .warnings
+            .iter()
+            .any(|w| w.kind == kind && w.bodies == bodies)
+        {
+            return;
+        }
+        let w = Warning {
+            kind,
+            step,
+            time_s: time,
+            bodies,
+            message,
+            doubtful: true,
+        };
+        if self.echo {
+            eprintln!("crash: warning: {w}");
+        }
+        self.warnings.push(w.clone());
+        self.fresh.push(w);
+    }
+
     fn summary(scene: &str, scene_hash: u64, size: RunSize) -> Summary {
         Summary {
             scene: scene.to_string(),
@@ -138,8 +244,11 @@ impl FileSink {
 }
 
 impl Sink for FileSink {
-    fn energy(&mut self, _step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError> {
+    fn energy(&mut self, step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError> {
         self.indicators.observe_energy(totals);
+        for (kind, message) in self.indicators.exceeded() {
+            self.raise(kind, step, time, Vec::new(), message);
+        }
         self.energy.write(time, totals)?;
         Ok(())
     }
@@ -147,12 +256,17 @@ impl Sink for FileSink {
     /// contacts.csv: one row per pair with pushed nodes, every step.
     fn contact_stats(
         &mut self,
-        _step: u64,
+        step: u64,
         time: f64,
         stats: &[PairStats],
     ) -> Result<(), SinkError> {
         for s in stats.iter().filter(|s| s.active_nodes > 0) {
             self.indicators.observe_penetration(s.max_penetration_ratio);
+            if s.max_penetration_ratio > PENETRATION_LIMIT {
+                let bodies = vec![self.name(s.a), self.name(s.b)];
+                let message = penetration_message(s.max_penetration_ratio);
+                self.raise(WarningKind::Penetration, step, time, bodies, message);
+            }
             self.contacts.write(&ContactRow {
                 time,
                 a: s.a,
@@ -177,6 +291,7 @@ impl Sink for FileSink {
             &RestartRef {
                 master: state,
                 indicators: &self.indicators,
+                warnings: &self.warnings,
             },
         )?;
         Ok(())
@@ -204,9 +319,10 @@ impl Sink for FileSink {
         self.contacts.flush()?;
         let s = &mut self.summary;
         s.steps = stats.steps;
-        s.end_time = stats.time;
-        s.dt_min = stats.dt_min;
-        s.dt_max = stats.dt_max;
+        s.time_reached_s = stats.time;
+        s.dt_min_s = stats.dt_min;
+        s.dt_max_s = stats.dt_max;
+        s.last_dt_s = stats.last_dt;
         s.wall_time_s = stats.wall_s;
         let cycles = (s.elements as f64 * stats.steps as f64).max(1.0);
         let st = &stats.stages;
@@ -221,9 +337,10 @@ impl Sink for FileSink {
         }
         s.ns_per_element_cycle
             .insert("total".into(), stats.wall_s * 1e9 / cycles);
-        s.max_energy_balance_error = stats.max_energy_error;
+        s.energy_balance_error = stats.max_energy_error;
+        s.energy_limit = self.indicators.energy_limit;
         s.indicators = self.indicators;
-        s.warnings = self.indicators.warnings();
+        s.warnings = self.warnings.clone();
         s.final_state_hash = if error.is_none() {
             hash_hex(stats.final_hash)
         } else {

@@ -134,6 +134,7 @@ fn drive<L: WorkerLink>(
             Err(e)
         }
         Err(e) => {
+            s.record_progress();
             let mut stats = s.stats().clone();
             stats.final_hash = 0;
             let _ = sink.finish(&stats, Some(&e));

@@ -112,6 +112,14 @@ fn run(args: Args) -> anyhow::Result<()> {
     // planned, not built: each body is built when it is handed to its worker, so the
     // master's memory does not grow with the model
     let plan = scene.plan()?;
+    let energy_limit = plan.energy_limit;
+    let names: Vec<(u32, String)> = scene
+        .spec
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (i as u32, b.name.clone()))
+        .collect();
     let input = RunInput::from_plan(scene, plan);
     let restart = match &args.resume {
         Some(path) => Some(read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?),
@@ -124,7 +132,10 @@ fn run(args: Args) -> anyhow::Result<()> {
     let mut sink = sink
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
-        .with_checkpoints(args.out.join(RESTART_FILE));
+        .with_checkpoints(args.out.join(RESTART_FILE))
+        .with_energy_limit(energy_limit)
+        .with_body_names(names)
+        .with_echo(true);
     let secret = Secret::configured(args.secret_file.as_deref())?;
     if let Some(p) = args.secret_file.as_deref() {
         if crash_link::auth::readable_by_others(p) {

@@ -78,6 +78,12 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         self.m.links()
     }
 
+    /// Steps done and time reached into the statistics (after a stop: the summary then
+    /// says how far the run got).
+    pub fn record_progress(&mut self) {
+        self.m.record_progress();
+    }
+
     pub fn stats(&self) -> &RunStats {
         &self.m.stats
     }

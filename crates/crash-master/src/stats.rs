@@ -34,8 +34,13 @@ pub struct RunStats {
     pub workers: usize,
     pub steps: u64,
     pub time: f64,
+    /// Smallest and largest full step taken [s] (the last step, shortened to land on
+    /// the end time, is `last_dt`).
     pub dt_min: f64,
     pub dt_max: f64,
+    /// The shortened last step [s] (0: none).
+    #[serde(default)]
+    pub last_dt: f64,
     pub wall_s: f64,
     pub stages: StageTimes,
     /// Largest relative energy-balance error of the run.

@@ -226,6 +226,27 @@ pub fn fault_to_pb(f: &Fault) -> pb::Fault {
                 budget: *budget,
             }),
         ),
+        Fault::PassThrough {
+            step,
+            body,
+            body_name,
+            node,
+            other,
+            other_name,
+            segment,
+            closing_speed,
+        } => (
+            *step,
+            *body,
+            Kind::PassThrough(pb::PassThrough {
+                body_name: body_name.clone(),
+                node: *node as u64,
+                other: *other,
+                other_name: other_name.clone(),
+                segment: *segment as u64,
+                closing_speed: *closing_speed,
+            }),
+        ),
     };
     pb::Fault {
         step,
@@ -287,6 +308,16 @@ pub fn fault_from_pb(p: &pb::Fault) -> Result<Fault, ProtoError> {
                 speed: k.speed,
                 distance: k.distance,
                 budget: k.budget,
+            },
+            Kind::PassThrough(k) => Fault::PassThrough {
+                step,
+                body,
+                body_name: k.body_name.clone(),
+                node: index(k.node)?,
+                other: k.other,
+                other_name: k.other_name.clone(),
+                segment: index(k.segment)?,
+                closing_speed: k.closing_speed,
             },
         },
     )

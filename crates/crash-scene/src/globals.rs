@@ -3,7 +3,7 @@
 use crate::context::Ctx;
 use crate::error::{ErrorKind, SceneError};
 use crate::schema::{MaterialSpec, SceneFile};
-use crash_core::contact::{ContactConfig, PenaltyKind};
+use crash_core::contact::{ContactConfig, PenaltyKind, SpeedRule};
 use crash_core::{CoreError, Material, Vec3};
 use std::collections::BTreeMap;
 
@@ -103,6 +103,14 @@ pub fn globals(
             "must be in [0, 1] (fraction of critical damping)",
         ));
     }
+    let speed_rule = match c.speed_rule.as_deref() {
+        None => d.speed_rule,
+        Some("limit_dt") => SpeedRule::LimitDt,
+        Some("stop") => SpeedRule::Stop,
+        Some(_) => {
+            return Err(ctx.invalid("contact.speed_rule", "must be \"limit_dt\" or \"stop\""))
+        }
+    };
     Ok(Globals {
         end_time,
         safety,
@@ -115,6 +123,7 @@ pub fn globals(
             penalty_scale,
             penalty,
             damping_ratio,
+            speed_rule,
         },
         margin_given: c.margin.is_some(),
     })

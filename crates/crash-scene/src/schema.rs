@@ -86,6 +86,8 @@ pub struct ContactSpec {
     /// "soft" or "element".
     pub penalty: Option<String>,
     pub damping_ratio: Option<f64>,
+    /// "limit_dt" (default) or "stop".
+    pub speed_rule: Option<String>,
 }
 
 /// Either (young, poisson) or the seed's Lamé pair (lambda1, lambda2).

@@ -12,6 +12,20 @@ from .vec import dot, cross, norm
 from .body import Fault
 
 REFERENCE_SAFETY = 0.9
+TIE = 1e-9
+CLOSING_FRACTION = 0.2
+
+
+def closing_speed(a, b):
+    """Upper bound of the speed of a node of a relative to a point of b: the smaller of
+    max|v_a - u| + max|v_b - u| with u the centre-of-mass velocity of a, then of b."""
+    def com(x):
+        return (x.v * x.mass[:, None]).sum(axis=0) / x.mass.sum()
+
+    def bound(u):
+        return float(norm(a.v - u).max()) + float(norm(b.v - u).max())
+
+    return min(bound(com(a)), bound(com(b)))
 
 
 def margin_for(cfg, body):
@@ -136,12 +150,14 @@ def _unit_normal(a, b, c):
 
 def project(p, seg_nodes, count, x):
     """Closest point of each segment (rows) to each p: (dist, point, weights (n, 4),
-    face normal)."""
+    face normal, sub-triangle, its barycentric weights (n, 3))."""
     n = len(p)
     dist = np.full(n, np.inf)
     point = np.zeros((n, 3))
     weights = np.zeros((n, 4))
     fnormal = np.zeros((n, 3))
+    sub = np.zeros(n, dtype=np.int64)
+    bary = np.zeros((n, 3))
     xs = [x[seg_nodes[:, k]] for k in range(4)]
     t = count == 3
     if np.any(t):
@@ -153,6 +169,7 @@ def project(p, seg_nodes, count, x):
         point[t] = pp
         weights[t, :3] = w
         fnormal[t] = _unit_normal(xs[0][t], xs[1][t], xs[2][t])
+        bary[t] = w
     q = ~t
     if np.any(q):
         pq = p[q]
@@ -162,6 +179,8 @@ def project(p, seg_nodes, count, x):
         bpoint = np.zeros((len(pq), 3))
         bw = np.zeros((len(pq), 4))
         bn = np.zeros((len(pq), 3))
+        bk = np.zeros(len(pq), dtype=np.int64)
+        bb = np.zeros((len(pq), 3))
         for k in range(4):
             k1 = (k + 1) % 4
             w3 = triangle_weights(pq, cen, X[k], X[k1])
@@ -178,8 +197,11 @@ def project(p, seg_nodes, count, x):
             bpoint[better] = pp[better]
             bw[better] = wk[better]
             bn[better] = _unit_normal(cen[better], X[k][better], X[k1][better])
+            bk[better] = k
+            bb[better] = w3[better]
         dist[q], point[q], weights[q], fnormal[q] = best, bpoint, bw, bn
-    return dist, point, weights, fnormal
+        sub[q], bary[q] = bk, bb
+    return dist, point, weights, fnormal, sub, bary
 
 
 def _candidates(p, body, surf, c):
@@ -247,24 +269,154 @@ def search(nb, sb, surf, self_pass):
         rows, sj = rows[~near], sj[~near]
     if len(rows) == 0:
         return empty
-    dist, point, weights, fnormal = project(p[rows], surf.nodes[sj], surf.count[sj], sb.x)
+    dist, point, weights, fnormal, sub, bary = project(p[rows], surf.nodes[sj], surf.count[sj], sb.x)
     ok = ~np.isnan(dist)
     rows, sj, dist, point, weights, fnormal = rows[ok], sj[ok], dist[ok], point[ok], weights[ok], fnormal[ok]
-    # the closest segment per node, ties: lowest segment index
-    order = np.lexsort((sj, dist, rows))
+    sub, bary = sub[ok], bary[ok]
+    # the closest segment per node; every segment within TIE c of the closest is a tie,
+    # won by the lowest segment index
+    dmin = np.full(len(p), np.inf)
+    np.minimum.at(dmin, rows, dist)
+    eligible = dist <= dmin[rows] + TIE * c
+    order = np.lexsort((sj, ~eligible, rows))
     first = np.ones(len(order), dtype=bool)
     first[1:] = rows[order][1:] != rows[order][:-1]
     pick = order[first]
     pick = pick[dist[pick] < c]
     if self_pass and len(pick):
         # already within contact distance at the start: part of the shape (no hit)
-        d0, _, _, _ = project(nb.x0[idx[rows[pick]]], surf.nodes[sj[pick]], surf.count[sj[pick]], sb.x0)
+        d0 = project(nb.x0[idx[rows[pick]]], surf.nodes[sj[pick]], surf.count[sj[pick]], sb.x0)[0]
         pick = pick[~(d0 < c)]
     if len(pick) == 0:
         return empty
     node = idx[rows[pick]]
     return dict(node=node, seg=sj[pick], dist=dist[pick], point=point[pick],
-                weights=weights[pick], fnormal=fnormal[pick], depth=c - dist[pick], c=c)
+                weights=weights[pick], fnormal=fnormal[pick], depth=c - dist[pick], c=c,
+                sub=sub[pick], bary=bary[pick])
+
+
+CREASE_COS = 0.866
+NEWTON_ITERATIONS = 3
+OUTSIDE_TOLERANCE = 0.25
+
+
+def nodal_normals(b):
+    """Area-weighted nodal normals: each triangle adds (x2-x1) x (x3-x1), each quad
+    (x3-x1) x (x4-x2); unit length (zero where they cancel)."""
+    n = np.zeros_like(b.x)
+    if len(b.tris):
+        t = b.tris
+        f = cross(b.x[t[:, 1]] - b.x[t[:, 0]], b.x[t[:, 2]] - b.x[t[:, 0]])
+        for k in range(3):
+            np.add.at(n, t[:, k], f)
+    if len(b.quads):
+        q = b.quads
+        f = cross(b.x[q[:, 2]] - b.x[q[:, 0]], b.x[q[:, 3]] - b.x[q[:, 1]])
+        for k in range(4):
+            np.add.at(n, q[:, k], f)
+    ln = norm(n)
+    return np.where((ln > 0.0)[:, None], n / np.where(ln > 0.0, ln, 1.0)[:, None], 0.0)
+
+
+def _solve3(j0, j1, j2, r):
+    """Rows of 3x3 systems [j0 j1 j2] d = r by Cramer's rule; det == 0 gives nan."""
+    c12 = cross(j1, j2)
+    det = dot(j0, c12)
+    bad = (det == 0.0) | ~np.isfinite(det)
+    det = np.where(bad, np.nan, det)
+    return np.stack([dot(r, c12) / det, dot(j0, cross(r, j2)) / det, dot(j0, cross(j1, r)) / det], axis=1)
+
+
+def _subtriangle(hits, sb, surf, nn):
+    """Corners (A, B, C) of the (sub-)triangle holding the closest point, corner normals
+    (from nn, the per-segment-node normals (h, 4, 3)) and the slots of B and C."""
+    sn = surf.nodes[hits["seg"]]
+    X = sb.x[sn]
+    quad = surf.count[hits["seg"]] == 4
+    k = np.where(quad, hits["sub"], 0)
+    k1 = np.where(quad, (k + 1) % 4, 2)
+    kb = np.where(quad, k, 1)
+    r = np.arange(len(k))
+    a = np.where(quad[:, None], (X[:, 0] + X[:, 1] + X[:, 2] + X[:, 3]) * 0.25, X[:, 0])
+    na = np.where(quad[:, None], (nn[:, 0] + nn[:, 1] + nn[:, 2] + nn[:, 3]) * 0.25, nn[:, 0])
+    return a, X[r, kb], X[r, k1], na, nn[r, kb], nn[r, k1], kb, k1, quad, X
+
+
+def _weights(u, v, kb, k1, quad):
+    w0 = 1.0 - u - v
+    w = np.zeros((len(u), 4))
+    r = np.arange(len(u))
+    w[quad] = (0.25 * w0[quad])[:, None]
+    w[~quad, 0] = w0[~quad]
+    w[r, kb] += u
+    w[r, k1] += v
+    return w
+
+
+def _inside(u, v):
+    t = OUTSIDE_TOLERANCE
+    return (u >= -t) & (v >= -t) & (u + v <= 1.0 + t) & np.isfinite(u) & np.isfinite(v)
+
+
+def smoothed_normal(hits, nb, sb, surf, n_cp):
+    """theory-contact.md "Normal: smoothed over facets": the direction and the reaction
+    weights of every hit (projection along the interpolated nodal normal, then the
+    common normal with the node's own normal; the closest point where either fails)."""
+    c = hits["c"]
+    p = nb.x[hits["node"]]
+    seg = hits["seg"]
+    sn = surf.nodes[seg]
+    X = sb.x[sn]
+    quad = surf.count[seg] == 4
+    # the segment's own normal and the corner normals (crease: the segment's)
+    fs = np.where(quad[:, None], cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 1]),
+                  cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]))
+    ls = norm(fs)
+    ns = np.where((ls > 0.0)[:, None], fs / np.where(ls > 0.0, ls, 1.0)[:, None], 0.0)
+    nsb = nodal_normals(sb)[sn]
+    # a segment with a corner beyond the crease angle is not smoothed (closest point)
+    smooth = np.all(dot(nsb, ns[:, None, :]) >= CREASE_COS, axis=1)
+    nn = nsb
+    a, b, cc, na, nbb, nc, kb, k1, quad, X = _subtriangle(hits, sb, surf, nn)
+    eu, ev, mu, mv = b - a, cc - a, nbb - na, nc - na
+    u, v = hits["bary"][:, 1].copy(), hits["bary"][:, 2].copy()
+    n0 = na + mu * u[:, None] + mv * v[:, None]
+    n2 = dot(n0, n0)
+    smooth &= hits["dist"] > 1e-9 * c
+    ok = smooth & (n2 > 0.0) & np.isfinite(n2)
+    lam = dot(p - hits["point"], n0) / np.where(n2 > 0.0, n2, 1.0)
+    for _ in range(NEWTON_ITERATIONS):
+        n = na + mu * u[:, None] + mv * v[:, None]
+        f = a + eu * u[:, None] + ev * v[:, None] + n * lam[:, None] - p
+        d = _solve3(eu + mu * lam[:, None], ev + mv * lam[:, None], n, f)
+        u, v, lam = u - d[:, 0], v - d[:, 1], lam - d[:, 2]
+    ok &= _inside(u, v)
+    w = _weights(np.where(ok, u, 0.0), np.where(ok, v, 0.0), kb, k1, quad)
+    pt = (X * w[:, :, None]).sum(axis=1)
+    d = p - pt
+    ld = norm(d)
+    ok &= (ld > 1e-9 * c) & np.isfinite(ld) & (dot(d, p - hits["point"]) > 0.0)
+    n_seg = np.where(ok[:, None], d / np.where(ld > 0.0, ld, 1.0)[:, None], n_cp)
+    w_seg = np.where(ok[:, None], w, hits["weights"])
+    # the common normal with the node's own normal
+    own = nodal_normals(nb)[hits["node"]]
+    sgn = dot(own, n_seg)
+    ok2 = smooth & (np.abs(sgn) >= CREASE_COS)
+    m = n_seg + np.where((sgn > 0.0)[:, None], own, -own)
+    lm = norm(m)
+    ok2 &= lm > 0.0
+    m = m / np.where(lm > 0.0, lm, 1.0)[:, None]
+    sol = _solve3(eu, ev, m, p - a)
+    u2, v2 = sol[:, 0], sol[:, 1]
+    ok2 &= _inside(u2, v2)
+    w2 = _weights(np.where(ok2, u2, 0.0), np.where(ok2, v2, 0.0), kb, k1, quad)
+    pt2 = (X * w2[:, :, None]).sum(axis=1)
+    d2 = p - pt2
+    l2 = norm(d2)
+    ok2 &= (l2 > 0.0) & np.isfinite(l2) & (dot(d2, n_seg) > 0.0)
+    n_out = np.where(ok2[:, None], d2 / np.where(l2 > 0.0, l2, 1.0)[:, None], n_seg)
+    w_out = np.where(ok2[:, None], w2, w_seg)
+    return n_out, w_out
 
 
 def pushes(hits, nb, sb, surf, cfg, dt_ref):
@@ -278,6 +430,7 @@ def pushes(hits, nb, sb, surf, cfg, dt_ref):
     dist = hits["dist"]
     n = np.where((dist > 1e-9 * c)[:, None], d / np.where(dist > 0.0, dist, 1.0)[:, None],
                  np.where((dot(d, hits["fnormal"]) < 0.0)[:, None], -hits["fnormal"], hits["fnormal"]))
+    n, weights = smoothed_normal(hits, nb, sb, surf, n)
     seg = hits["seg"]
     m_star = np.minimum(nb.mass[node], surf.seg_mass[seg])
     s = cfg["penalty_scale"]
@@ -288,7 +441,7 @@ def pushes(hits, nb, sb, surf, cfg, dt_ref):
     fn = k * hits["depth"]
     xi = cfg["damping_ratio"]
     if xi > 0.0:
-        w = hits["weights"]
+        w = weights
         sn = surf.nodes[seg]
         vs = (sb.v[sn] * w[:, :, None]).sum(axis=1)
         vn = dot(nb.v[node] - vs, n)
@@ -296,7 +449,7 @@ def pushes(hits, nb, sb, surf, cfg, dt_ref):
     keep = (fn > 0.0) & np.isfinite(fn)
     if not np.any(keep):
         return None
-    return dict(node=node[keep], seg=seg[keep], weights=hits["weights"][keep],
+    return dict(node=node[keep], seg=seg[keep], weights=weights[keep],
                 depth=hits["depth"][keep], fn=fn[keep], force=n[keep] * fn[keep, None])
 
 
@@ -368,10 +521,18 @@ class ContactStage:
                 d = min(_element_form_dt(cfg, sa, sb), _element_form_dt(cfg, sb, sa))
                 dt[ia] = min(dt[ia], d)
                 dt[ib] = min(dt[ib], d)
-            dt_ref = REFERENCE_SAFETY * min(element_dt[ia], element_dt[ib])
-            if cfg["penalty"] == "soft" and not (math.isfinite(dt_ref) and dt_ref > 0.0):
-                continue
             self_pair = ia == ib
+            pair_dt = min(element_dt[ia], element_dt[ib])
+            if cfg["penalty"] == "soft" and not (math.isfinite(pair_dt) and pair_dt > 0.0):
+                continue
+            if cfg.get("speed_rule", "limit_dt") == "limit_dt" and not self_pair:
+                v = closing_speed(a, b)
+                if v > 0.0:
+                    d = CLOSING_FRACTION * 0.5 * (a.thickness + b.thickness) / v
+                    dt[ia] = min(dt[ia], d)
+                    dt[ib] = min(dt[ib], d)
+                    pair_dt = min(pair_dt, d)
+            dt_ref = REFERENCE_SAFETY * pair_dt
             first = pushes(search(a, b, sb, self_pair), a, b, sb, cfg, dt_ref)
             second = None if self_pair else pushes(search(b, a, sa, False), b, a, sa, cfg, dt_ref)
             st = dict(a=ida, b=idb, active=0, max_penetration=0.0, normal_force=0.0)

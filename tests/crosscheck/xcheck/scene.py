@@ -234,6 +234,7 @@ def load(path, end_time=None, output_interval=None):
         "penalty": c.get("penalty", "soft"),
         "penalty_scale": float(c.get("penalty_scale", 0.1)),
         "damping_ratio": float(c.get("damping_ratio", 0.0)),
+        "speed_rule": c.get("speed_rule", "limit_dt"),
     }
     materials = {k: _material(v) for k, v in spec.get("materials", {}).items()}
     scene_dir = os.path.dirname(os.path.abspath(path))

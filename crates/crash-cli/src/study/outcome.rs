@@ -28,8 +28,8 @@ pub enum Outcome {
         /// Largest penetration / thickness of the thinner body seen in any contact.
         max_penetration: f64,
         steps: u64,
-        /// Energy error above the scene's energy limit (`crash run` warns and exits with
-        /// 3) or penetration above crash-io's limit (a warning in summary.json).
+        /// Energy error above the scene's energy limit or penetration above crash-io's
+        /// limit (`crash run` warns and exits with 4).
         over_limit: bool,
     },
     Stopped {
@@ -68,6 +68,15 @@ impl Outcome {
     }
 }
 
+/// A pass-through check of a completed run: no node of `body` over the square
+/// |x|, |y| < `half_size` may end below the plane z = `z` (the plate's mid-surface).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PassGuard {
+    pub body: u32,
+    pub half_size: f64,
+    pub z: f64,
+}
+
 /// Watches every energy row and every frame for non-finite numbers.
 #[derive(Debug, Default)]
 struct Watch {
@@ -77,6 +86,9 @@ struct Watch {
     steps: u64,
     /// Step of the frame being received.
     frame_step: u64,
+    guard: Option<PassGuard>,
+    /// Lowest node of the guarded body over the square in the last frame.
+    lowest: f64,
 }
 
 impl Watch {
@@ -125,6 +137,13 @@ impl Sink for Watch {
             let step = self.frame_step;
             self.flag(format!("non-finite state of body {} at step {step}", b.id));
         }
+        if let Some(g) = self.guard.filter(|g| g.body == b.id) {
+            self.lowest =
+                b.x.iter()
+                    .filter(|p| p.x.abs() < g.half_size && p.y.abs() < g.half_size)
+                    .map(|p| p.z - g.z)
+                    .fold(f64::INFINITY, f64::min);
+        }
         Ok(())
     }
 
@@ -140,7 +159,21 @@ impl Sink for Watch {
 /// Run `input` through the master loop (one in-process worker, like `crash run`) and
 /// classify what happened.
 pub fn run_and_classify(input: RunInput, energy_limit: f64) -> Outcome {
-    let mut watch = Watch::default();
+    run_and_classify_guarded(input, energy_limit, None)
+}
+
+/// The same with a pass-through check of the final state: a completed run with a node
+/// on the far side of the plate is a silent failure.
+pub fn run_and_classify_guarded(
+    input: RunInput,
+    energy_limit: f64,
+    guard: Option<PassGuard>,
+) -> Outcome {
+    let mut watch = Watch {
+        guard,
+        lowest: f64::INFINITY,
+        ..Watch::default()
+    };
     let result = run_with(
         input,
         &mut LocalWorker::many(1),
@@ -170,6 +203,14 @@ fn classify(result: Result<RunStats, MasterError>, w: &Watch, energy_limit: f64)
             if !(stats.max_energy_error.is_finite() && last.is_finite()) {
                 return Outcome::SilentBlowUp {
                     reason: "non-finite energy-balance error".into(),
+                };
+            }
+            if w.guard.is_some() && w.lowest < 0.0 {
+                return Outcome::SilentBlowUp {
+                    reason: format!(
+                        "finished with a node {:.3e} m below the plate's mid-surface: a silent pass-through",
+                        -w.lowest
+                    ),
                 };
             }
             if last.abs() > SILENT_ERROR {

@@ -4,7 +4,7 @@
 //! (a time step above the critical one) or to meet the mesh check head-on.
 
 use super::build::body;
-use super::outcome::{refused, run_and_classify, Outcome};
+use super::outcome::{refused, run_and_classify, run_and_classify_guarded, Outcome, PassGuard};
 use crash_core::contact::ContactConfig;
 use crash_core::shapes::{plate, ElementKind};
 use crash_core::{Material, RunConfig, Vec3};
@@ -163,6 +163,89 @@ position = [{x:e}, 0.0, 0.0]
 }
 
 /// Parse, build and check a scene as `crash run` does, then run it.
+/// A thin steel tube (R = 25 mm, length 60 mm, 32 x 12 cells, triangles or quads)
+/// thrown sideways at `speed` onto a fixed steel plate (0.12 m, t = 1 mm, 24 x 24 cells
+/// of the same kind, every node held), run until it has travelled 1.5 diameters (or
+/// 0.3 ms at low speed): the speed x thickness x element-kind matrix of issue 12. A
+/// completed run is checked for a pass-through: no tube node over the plate may end
+/// below the plate's mid-surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Thrown {
+    pub speed: f64,
+    /// Tube wall thickness [m].
+    pub t: f64,
+    pub kind: ElementKind,
+}
+
+const TUBE_R: f64 = 0.025;
+const THROWN_PLATE: f64 = 0.12;
+
+impl Thrown {
+    pub fn scene(&self) -> String {
+        let tp = 1e-3;
+        let kind = match self.kind {
+            ElementKind::Tri => "tri",
+            ElementKind::Quad => "quad",
+        };
+        let gap = 1e-4;
+        let end = (gap + 3.0 * TUBE_R) / self.speed;
+        let end = end.min(3e-4);
+        format!(
+            r#"name = "matrix-thrown"
+end_time = {end:e}
+output_interval = {out:e}
+
+[materials.steel]
+density = 7800.0
+young = 200.0e9
+poisson = 0.3
+
+[[bodies]]
+name = "plate"
+material = "steel"
+thickness = {tp:e}
+element = "{kind}"
+plate = {{ size = [{THROWN_PLATE:e}, {THROWN_PLATE:e}], cells = [24, 24] }}
+
+[[bodies.fix]]
+select = "all"
+dofs = "all"
+
+[[bodies]]
+name = "tube"
+material = "steel"
+thickness = {t:e}
+element = "{kind}"
+cylinder = {{ radius = {TUBE_R:e}, length = 0.06, cells = [32, 12] }}
+rotation = {{ axis = [1.0, 0.0, 0.0], angle = 90.0 }}
+position = [0.0, 0.0, {z:e}]
+velocity = [0.0, 0.0, {v:e}]
+"#,
+            out = end / 4.0,
+            t = self.t,
+            z = TUBE_R + 0.5 * (self.t + tp) + gap,
+            v = -self.speed,
+        )
+    }
+
+    pub fn run(&self) -> Outcome {
+        let built = match crash_scene::parse(&self.scene(), "matrix.toml").and_then(|s| s.build()) {
+            Ok(b) => b,
+            Err(e) => return refused(e),
+        };
+        if let Some(p) = crash_scene::check_initial_overlap(&built.bodies, &built.contact) {
+            return refused(crate::run::penetration_message(&built, &p));
+        }
+        let limit = built.energy_limit;
+        let guard = PassGuard {
+            body: 1,
+            half_size: 0.5 * THROWN_PLATE,
+            z: 0.0,
+        };
+        run_and_classify_guarded(RunInput::from_built(built), limit, Some(guard))
+    }
+}
+
 pub fn run_scene(text: &str, forced_safety: Option<f64>) -> Outcome {
     let built = match crash_scene::parse(text, "stability.toml").and_then(|s| s.build()) {
         Ok(b) => b,

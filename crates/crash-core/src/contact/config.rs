@@ -17,6 +17,24 @@ pub enum PenaltyKind {
     Element,
 }
 
+/// What keeps a node from crossing a contact slab in one step at high speed
+/// (docs/theory-contact.md, "Fast motion").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpeedRule {
+    /// The time step of every candidate pair's bodies is limited by their closing
+    /// speed (`CLOSING_FRACTION` of the contact distance per step), and the soft
+    /// penalty's reference step with it; a crossing that happens anyway stops the run.
+    #[default]
+    LimitDt,
+    /// No limit from speed: a crossing stops the run.
+    Stop,
+}
+
+/// Most a node may close on a segment in one step, as a fraction of the contact
+/// distance c = (t_node + t_segment)/2, under `SpeedRule::LimitDt`.
+pub const CLOSING_FRACTION: f64 = 0.2;
+
 /// Fraction of a pair's smallest element critical step used as the reference step of
 /// the soft penalty (the industry safety factor; docs/theory-contact.md).
 pub const REFERENCE_SAFETY: f64 = 0.9;
@@ -38,6 +56,9 @@ pub struct ContactConfig {
     pub penalty: PenaltyKind,
     /// Contact damping as a fraction of critical (0 = off).
     pub damping_ratio: f64,
+    /// Fast motion: limit the time step by closing speed, or only stop at a crossing.
+    #[serde(default)]
+    pub speed_rule: SpeedRule,
 }
 
 impl Default for ContactConfig {
@@ -48,6 +69,7 @@ impl Default for ContactConfig {
             penalty_scale: 0.1,
             penalty: PenaltyKind::Soft,
             damping_ratio: 0.0,
+            speed_rule: SpeedRule::LimitDt,
         }
     }
 }

@@ -6,11 +6,15 @@ pub mod broad;
 pub mod config;
 pub mod narrow;
 pub mod segment;
+pub mod smooth;
 pub mod stage;
 pub mod surface;
+pub mod sweep;
 
 pub use broad::{candidate_pairs, BodyBox};
-pub use config::{ContactConfig, PenaltyKind, REFERENCE_SAFETY, SOFT_SCALE_LIMIT};
+pub use config::{
+    ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY, SOFT_SCALE_LIMIT,
+};
 pub use segment::{project, segments, Projection, Segment};
 pub use stage::{
     check_moves, contact_forces, initial_penetrations, ContactState, PairStats, Penetration,

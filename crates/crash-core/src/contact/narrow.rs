@@ -6,10 +6,15 @@
 
 use super::config::{ContactConfig, PenaltyKind};
 use super::segment::{project, Projection};
+use super::smooth::smoothed;
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
+
+/// Distances within this fraction of the contact distance of the closest one are a tie,
+/// won by the lowest segment index.
+pub const TIE: f64 = 1e-9;
 
 /// Nodes per parallel task (fixed: chunk results are concatenated in node order).
 const NODE_CHUNK: usize = 512;
@@ -51,6 +56,7 @@ fn box_distance(p: &Vec3, nodes: &[u32], x: &[Vec3]) -> f64 {
 pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit> {
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     let r = 0.5 * nb.def.section.thickness;
+    let tie = TIE * c;
     let (lo, hi) = reach_box(sb, nb);
     let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] && p[d] <= hi[d]);
     let chunks: Vec<Vec<Hit>> = nb
@@ -61,33 +67,42 @@ pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit>
         .map(|(ci, xs)| {
             let mut out = Vec::new();
             let mut cand = Vec::new();
+            let mut close: Vec<(Projection, u32)> = Vec::new();
             for (k, p) in xs.iter().enumerate() {
                 if !inside(p) {
                     continue;
                 }
                 let i = (ci * NODE_CHUNK + k) as u32;
                 surf.candidates(p, r, &mut cand);
-                let mut best: Option<(Projection, u32)> = None;
+                // every candidate within the tie tolerance of the closest one, then the
+                // lowest index among them: a function of the geometry, not of the
+                // candidates' order, and the same for distances equal up to round-off
+                // (a node over the shared edge of two segments)
+                close.clear();
+                let mut dmin = f64::INFINITY;
                 for &j in &cand {
                     if self_pass && surf.near_in_topology(i, j) {
                         continue;
                     }
                     let seg = &surf.segments[j as usize];
                     // cheap lower bound: distance to the segment's node box; skipping
-                    // only strictly worse candidates keeps the (dist, index) choice
+                    // only candidates beyond the tolerance keeps the choice
                     let lb = box_distance(p, seg.nodes(), &sb.state.x);
-                    if lb >= c || best.as_ref().is_some_and(|(b, _)| lb > b.dist) {
+                    if lb >= c || lb > dmin + tie {
                         continue;
                     }
                     let pr = project(p, seg, &sb.state.x);
-                    let better = match &best {
-                        None => true,
-                        Some((b, bj)) => pr.dist < b.dist || (pr.dist == b.dist && j < *bj),
-                    };
-                    if better {
-                        best = Some((pr, j));
+                    if pr.dist.is_nan() {
+                        continue;
                     }
+                    dmin = dmin.min(pr.dist);
+                    close.push((pr, j));
                 }
+                let best = close
+                    .iter()
+                    .filter(|(pr, _)| pr.dist <= dmin + tie)
+                    .min_by_key(|(_, j)| *j)
+                    .copied();
                 let Some((proj, j)) = best else { continue };
                 if proj.dist.is_nan() || proj.dist >= c {
                     continue;
@@ -112,6 +127,13 @@ pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit>
     chunks.into_iter().flatten().collect()
 }
 
+/// Nodal normals of a pass: of the segment body and of the node body.
+#[derive(Debug, Clone, Copy)]
+pub struct Normals<'a> {
+    pub segment: &'a [Vec3],
+    pub node: &'a [Vec3],
+}
+
 /// The penalty force of a hit, acting on the node (the segment nodes get minus it times
 /// their weights).
 #[derive(Debug, Clone, Copy)]
@@ -119,6 +141,8 @@ pub struct Push {
     pub hit: Hit,
     pub force: Vec3,
     pub normal_force: f64,
+    /// Weights of the point where the reaction acts on the segment's nodes (sum 1).
+    pub weights: [f64; 4],
 }
 
 /// Unit normal pointing from the segment to the node: the direction to the node, or
@@ -142,7 +166,11 @@ pub fn stiffness(cfg: &ContactConfig, surf: &Surface, m_star: f64, seg: u32, dt_
     }
 }
 
-/// Forces of the hits, f = (k depth - c_d v_n)+ n, in hit order.
+/// Forces of the hits, f = (k depth - c_d v_n)+ n, in hit order. The depth is the exact
+/// closest-point one; n and the point of the reaction come from the projection along the
+/// smoothed normal (`smooth::along_normal`, `normals.segment` the nodal normals of `sb`,
+/// or the closest point where that fails), averaged with the node's own normal
+/// (`smooth::common_normal`, `normals.node` those of `nb`).
 pub fn forces(
     hits: &[Hit],
     nb: &Body,
@@ -150,21 +178,36 @@ pub fn forces(
     surf: &Surface,
     cfg: &ContactConfig,
     dt_ref: f64,
+    normals: Normals<'_>,
 ) -> Vec<Push> {
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     hits.iter()
         .filter_map(|h| {
             let i = h.node as usize;
             let p = nb.state.x[i];
-            let n = normal(&p, &h.proj, c);
             let seg = &surf.segments[h.segment as usize];
+            // along the smoothed normal and the common normal, or the closest point
+            let n_cp = normal(&p, &h.proj, c);
+            let (n, weights) = match smoothed(
+                &p,
+                seg,
+                &h.proj,
+                &sb.state.x,
+                normals.segment,
+                &normals.node[i],
+                &n_cp,
+                c,
+            ) {
+                Some(s) => (s.direction, s.weights),
+                None => (n_cp, h.proj.weights),
+            };
             let m_star = nb.def.mass[i].min(surf.seg_mass[h.segment as usize]);
             let k = stiffness(cfg, surf, m_star, h.segment, dt_ref);
             let mut fn_ = k * h.depth;
             if cfg.damping_ratio > 0.0 {
                 let mut vs = Vec3::zeros();
                 for (q, &nd) in seg.nodes().iter().enumerate() {
-                    vs += sb.state.v[nd as usize] * h.proj.weights[q];
+                    vs += sb.state.v[nd as usize] * weights[q];
                 }
                 let vn = (nb.state.v[i] - vs).dot(&n);
                 fn_ -= 2.0 * cfg.damping_ratio * (k * m_star).sqrt() * vn;
@@ -174,6 +217,7 @@ pub fn forces(
                 hit: *h,
                 force: n * fn_,
                 normal_force: fn_,
+                weights,
             })
         })
         .collect()

@@ -44,6 +44,11 @@ pub struct Projection {
     /// Unit normal of the (sub-)triangle that holds the closest point (used only when
     /// the node lies on the mid-surface and the direction to it is undefined).
     pub face_normal: Vec3,
+    /// The (sub-)triangle that holds the closest point (0 for a triangle, k = 0..3 for
+    /// the quad's (centroid, x_k, x_{k+1})) and the closest point's barycentric weights
+    /// on it (corner order as listed).
+    pub sub: u8,
+    pub bary: [f64; 3],
 }
 
 /// Closest point on triangle abc to p as barycentric weights (Ericson, Real-Time
@@ -111,6 +116,8 @@ pub fn project(p: &Vec3, seg: &Segment, x: &[Vec3]) -> Projection {
             point,
             weights: [w[0], w[1], w[2], 0.0],
             face_normal: unit_normal(&xs[0], &xs[1], &xs[2]),
+            sub: 0,
+            bary: w,
         };
     }
     let c = (xs[0] + xs[1] + xs[2] + xs[3]) * 0.25;
@@ -131,6 +138,8 @@ pub fn project(p: &Vec3, seg: &Segment, x: &[Vec3]) -> Projection {
                 point,
                 weights,
                 face_normal: unit_normal(&c, &a, &b),
+                sub: k as u8,
+                bary: w,
             });
         }
     }
@@ -140,6 +149,8 @@ pub fn project(p: &Vec3, seg: &Segment, x: &[Vec3]) -> Projection {
         point: c,
         weights: [0.25; 4],
         face_normal: Vec3::z(),
+        sub: 0,
+        bary: [1.0, 0.0, 0.0],
     })
 }
 

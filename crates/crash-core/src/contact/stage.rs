@@ -8,10 +8,12 @@
 //! with a contact add anything, so a body's forces depend only on the bodies it touches.
 
 use super::broad::{candidate_pairs, BodyBox};
-use super::config::{ContactConfig, PenaltyKind, REFERENCE_SAFETY};
-use super::narrow::{forces, search, Hit, Push};
+use super::config::{ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY};
+use super::narrow::{forces, search, Hit, Normals, Push};
 use super::segment::Segment;
+use super::smooth::nodal_normals;
 use super::surface::Surface;
+use super::sweep::{closing_speed, first_crossing};
 use crate::body::Body;
 use crate::error::Fault;
 use crate::Vec3;
@@ -102,16 +104,53 @@ fn element_form_dt(cfg: &ContactConfig, nb: &Surface, surf: &Surface) -> f64 {
     (2.0 * m_over_k).sqrt()
 }
 
+/// The crossing check of a pair (both passes), as a fault naming both bodies.
+fn check_crossing(
+    a: &Body,
+    b: &Body,
+    sa: &Surface,
+    sb: &Surface,
+    h: f64,
+    step: u64,
+) -> Result<(), Fault> {
+    let self_pair = a.def.id == b.def.id;
+    let mut passes = vec![(a, b, sb)];
+    if !self_pair {
+        passes.push((b, a, sa));
+    }
+    for (nb, segb, surf) in passes {
+        if let Some(c) = first_crossing(nb, segb, surf, self_pair, h) {
+            return Err(Fault::PassThrough {
+                step,
+                body: nb.def.id,
+                body_name: nb.def.name.clone(),
+                node: c.node,
+                other: segb.def.id,
+                other_name: segb.def.name.clone(),
+                segment: c.segment,
+                closing_speed: c.closing_speed,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Compute contact forces at the current positions into `f_contact` of every contact
 /// body. `element_dt[k]` is body k's element critical step of this force pass (sets the
-/// soft penalty's reference step: REFERENCE_SAFETY times the smaller of the pair's).
-/// Returns the contact stable step per body (infinite where contact sets no limit).
+/// soft penalty's reference step: REFERENCE_SAFETY times the smaller of the pair's, and
+/// of the pair's closing-speed step under `SpeedRule::LimitDt`). `h` is the step that
+/// led to the current positions (0 at the start) and `step` its number: every node of a
+/// candidate pair is first checked for a crossing within that step (a crossing is a
+/// `Fault::PassThrough`). Returns the contact stable step per body (infinite where
+/// contact sets no limit).
 pub fn contact_forces(
     bodies: &mut [Body],
     cfg: &ContactConfig,
     state: &mut ContactState,
     element_dt: &[f64],
-) -> Vec<f64> {
+    h: f64,
+    step: u64,
+) -> Result<Vec<f64>, Fault> {
     let mut dt = vec![f64::INFINITY; bodies.len()];
     state.stats.clear();
     for b in bodies.iter_mut() {
@@ -123,7 +162,7 @@ pub fn contact_forces(
         }
     }
     if !cfg.enabled {
-        return dt;
+        return Ok(dt);
     }
     let pairs = pairs_of(bodies, cfg);
     for &(ia, ib) in &pairs {
@@ -138,21 +177,59 @@ pub fn contact_forces(
         else {
             continue;
         };
+        check_crossing(a, b, sa, sb, h, step)?;
         if cfg.penalty == PenaltyKind::Element {
             let d = element_form_dt(cfg, sa, sb).min(element_form_dt(cfg, sb, sa));
             dt[ia] = dt[ia].min(d);
             dt[ib] = dt[ib].min(d);
         }
-        let dt_ref = REFERENCE_SAFETY * element_dt[ia].min(element_dt[ib]);
-        if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
+        let self_pair = ia == ib;
+        let mut pair_dt = element_dt[ia].min(element_dt[ib]);
+        if cfg.penalty == PenaltyKind::Soft && !(pair_dt.is_finite() && pair_dt > 0.0) {
             continue; // two kinematic bodies: contact cannot move anything
         }
-        let self_pair = ia == ib;
-        let first = forces(&search(a, b, sb, self_pair), a, b, sb, cfg, dt_ref);
+        if cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
+            let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+            let v = closing_speed(a, b);
+            if v > 0.0 {
+                let d = CLOSING_FRACTION * c / v;
+                dt[ia] = dt[ia].min(d);
+                dt[ib] = dt[ib].min(d);
+                pair_dt = pair_dt.min(d);
+            }
+        }
+        let dt_ref = REFERENCE_SAFETY * pair_dt;
+        if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
+            continue;
+        }
+        let (na, nb_) = (nodal_normals(a), nodal_normals(b));
+        let first = forces(
+            &search(a, b, sb, self_pair),
+            a,
+            b,
+            sb,
+            cfg,
+            dt_ref,
+            Normals {
+                segment: &nb_,
+                node: &na,
+            },
+        );
         let second = if self_pair {
             Vec::new()
         } else {
-            forces(&search(b, a, sa, false), b, a, sa, cfg, dt_ref)
+            forces(
+                &search(b, a, sa, false),
+                b,
+                a,
+                sa,
+                cfg,
+                dt_ref,
+                Normals {
+                    segment: &na,
+                    node: &nb_,
+                },
+            )
         };
         let mut st = PairStats {
             a: a.def.id,
@@ -177,7 +254,7 @@ pub fn contact_forces(
         st.max_penetration_ratio = st.max_penetration / thin;
         state.stats.push(st);
     }
-    dt
+    Ok(dt)
 }
 
 /// Add the pushes of one pass: +f on the node of body `inode`, -w_k f on the segment
@@ -195,7 +272,7 @@ fn apply(
         bodies[inode].state.f_contact[p.hit.node as usize] += p.force;
         let fc = &mut bodies[iseg].state.f_contact;
         for (q, &n) in seg.nodes().iter().enumerate() {
-            fc[n as usize] -= p.force * p.hit.proj.weights[q];
+            fc[n as usize] -= p.force * p.weights[q];
         }
         st.max_penetration = st.max_penetration.max(p.hit.depth);
         st.normal_force += p.normal_force;

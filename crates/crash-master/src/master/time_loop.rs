@@ -8,7 +8,7 @@ use crate::input::BodySource;
 use crate::input::CostModel;
 use crate::sink::Sink;
 use crash_core::contact::BodyBox;
-use crash_core::driver::{check_runaway, choose_dt};
+use crash_core::driver::{check_runaway, choose_dt, step_length};
 use crash_core::{BodyBrief, Clock, EnergyTotals, Fault};
 use crash_link::{BodyLoad, Command, Setup, WorkerLink};
 use std::time::Instant;
@@ -67,13 +67,13 @@ impl<L: WorkerLink> Master<'_, L> {
     /// One global step (the last one shortened to land on the end time).
     pub(crate) fn step(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
         let _span = tracing::debug_span!("step", step = self.clock.step).entered();
-        let mut h = self.next_dt;
-        let left = self.cfg.end_time - self.clock.time;
-        if left < h && left > 0.0 {
-            h = left;
+        let (h, short) = step_length(self.next_dt, self.cfg.end_time - self.clock.time);
+        if short {
+            self.stats.last_dt = h;
+        } else {
+            self.stats.dt_min = self.stats.dt_min.min(h);
+            self.stats.dt_max = self.stats.dt_max.max(h);
         }
-        self.stats.dt_min = self.stats.dt_min.min(h);
-        self.stats.dt_max = self.stats.dt_max.max(h);
         let t0 = Instant::now();
         let at = self.clock;
         let reps = {
@@ -94,9 +94,10 @@ impl<L: WorkerLink> Master<'_, L> {
         let t1 = Instant::now();
         let _s = tracing::debug_span!("meim").entered();
         self.gather(reps)?;
-        let energy = self
-            .ledger
-            .update(EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)));
+        let energy = self.ledger.record(
+            EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)),
+            !short,
+        );
         self.runaway(&energy)?;
         self.next_dt = self.choose_dt()?;
         self.check_margin()?;
@@ -156,13 +157,24 @@ impl<L: WorkerLink> Master<'_, L> {
         Ok(())
     }
 
-    /// Final frame (the state hash) and statistics.
-    pub(crate) fn finish(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
-        self.output(sink, true)?;
+    /// Where the run stands, into the statistics (also after a fault: steps done, time
+    /// reached, the energy figure so far).
+    pub(crate) fn record_progress(&mut self) {
         self.stats.steps = self.clock.step;
         self.stats.time = self.clock.time;
         self.stats.workers = self.links.len();
         self.stats.max_energy_error = self.ledger.max_error();
+        if !self.stats.dt_min.is_finite() && self.stats.last_dt > 0.0 {
+            // only a shortened step was taken
+            self.stats.dt_min = self.stats.last_dt;
+            self.stats.dt_max = self.stats.last_dt;
+        }
+    }
+
+    /// Final frame (the state hash) and statistics.
+    pub(crate) fn finish(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        self.output(sink, true)?;
+        self.record_progress();
         self.stats.final_groups = self
             .meim
             .groups()

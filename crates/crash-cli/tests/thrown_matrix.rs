@@ -1,0 +1,68 @@
+//! Issue 12's matrix: a thin tube thrown onto a fixed plate at 50 to 5000 m/s, two
+//! wall thicknesses, triangles and quads. Every cell completes with no pass-through and
+//! an energy-balance error under 5 % or a warning that names it (exit code 4), or stops
+//! with a named diagnostic: zero silent cells. The quick cells run here; `crash study
+//! stability` runs them all and writes docs/stability.md.
+
+use crash_cli::study::matrix::{cells, CellResult, Scenario};
+use crash_cli::study::outcome::Outcome;
+use std::time::Instant;
+
+fn run(quick_only: bool) -> Vec<CellResult> {
+    cells()
+        .into_iter()
+        .filter(|c| matches!(c.scenario, Scenario::Thrown(_)) && (!quick_only || c.quick))
+        .map(|cell| {
+            let t = Instant::now();
+            let outcome = cell.scenario.run();
+            let r = CellResult {
+                cell,
+                outcome,
+                wall_s: t.elapsed().as_secs_f64(),
+            };
+            println!(
+                "{} = {}: {:?} ({:.2} s)",
+                r.cell.axis, r.cell.value, r.outcome, r.wall_s
+            );
+            r
+        })
+        .collect()
+}
+
+fn check(res: &[CellResult]) {
+    for r in res {
+        assert!(
+            !r.outcome.is_silent_blow_up(),
+            "{}: {:?}",
+            r.cell.value,
+            r.outcome
+        );
+        assert!(r.as_expected(), "{}: {:?}", r.cell.value, r.outcome);
+        match &r.outcome {
+            // a stop names its cause and the step
+            Outcome::Stopped { message, .. } => assert!(message.contains("step"), "{message}"),
+            // above 5 %: warned, never quietly
+            Outcome::Stable {
+                max_error,
+                over_limit,
+                ..
+            } => assert!(*max_error < 0.05 || *over_limit, "{}", r.cell.value),
+            Outcome::SilentBlowUp { .. } => unreachable!(),
+        }
+    }
+}
+
+#[test]
+fn thrown_tube_cells_never_pass_through_silently() {
+    let res = run(true);
+    assert_eq!(res.len(), 4, "two speeds x two element kinds");
+    check(&res);
+}
+
+#[test]
+#[ignore = "the whole matrix, about a minute: cargo test --release -p crash-cli --test thrown_matrix -- --ignored"]
+fn every_thrown_tube_cell_is_completed_warned_or_stopped_never_silent() {
+    let res = run(false);
+    assert_eq!(res.len(), 20);
+    check(&res);
+}

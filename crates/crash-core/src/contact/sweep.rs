@@ -1,0 +1,211 @@
+//! Fast motion: the closing-speed time step limit of a candidate pair and the swept
+//! crossing check (docs/theory-contact.md, "Fast motion").
+//!
+//! *Closing speed.* For a pair (a, b) the speed of any node of a relative to any point
+//! of b is at most `max_i |v_i - u| + max_j |v_j - u|` for any common velocity u; crash
+//! takes the smaller of the bounds with u = the centre-of-mass velocity of a and of b.
+//! Under `SpeedRule::LimitDt` the pair's step is limited to
+//! `CLOSING_FRACTION * c / v_close`, c = (t_a + t_b)/2.
+//!
+//! *Crossing.* A node crossed a segment in the step x_n -> x_{n+1} if its signed
+//! distance to the plane of a (sub-)triangle of the segment changed sign and, at the
+//! time where the linearly interpolated distance vanishes, the node lies within
+//! `CROSSING_TOLERANCE * c` of that (sub-)triangle. x_n is recovered as
+//! x_{n+1} - h v_{n+1/2} (the positions the step moved from, to round-off): the check is
+//! a function of the state after the step only.
+
+use super::segment::{triangle_weights, Segment};
+use super::surface::Surface;
+use crate::body::Body;
+use crate::Vec3;
+use rayon::prelude::*;
+
+/// Largest distance of the node to the crossed (sub-)triangle at the crossing time, as
+/// a fraction of the contact distance c. A node that goes round the rounded edge of a
+/// slab at contact distance stays about c from the edge; one that goes through the
+/// mid-surface is at 0 (up to the rotation of the facet within the step).
+pub const CROSSING_TOLERANCE: f64 = 0.25;
+
+/// Nodes per parallel task of the crossing check (fixed, results in node order).
+const NODE_CHUNK: usize = 512;
+
+/// Centre-of-mass velocity of a body (mass-weighted mean of v).
+fn mean_velocity(b: &Body) -> Vec3 {
+    let mut p = Vec3::zeros();
+    let mut m = 0.0;
+    for (v, mi) in b.state.v.iter().zip(&b.def.mass) {
+        p += v * *mi;
+        m += mi;
+    }
+    if m > 0.0 {
+        p / m
+    } else {
+        Vec3::zeros()
+    }
+}
+
+fn max_speed_rel(b: &Body, u: &Vec3) -> f64 {
+    b.state.v.iter().map(|v| (v - u).norm()).fold(0.0, f64::max)
+}
+
+/// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
+pub fn closing_speed(a: &Body, b: &Body) -> f64 {
+    let (ua, ub) = (mean_velocity(a), mean_velocity(b));
+    let with_a = max_speed_rel(a, &ua) + max_speed_rel(b, &ua);
+    let with_b = max_speed_rel(a, &ub) + max_speed_rel(b, &ub);
+    with_a.min(with_b)
+}
+
+/// A node that crossed a segment's mid-surface in the step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crossing {
+    pub node: usize,
+    pub segment: usize,
+    /// |normal relative speed| of the node and the crossed point [m/s].
+    pub closing_speed: f64,
+}
+
+/// Signed distance of p to the plane of (a, b, c) and the unit normal (None if the
+/// triangle is degenerate).
+fn plane(p: &Vec3, a: &Vec3, b: &Vec3, c: &Vec3) -> Option<(f64, Vec3)> {
+    let n = (b - a).cross(&(c - a));
+    let l = n.norm();
+    (l > 0.0).then(|| {
+        let n = n / l;
+        ((p - a).dot(&n), n)
+    })
+}
+
+/// The crossing of one (sub-)triangle, given its corners before (`t0`) and after (`t1`)
+/// the step and the node before and after; returns the crossing time fraction.
+fn crosses(p0: &Vec3, p1: &Vec3, t0: &[Vec3; 3], t1: &[Vec3; 3], c: f64) -> Option<f64> {
+    let (d0, _) = plane(p0, &t0[0], &t0[1], &t0[2])?;
+    let (d1, _) = plane(p1, &t1[0], &t1[1], &t1[2])?;
+    let flipped = (d0 > 0.0 && d1 <= 0.0) || (d0 < 0.0 && d1 >= 0.0);
+    if !flipped {
+        return None;
+    }
+    let tau = d0 / (d0 - d1);
+    let at = |x0: &Vec3, x1: &Vec3| x0 + (x1 - x0) * tau;
+    let p = at(p0, p1);
+    let (a, b, cc) = (at(&t0[0], &t1[0]), at(&t0[1], &t1[1]), at(&t0[2], &t1[2]));
+    let w = triangle_weights(&p, &a, &b, &cc);
+    let q = a * w[0] + b * w[1] + cc * w[2];
+    ((p - q).norm() <= CROSSING_TOLERANCE * c).then_some(tau)
+}
+
+/// The (sub-)triangles of a segment with their corner weights: a triangle is itself;
+/// a quad is split into four around its centroid, as in the projection.
+fn sub_triangles(seg: &Segment, x: &[Vec3]) -> ([[Vec3; 3]; 4], [[f64; 4]; 12], usize) {
+    let xs = seg.nodes.map(|n| x[n as usize]);
+    let mut tris = [[Vec3::zeros(); 3]; 4];
+    // weights of each corner on the segment's nodes (corner k of triangle j: row 3j+k)
+    let mut w = [[0.0; 4]; 12];
+    if seg.count == 3 {
+        tris[0] = [xs[0], xs[1], xs[2]];
+        w[0][0] = 1.0;
+        w[1][1] = 1.0;
+        w[2][2] = 1.0;
+        return (tris, w, 1);
+    }
+    let c = (xs[0] + xs[1] + xs[2] + xs[3]) * 0.25;
+    for k in 0..4 {
+        tris[k] = [c, xs[k], xs[(k + 1) % 4]];
+        w[3 * k] = [0.25; 4];
+        w[3 * k + 1][k] = 1.0;
+        w[3 * k + 2][(k + 1) % 4] = 1.0;
+    }
+    (tris, w, 4)
+}
+
+/// The first node of `nb` (in node order) that crossed a segment of `sb` in the step of
+/// length h, with the segment it crossed (lowest index among those it crossed).
+/// `self_pass`: the same body; segments excluded from self-contact are not checked.
+pub fn first_crossing(
+    nb: &Body,
+    sb: &Body,
+    surf: &Surface,
+    self_pass: bool,
+    h: f64,
+) -> Option<Crossing> {
+    if h <= 0.0 {
+        return None;
+    }
+    let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
+    let xb1 = &sb.state.x;
+    let xb0: Vec<Vec3> = xb1
+        .iter()
+        .zip(&sb.state.v)
+        .map(|(x, v)| x - v * h)
+        .collect();
+    let seg_move = sb.state.v.iter().map(|v| v.norm() * h).fold(0.0, f64::max);
+    let (lo, hi) = super::narrow::reach_box(sb, nb);
+    let chunks: Vec<Option<Crossing>> = nb
+        .state
+        .x
+        .par_chunks(NODE_CHUNK)
+        .enumerate()
+        .map(|(ci, xs)| {
+            let mut cand = Vec::new();
+            for (k, p1) in xs.iter().enumerate() {
+                let i = ci * NODE_CHUNK + k;
+                let v = nb.state.v[i];
+                let p0 = p1 - v * h;
+                let r = v.norm() * h + seg_move;
+                let grown = |d: usize| p1[d] >= lo[d] - r && p1[d] <= hi[d] + r;
+                if !(0..3).all(grown) {
+                    continue;
+                }
+                surf.candidates(p1, r, &mut cand);
+                cand.sort_unstable();
+                for &j in &cand {
+                    if self_pass && surf.near_in_topology(i as u32, j) {
+                        continue;
+                    }
+                    let seg = &surf.segments[j as usize];
+                    let (t1, w, n) = sub_triangles(seg, xb1);
+                    let (t0, _, _) = sub_triangles(seg, &xb0);
+                    for s in 0..n {
+                        let Some(tau) = crosses(&p0, p1, &t0[s], &t1[s], c) else {
+                            continue;
+                        };
+                        if self_pass {
+                            let x0 = &nb.def.x0;
+                            let pr = super::segment::project(&x0[i], seg, &sb.def.x0);
+                            if pr.dist < c {
+                                continue;
+                            }
+                        }
+                        // relative velocity of the node and the crossed point
+                        let pt = p0 + (p1 - p0) * tau;
+                        let corners: Vec<Vec3> = (0..3)
+                            .map(|q| t0[s][q] + (t1[s][q] - t0[s][q]) * tau)
+                            .collect();
+                        let bw = triangle_weights(&pt, &corners[0], &corners[1], &corners[2]);
+                        let mut vs = Vec3::zeros();
+                        for q in 0..3 {
+                            for (m, &nd) in seg.nodes().iter().enumerate() {
+                                vs += sb.state.v[nd as usize] * (bw[q] * w[3 * s + q][m]);
+                            }
+                        }
+                        let normal = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
+                        let l = normal.norm();
+                        let rel = v - vs;
+                        let closing = if l > 0.0 {
+                            (rel.dot(&normal) / l).abs()
+                        } else {
+                            rel.norm()
+                        };
+                        return Some(Crossing {
+                            node: i,
+                            segment: j as usize,
+                            closing_speed: closing,
+                        });
+                    }
+                }
+            }
+            None
+        })
+        .collect();
+    chunks.into_iter().flatten().next()
+}

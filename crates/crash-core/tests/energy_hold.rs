@@ -1,0 +1,82 @@
+//! Issue 12, point 5 (the parts the core meets without element changes): a free plate
+//! of triangles spinning about a non-principal axis (torque-free precession, 10
+//! revolutions) and the free 10 x 1 triangle strip in free vibration hold their energy
+//! balance to 1e-4 (docs/theory.md section 8 recorded 2e-3 after ~8 turns and
+//! docs/stability.md 17 % before triangles got the larger rotary inertia and the 0.8 step
+//! factor). The quad plate still drifts (1.5e-3): recorded, with its bound, as open.
+
+mod common;
+
+use common::*;
+use crash_core::shapes::{plate, ElementKind};
+use crash_core::{Group, Run, RunConfig, Vec3};
+
+/// Largest energy-balance error of a free 2 x 2 plate spinning at 2 rad/s about a
+/// non-principal axis for 10 revolutions.
+fn precession_error(kind: ElementKind) -> f64 {
+    {
+        let m = plate(0.1, 0.1, 2, 2, kind);
+        let mut b = body(&m, steel(), 0.002);
+        // an axis that is no principal axis of the square plate
+        let omega = Vec3::new(0.3, 0.5, 1.0).normalize() * 2.0;
+        b.set_rigid_velocity(Vec3::zeros(), omega, Vec3::zeros());
+        let end = 10.0 * std::f64::consts::TAU / omega.norm();
+        let mut run = Run::new(
+            Group::new(vec![b], Vec3::zeros()),
+            RunConfig {
+                end_time: end,
+                ..Default::default()
+            },
+        )
+        .expect("start");
+        run.run(|_| {}).expect("run");
+        let err = run.ledger.max_error();
+        println!(
+            "{kind:?}: {} steps, energy-balance error {err:.3e}",
+            run.clock.step
+        );
+        err
+    }
+}
+
+#[test]
+fn free_triangle_plate_precessing_for_10_revolutions_holds_energy_to_1e_4() {
+    let err = precession_error(ElementKind::Tri);
+    assert!(err < 1e-4, "{err}");
+}
+
+/// Open: the quad's nodal rotary inertia (factor 1/8; 1/2 as for triangles would cure
+/// the drift but breaks the roll-up cantilever) lets the shear-rotation mode grow.
+#[test]
+fn free_quad_plate_precessing_for_10_revolutions_stays_below_its_recorded_2e_3() {
+    let err = precession_error(ElementKind::Quad);
+    assert!(err < 2e-3, "{err}");
+}
+
+#[test]
+fn free_triangle_strip_10_by_1_holds_energy_to_1e_4() {
+    let (lx, ly) = (1.0, 0.1);
+    let m = plate(lx, ly, 10, 1, ElementKind::Tri);
+    let mut b = body(&m, steel(), 0.002);
+    for i in 0..b.state.x.len() {
+        let p = b.def.x0[i];
+        // the stability study's field: transverse, inconsistent with the (zero) rotations
+        b.state.v[i] = Vec3::new(
+            0.0,
+            0.0,
+            0.5 * (std::f64::consts::PI * p.x / lx).cos() * (p.y / ly),
+        );
+    }
+    let mut run = Run::new(
+        Group::new(vec![b], Vec3::zeros()),
+        RunConfig {
+            end_time: 5e-3,
+            ..Default::default()
+        },
+    )
+    .expect("start");
+    run.run(|_| {}).expect("run");
+    let err = run.ledger.max_error();
+    println!("{} steps, energy-balance error {err:.3e}", run.clock.step);
+    assert!(err < 1e-4, "{err}");
+}
