@@ -175,23 +175,7 @@ pub fn out_dir(name: &str) -> PathBuf {
 
 /// Start a master on a free loopback port; returns it and the workers' URL.
 pub fn master(scene: &Path, workers: usize, out: &Path, extra: &[&str]) -> (Proc, String) {
-    let w = workers.to_string();
-    let mut args = vec![
-        scene.to_str().unwrap(),
-        "--listen",
-        "127.0.0.1:0",
-        "--workers",
-        &w,
-        "--out",
-        out.to_str().unwrap(),
-        "--accept-timeout",
-        "60",
-    ];
-    args.extend_from_slice(extra);
-    let m = Proc::spawn("crash-master", &master_bin(), &args);
-    let line = m.expect_line("listening on", Duration::from_secs(60));
-    let addr = line.rsplit(' ').next().unwrap().trim().to_string();
-    (m, format!("http://{addr}"))
+    master_env(scene, workers, out, extra, &[])
 }
 
 /// As `master`, with environment variables set (e.g. CRASH_SECRET).
@@ -222,10 +206,7 @@ pub fn master_env(
 }
 
 pub fn worker(url: &str, threads: usize, extra: &[&str]) -> Proc {
-    let t = threads.to_string();
-    let mut args = vec!["--master", url, "--threads", &t, "--connect-timeout", "30"];
-    args.extend_from_slice(extra);
-    Proc::spawn("crash-worker", &worker_bin(), &args)
+    worker_env(url, threads, extra, &[])
 }
 
 /// As `worker`, with environment variables set (e.g. CRASH_SECRET).

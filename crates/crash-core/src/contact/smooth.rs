@@ -187,21 +187,7 @@ pub fn along_normal(
         v -= d.y;
         lambda -= d.z;
     }
-    let t = OUTSIDE_TOLERANCE;
-    if !(u >= -t && v >= -t && u + v <= 1.0 + t && u.is_finite() && v.is_finite()) {
-        return None;
-    }
-    let w0 = 1.0 - u - v;
-    let mut weights = [0.0; 4];
-    if seg.count == 3 {
-        weights[0] = w0;
-        weights[1] = u;
-        weights[2] = v;
-    } else {
-        weights = [0.25 * w0; 4];
-        weights[k] += u;
-        weights[(k + 1) % 4] += v;
-    }
+    let weights = sub_triangle_weights(seg.count == 3, k, u, v)?;
     let point = xs[0] * weights[0] + xs[1] * weights[1] + xs[2] * weights[2] + xs[3] * weights[3];
     let d = p - point;
     let l = d.norm();
@@ -255,21 +241,7 @@ pub fn common_normal(
     let r = p - a;
     let sol = solve3(&eu, &ev, &m, &r)?;
     let (u, v) = (sol.x, sol.y);
-    let t = OUTSIDE_TOLERANCE;
-    if !(u >= -t && v >= -t && u + v <= 1.0 + t && u.is_finite() && v.is_finite()) {
-        return None;
-    }
-    let w0 = 1.0 - u - v;
-    let mut weights = [0.0; 4];
-    if seg.count == 3 {
-        weights[0] = w0;
-        weights[1] = u;
-        weights[2] = v;
-    } else {
-        weights = [0.25 * w0; 4];
-        weights[k] += u;
-        weights[(k + 1) % 4] += v;
-    }
+    let weights = sub_triangle_weights(seg.count == 3, k, u, v)?;
     let point = xs[0] * weights[0] + xs[1] * weights[1] + xs[2] * weights[2] + xs[3] * weights[3];
     let d = p - point;
     let l = d.norm();
@@ -280,4 +252,26 @@ pub fn common_normal(
         weights,
         direction: d / l,
     })
+}
+
+/// Nodal weights of the point (u, v) of sub-triangle `k` of a segment (a triangle's
+/// own nodes, or a quad's centre and nodes k, k+1), None when the point lies outside
+/// it by more than the tolerance.
+fn sub_triangle_weights(triangle: bool, k: usize, u: f64, v: f64) -> Option<[f64; 4]> {
+    let t = OUTSIDE_TOLERANCE;
+    if !(u >= -t && v >= -t && u + v <= 1.0 + t && u.is_finite() && v.is_finite()) {
+        return None;
+    }
+    let w0 = 1.0 - u - v;
+    let mut weights = [0.0; 4];
+    if triangle {
+        weights[0] = w0;
+        weights[1] = u;
+        weights[2] = v;
+    } else {
+        weights = [0.25 * w0; 4];
+        weights[k] += u;
+        weights[(k + 1) % 4] += v;
+    }
+    Some(weights)
 }
