@@ -197,6 +197,7 @@ fn step_report_round_trips_bit_exact() {
             nanos: 12345,
         }],
         compute_ns: 99,
+        codec_ns: 17,
         contacts: vec![crash_core::contact::PairStats {
             a: 0,
             b: 1,

@@ -28,6 +28,23 @@ pub struct BodyReport {
     pub hot_density: f64,
 }
 
+impl BodyReport {
+    /// A placeholder for body `id` before its first report (zero energies and box).
+    pub fn empty(id: u32) -> Self {
+        Self {
+            id,
+            energy: BodyEnergy::default(),
+            stable_dt: f64::INFINITY,
+            dt_element: 0,
+            lo: Vec3::zeros(),
+            hi: Vec3::zeros(),
+            max_move: 0.0,
+            hot_element: 0,
+            hot_density: 0.0,
+        }
+    }
+}
+
 /// A set of bodies integrated together.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Group {

@@ -233,6 +233,11 @@ pub struct Summary {
     pub wall_time_s: f64,
     /// Cost per element per step of each pipeline stage (and "total") [ns].
     pub ns_per_element_cycle: BTreeMap<String, f64>,
+    /// The barrier per step [us]: "median", and the means of its parts
+    /// ("master_codec", "worker_codec", "wire_wake") and of the master's own work
+    /// between steps ("master_work").
+    #[serde(default)]
+    pub barrier_us_per_step: BTreeMap<String, f64>,
     /// The run's energy-balance figure (relative): largest |imbalance| over the largest
     /// energy of the run.
     #[serde(deserialize_with = "nan_if_null")]

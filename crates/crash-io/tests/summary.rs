@@ -108,6 +108,7 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
         last_dt_s: 2e-8,
         wall_time_s: 12.5,
         ns_per_element_cycle: [("elements".to_string(), 41.5), ("total".to_string(), 60.25)].into(),
+        barrier_us_per_step: [("median".to_string(), 31.5)].into(),
         energy_balance_error: 1e-4,
         energy_limit: 0.05,
         indicators: ind,

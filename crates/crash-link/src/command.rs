@@ -103,6 +103,9 @@ pub struct StepReport {
     pub compute_ns: u64,
     /// Contact statistics of the worker's groups, group after group.
     pub contacts: Vec<PairStats>,
+    /// The worker's decoding of this command and encoding of its previous reply [ns]
+    /// (0 in process): a part of the barrier.
+    pub codec_ns: u64,
 }
 
 #[derive(Debug, Clone)]

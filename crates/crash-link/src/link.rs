@@ -31,6 +31,11 @@ pub trait WorkerLink {
     /// Whether the worker holds the definition of body `id` (a body moving there then
     /// travels as its state only).
     fn has_definition(&self, id: u32) -> bool;
+    /// Time this link spent encoding commands and decoding replies since the last call
+    /// [ns] (a part of the barrier; 0 for in-process links).
+    fn take_codec_ns(&mut self) -> u64 {
+        0
+    }
     /// Tell the worker to stop (best effort: it may be gone; must not block long).
     fn close(&mut self, reason: &str) {
         if self.send(Command::Shutdown(reason.into())).is_ok() {

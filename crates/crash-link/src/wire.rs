@@ -316,6 +316,7 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
             group_nanos: rep.groups.iter().map(|g| g.nanos).collect(),
             compute_nanos: rep.compute_ns,
             contacts: Some(contacts_to_pb(&rep.contacts)),
+            codec_nanos: rep.codec_ns,
         }),
         Reply::Unloaded(bodies) => PbReply::Unloaded(pb::BodyLoads {
             bodies: bodies.iter().map(|b| load_to_pb(b, true)).collect(),
@@ -404,5 +405,6 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
             Some(c) => contacts_from_pb(c)?,
             None => Vec::new(),
         },
+        codec_ns: r.codec_nanos,
     })
 }

@@ -36,7 +36,7 @@ pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions};
 pub use session::Session;
 pub use sink::{EnergyRecord, RecordSink, Sink, SinkError};
-pub use stats::{Migration, RunStats, StageTimes};
+pub use stats::{BarrierStats, Migration, RunStats, StageTimes};
 
 use crash_link::WorkerLink;
 use std::time::Instant;

@@ -99,6 +99,11 @@ impl Meim {
     }
 
     fn index(&self, id: u32) -> Option<usize> {
+        // ids are usually 0..n: the direct slot first, the search otherwise
+        let i = id as usize;
+        if self.ids.get(i) == Some(&id) {
+            return Some(i);
+        }
         self.ids.binary_search(&id).ok()
     }
 

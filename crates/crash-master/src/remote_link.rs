@@ -7,7 +7,7 @@ use crash_link::{escape_peer, Command, LinkError, Reply, WorkerLink};
 use crash_proto::pb;
 use std::collections::BTreeSet;
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use tokio::runtime::Runtime;
 use tonic::Status;
 use tonic::Streaming;
@@ -25,6 +25,8 @@ pub struct RemoteWorker {
     /// Ids of the body definitions this worker has received.
     pub(crate) sent: BTreeSet<u32>,
     pub(crate) timeout: Duration,
+    /// Encoding and decoding time since the last `take_codec_ns` [ns].
+    pub(crate) codec_ns: u64,
 }
 
 impl std::fmt::Debug for RemoteWorker {
@@ -66,7 +68,10 @@ impl RemoteWorker {
             Ok(Ok(Some(m))) => m,
         };
         // a worker's error text reaches the master's log: escaped
-        match reply_from_pb(&msg) {
+        let t = Instant::now();
+        let decoded = reply_from_pb(&msg);
+        self.codec_ns += t.elapsed().as_nanos() as u64;
+        match decoded {
             Ok(Reply::Error(e)) => Ok(Reply::Error(escape_peer(&e))),
             Ok(r) => Ok(r),
             Err(e) => Err(LinkError::Protocol(escape_peer(&e.to_string()))),
@@ -76,7 +81,9 @@ impl RemoteWorker {
 
 impl WorkerLink for RemoteWorker {
     fn send(&mut self, cmd: Command) -> Result<(), LinkError> {
+        let t = Instant::now();
         let msg = command_to_pb(&cmd, |id| self.sent.contains(&id));
+        self.codec_ns += t.elapsed().as_nanos() as u64;
         if let Command::Load { bodies, .. } = &cmd {
             self.sent
                 .extend(bodies.iter().filter(|b| b.def.is_some()).map(|b| b.id));
@@ -99,6 +106,10 @@ impl WorkerLink for RemoteWorker {
 
     fn has_definition(&self, id: u32) -> bool {
         self.sent.contains(&id)
+    }
+
+    fn take_codec_ns(&mut self) -> u64 {
+        std::mem::take(&mut self.codec_ns)
     }
 
     fn close(&mut self, reason: &str) {

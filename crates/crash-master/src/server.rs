@@ -412,6 +412,7 @@ impl Cluster {
                 tx: Some(a.outbound),
                 inbound: a.inbound,
                 sent: BTreeSet::new(),
+                codec_ns: 0,
                 timeout: self.opts.reply_timeout,
             });
         }

@@ -19,6 +19,61 @@ pub struct StageTimes {
     pub output_ns: u64,
 }
 
+/// The barrier of every step, in parts (issue 16: measured, then cut). Per step, the
+/// barrier is the step exchange's wall time less the slowest worker's compute; it splits
+/// into the master's encoding and decoding, the slowest worker's decoding and encoding
+/// (`StepReport::codec_ns`), and the rest: the wire and waking the processes.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct BarrierStats {
+    pub steps: u64,
+    pub master_codec_ns: u64,
+    pub worker_codec_ns: u64,
+    pub wire_wake_ns: u64,
+    /// Steps per barrier length in whole microseconds (the last bin: this many or more).
+    pub histogram_us: Vec<u64>,
+}
+
+/// Bins of the barrier histogram: 1 us each up to 5 ms.
+const BARRIER_BINS: usize = 5001;
+
+impl BarrierStats {
+    /// One step's barrier (`total` = exchange wall time - slowest compute).
+    pub fn record(&mut self, total: u64, master_codec: u64, worker_codec: u64) {
+        self.steps += 1;
+        self.master_codec_ns += master_codec;
+        self.worker_codec_ns += worker_codec;
+        self.wire_wake_ns += total.saturating_sub(master_codec + worker_codec);
+        if self.histogram_us.len() != BARRIER_BINS {
+            self.histogram_us.resize(BARRIER_BINS, 0);
+        }
+        let bin = ((total / 1000) as usize).min(BARRIER_BINS - 1);
+        self.histogram_us[bin] += 1;
+    }
+
+    /// Median barrier per step [us] (to the microsecond; NaN without steps).
+    pub fn median_us(&self) -> f64 {
+        let half = self.steps.div_ceil(2);
+        let mut seen = 0;
+        for (us, &n) in self.histogram_us.iter().enumerate() {
+            seen += n;
+            if seen >= half && n > 0 {
+                return us as f64 + 0.5;
+            }
+        }
+        f64::NAN
+    }
+
+    /// Mean of each part per step [us]: master codec, worker codec, wire and wake-up.
+    pub fn parts_us(&self) -> [f64; 3] {
+        let s = self.steps.max(1) as f64 * 1e3;
+        [
+            self.master_codec_ns as f64 / s,
+            self.worker_codec_ns as f64 / s,
+            self.wire_wake_ns as f64 / s,
+        ]
+    }
+}
+
 /// One body moved between workers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Migration {
@@ -54,4 +109,34 @@ pub struct RunStats {
     /// `crash_core::hash::state_hash` of the final state (0 if the run failed).
     pub final_hash: u64,
     pub frames: u64,
+    #[serde(default)]
+    pub barrier: BarrierStats,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::BarrierStats;
+
+    #[test]
+    fn barrier_median_is_the_middle_step_and_parts_add_up_to_the_total() {
+        let mut b = BarrierStats::default();
+        // 5 steps: 10, 20, 30, 40 us and one of 9 ms (beyond the last bin)
+        for (total, m, w) in [
+            (10_000, 1_000, 2_000),
+            (20_000, 1_000, 2_000),
+            (30_500, 1_000, 2_000),
+            (40_000, 1_000, 2_000),
+            (9_000_000, 1_000, 2_000),
+        ] {
+            b.record(total, m, w);
+        }
+        assert_eq!(b.median_us(), 30.5);
+        let [mc, wc, ww] = b.parts_us();
+        let mean = (10_000 + 20_000 + 30_500 + 40_000 + 9_000_000) as f64 / 5.0 / 1e3;
+        assert!(
+            (mc + wc + ww - mean).abs() < 1e-9,
+            "{mc} + {wc} + {ww} vs {mean}"
+        );
+        assert!(BarrierStats::default().median_us().is_nan());
+    }
 }

@@ -310,6 +310,8 @@ fn serve(
         reason,
     };
     let mut engine = Engine::new();
+    // encoding time of the previous reply, reported with the next one
+    let mut last_encode_ns = 0u64;
     loop {
         let msg = match rt.block_on(inbound.message()) {
             Ok(Some(m)) => m,
@@ -320,16 +322,25 @@ fn serve(
             }
             Err(s) => return Err(refused_or_lost(url, &s)),
         };
-        let (reply, shutdown) = match command_from_pb(&msg) {
+        let t0 = Instant::now();
+        let decoded = command_from_pb(&msg);
+        let decode_ns = t0.elapsed().as_nanos() as u64;
+        let (mut reply, shutdown) = match decoded {
             Ok(cmd) => {
                 let shutdown = match &cmd {
                     Command::Shutdown(r) => Some(escape_peer(r)),
                     _ => None,
                 };
-                (pool.install(|| reply_to_pb(&engine.handle(cmd))), shutdown)
+                (pool.install(|| engine.handle(cmd)), shutdown)
             }
-            Err(e) => (reply_to_pb(&Reply::Error(e.to_string())), None),
+            Err(e) => (Reply::Error(e.to_string()), None),
         };
+        if let Reply::Report(rep) = &mut reply {
+            rep.codec_ns = decode_ns + last_encode_ns;
+        }
+        let t1 = Instant::now();
+        let reply = reply_to_pb(&reply);
+        last_encode_ns = t1.elapsed().as_nanos() as u64;
         if tx.send(reply).is_err() {
             return Err(lost("the outbound stream closed".into()));
         }

@@ -289,6 +289,7 @@ impl Engine {
             groups: Vec::with_capacity(results.len()),
             compute_ns: 0,
             contacts: Vec::new(),
+            codec_ns: 0,
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.bodies.first().map_or(0, |b| b.def.id);

@@ -85,16 +85,24 @@ impl<L: WorkerLink> Master<'_, L> {
 
     /// Reports of all workers into one list in body-id order.
     pub(super) fn gather(&mut self, reps: Vec<StepReport>) -> Result<(), MasterError> {
+        // In place, without allocating per step: each report lands in its body's slot;
+        // `seen` (kept between steps) marks the slots filled by this step.
         let n = self.info.len();
-        self.reports.clear();
         self.contacts.clear();
-        let mut slot: Vec<Option<BodyReport>> = vec![None; n];
+        if self.reports.len() != n {
+            self.reports.clear();
+            self.reports
+                .extend(self.info.iter().map(|i| BodyReport::empty(i.id)));
+        }
+        self.seen.clear();
+        self.seen.resize(n, false);
         let mut count = 0;
         for (w, rep) in reps.into_iter().enumerate() {
             for r in rep.bodies {
                 match self.index(r.id) {
-                    Some(i) if slot[i].is_none() && self.worker_of[i] == Some(w) => {
-                        slot[i] = Some(r);
+                    Some(i) if !self.seen[i] && self.worker_of[i] == Some(w) => {
+                        self.reports[i] = r;
+                        self.seen[i] = true;
                         count += 1;
                     }
                     _ => {
@@ -116,7 +124,6 @@ impl<L: WorkerLink> Master<'_, L> {
                 expected: n,
             });
         }
-        self.reports.extend(slot.into_iter().flatten());
         self.contacts.sort_by_key(|c| (c.a, c.b));
         Ok(())
     }
@@ -131,14 +138,14 @@ impl<L: WorkerLink> Master<'_, L> {
             let Some(k) = self.meim.group_of(g.first) else {
                 continue;
             };
-            let members: Vec<usize> = self
-                .meim
-                .group(k)
+            let members = self.meim.group(k);
+            let total: f64 = members
                 .iter()
                 .filter_map(|&id| self.index(id))
-                .collect();
-            let total: f64 = members.iter().map(|&b| self.info[b].estimate).sum();
-            for &b in &members {
+                .map(|b| self.info[b].estimate)
+                .sum();
+            for &id in members {
+                let Some(b) = self.index(id) else { continue };
                 let t = g.nanos as f64 * self.info[b].estimate / total;
                 self.measured[b] = Some(match self.measured[b] {
                     Some(old) => 0.8 * old + 0.2 * t,

@@ -63,6 +63,8 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     dt0: f64,
     ledger: EnergyLedger,
     reports: Vec<BodyReport>,
+    /// Which reports the current gather has filled (kept to avoid allocating per step).
+    seen: Vec<bool>,
     contacts: Vec<PairStats>,
     frames: u64,
     last_frame_step: Option<u64>,
@@ -142,6 +144,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             dt0: 0.0,
             ledger: EnergyLedger::default(),
             reports: Vec::with_capacity(n),
+            seen: Vec::with_capacity(n),
             contacts: Vec::new(),
             frames: 0,
             last_frame_step: None,

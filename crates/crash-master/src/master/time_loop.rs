@@ -74,6 +74,9 @@ impl<L: WorkerLink> Master<'_, L> {
             self.stats.dt_min = self.stats.dt_min.min(h);
             self.stats.dt_max = self.stats.dt_max.max(h);
         }
+        for l in self.links.iter_mut() {
+            l.take_codec_ns(); // what earlier exchanges (loads, frames) spent
+        }
         let t0 = Instant::now();
         let at = self.clock;
         let reps = {
@@ -89,6 +92,11 @@ impl<L: WorkerLink> Master<'_, L> {
             .min(wall);
         self.stats.stages.compute_ns += slowest;
         self.stats.stages.barrier_ns += wall - slowest;
+        let master_codec: u64 = self.links.iter_mut().map(|l| l.take_codec_ns()).sum();
+        let worker_codec = reps.iter().map(|r| r.codec_ns).max().unwrap_or(0);
+        self.stats
+            .barrier
+            .record(wall - slowest, master_codec, worker_codec);
         self.clock = self.clock.after(h);
 
         let t1 = Instant::now();
@@ -175,6 +183,14 @@ impl<L: WorkerLink> Master<'_, L> {
     pub(crate) fn finish(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
         self.output(sink, true)?;
         self.record_progress();
+        let b = &self.stats.barrier;
+        let [mc, wc, ww] = b.parts_us();
+        let steps = self.stats.steps.max(1) as f64;
+        tracing::info!(
+            "barrier per step: median {:.1} us (mean: master encode/decode {mc:.1}, worker decode/encode {wc:.1}, wire and wake-up {ww:.1}); master work {:.1} us",
+            b.median_us(),
+            self.stats.stages.meim_ns as f64 / steps / 1e3
+        );
         self.stats.final_groups = self
             .meim
             .groups()

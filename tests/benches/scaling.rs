@@ -1,0 +1,179 @@
+//! The scaling benchmark (issue 16, point 6): one scene in four modes, timed in one
+//! sitting with the repetitions interleaved (mode A, B, C, D, then again), so machine
+//! load affects every mode alike:
+//!
+//! - `crash run --threads 1` and `crash run --threads 2` (one process),
+//! - `crash-master` + 1 and + 2 `crash-worker` processes x 1 thread (gRPC on loopback).
+//!
+//! Prints, per mode, the median wall time of the run (summary.json `wall_time_s`: from
+//! the first command to the last frame), ns per element-cycle, the speed-up over
+//! `--threads 1`, the barrier's median per step and its parts, and checks that every
+//! mode ends with the same final state hash (exit 1 otherwise).
+//!
+//! Run: cargo bench -p crash-tests --bench scaling -- SCENE [END_TIME [REPS]]
+//! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions).
+#![allow(clippy::unwrap_used)]
+
+use crash_io::Summary;
+use crash_tests::procs::{bin, master_bin, worker_bin};
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+#[derive(Clone, Copy, PartialEq)]
+enum Mode {
+    Local { threads: usize },
+    Cluster { workers: usize },
+}
+
+impl Mode {
+    fn label(self) -> String {
+        match self {
+            Mode::Local { threads } => format!("crash run --threads {threads}"),
+            Mode::Cluster { workers } => format!("master + {workers} worker(s) x 1 thread"),
+        }
+    }
+}
+
+fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
+    let _ = std::fs::remove_dir_all(out);
+    let out_s = out.to_str().unwrap();
+    let scene_s = scene.to_str().unwrap();
+    match mode {
+        Mode::Local { threads } => {
+            let st = Command::new(bin("crash"))
+                .args(["run", scene_s, "--threads", &threads.to_string()])
+                .args(["--end-time", end, "--output-interval", end, "--out", out_s])
+                .args(["--quiet", "--no-pictures", "--allow-warnings"])
+                .env("RUST_LOG", "warn")
+                .stderr(Stdio::null())
+                .status()
+                .unwrap();
+            assert!(st.success(), "{}: {st}", mode.label());
+        }
+        Mode::Cluster { workers } => {
+            let mut m = Command::new(master_bin())
+                .args([scene_s, "--listen", "127.0.0.1:0"])
+                .args(["--workers", &workers.to_string(), "--out", out_s])
+                .args(["--end-time", end, "--output-interval", end])
+                .env("RUST_LOG", "warn")
+                .env_remove("CRASH_SECRET")
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            let mut lines = BufReader::new(m.stderr.take().unwrap()).lines();
+            let addr = loop {
+                let l = lines.next().unwrap().unwrap();
+                if let Some(a) = l.strip_prefix("crash-master: listening on ") {
+                    break a.trim().to_string();
+                }
+            };
+            let mut ws: Vec<_> = (0..workers)
+                .map(|_| {
+                    Command::new(worker_bin())
+                        .args(["--master", &format!("http://{addr}"), "--threads", "1"])
+                        .env("RUST_LOG", "warn")
+                        .env_remove("CRASH_SECRET")
+                        .stderr(Stdio::null())
+                        .spawn()
+                        .unwrap()
+                })
+                .collect();
+            for l in lines.map_while(Result::ok) {
+                if l.contains("error") {
+                    eprintln!("  {l}");
+                }
+            }
+            let st = m.wait().unwrap();
+            for w in &mut ws {
+                let _ = w.wait();
+            }
+            assert!(st.success(), "{}: {st}", mode.label());
+        }
+    }
+    crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    // cargo bench passes --bench: positional arguments only
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let scene = args.first().map_or_else(
+        || crash_tests::fixtures::scene("ten-spheres-three-plates-small.toml"),
+        |s| {
+            let p = PathBuf::from(s);
+            if p.is_absolute() {
+                p
+            } else {
+                crash_tests::fixtures::root().join(p)
+            }
+        },
+    );
+    let end = args.get(1).cloned().unwrap_or_else(|| "1e-3".into());
+    let reps: usize = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(3);
+    let modes = [
+        Mode::Local { threads: 1 },
+        Mode::Local { threads: 2 },
+        Mode::Cluster { workers: 1 },
+        Mode::Cluster { workers: 2 },
+    ];
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("scaling-run");
+    let mut runs: Vec<Vec<Summary>> = vec![Vec::new(); modes.len()];
+    for _ in 0..reps {
+        for (k, &mode) in modes.iter().enumerate() {
+            runs[k].push(run(mode, &scene, &end, &out));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    let s0 = &runs[0][0];
+    println!(
+        "scaling: {} to {end} s ({} elements, {} steps), {reps} interleaved runs per mode, medians",
+        scene.display(),
+        s0.elements,
+        s0.steps
+    );
+    println!(
+        "| mode | wall [s] | ns/element-cycle | speed-up vs 1 thread | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | final hash |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
+    let base = median(runs[0].iter().map(|s| s.wall_time_s).collect());
+    let mut hashes = Vec::new();
+    for (mode, r) in modes.iter().zip(&runs) {
+        let wall = median(r.iter().map(|s| s.wall_time_s).collect());
+        let ns = median(r.iter().map(|s| s.ns_per_element_cycle["total"]).collect());
+        let part = |k: &str| {
+            median(
+                r.iter()
+                    .map(|s| s.barrier_us_per_step.get(k).copied().unwrap_or(f64::NAN))
+                    .collect(),
+            )
+        };
+        println!(
+            "| {} | {wall:.2} | {ns:.1} | {:.2}x | {:.0} | {:.1} / {:.1} / {:.1} | {:.1} | {} |",
+            mode.label(),
+            base / wall,
+            part("median"),
+            part("master_codec"),
+            part("worker_codec"),
+            part("wire_wake"),
+            part("master_work"),
+            r[0].final_state_hash
+        );
+        hashes.extend(r.iter().map(|s| s.final_state_hash.clone()));
+    }
+    if hashes.iter().any(|h| *h != hashes[0]) {
+        eprintln!("scaling: the modes disagree on the final state hash: {hashes:?}");
+        std::process::exit(1);
+    }
+    println!(
+        "every mode and run ends with the same final state hash {}",
+        hashes[0]
+    );
+}
