@@ -184,6 +184,7 @@ fn section_of_a_sphere_through_its_centre_is_a_circle_of_its_radius() {
         plane,
         up: Vec3::z(),
         centre: c,
+        mark: c,
         half_width: 0.15,
     };
     let (img, _) = render_section(&frame, &section, 600, 600, None);

@@ -10,13 +10,14 @@ use super::sheet::sheet_from_cells;
 use crate::history::{ContactRow, EnergyRow};
 use crate::matsum_read::MatsumRow;
 
-/// Body names by id (from a frame); ids without a name are written as "body N".
+/// Body ids and names in id order (from a frame); an empty name (the .vtu files do not
+/// store names) is written as "body N".
 pub type Names<'a> = &'a [(u32, String)];
 
 fn name_of(names: Names, id: u32) -> String {
     names
         .iter()
-        .find(|(i, _)| *i == id)
+        .find(|(i, n)| *i == id && !n.is_empty())
         .map_or_else(|| format!("body {id}"), |(_, n)| n.clone())
 }
 
@@ -95,8 +96,9 @@ const TERMS: [Term; 4] = [
 ];
 
 /// Energies per body [J] over time [ms]: four panels (kinetic, internal, hourglass,
-/// damping), one line per body in its picture colour. Body names are matched to ids
-/// with `names`; unknown names take colours after the known ones.
+/// damping), one line per body in its picture colour. A body name is matched to its id
+/// with `names`; when `names` lacks it, the k-th body of matsum.csv (rows list bodies
+/// in id order) takes the k-th id's colour.
 pub fn body_energy_plot(rows: &[MatsumRow], names: Names, width: u32, height: u32) -> Image {
     let mut bodies: Vec<&str> = Vec::new();
     for r in rows {
@@ -108,9 +110,8 @@ pub fn body_energy_plot(rows: &[MatsumRow], names: Names, width: u32, height: u3
         names
             .iter()
             .find(|(_, n)| n == name)
-            .map_or(body_colour((names.len() + k) as u32), |(id, _)| {
-                body_colour(*id)
-            })
+            .or_else(|| names.get(k))
+            .map_or(body_colour(k as u32), |(id, _)| body_colour(*id))
     };
     let cells: Vec<Image> = TERMS
         .iter()

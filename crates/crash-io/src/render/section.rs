@@ -79,6 +79,8 @@ pub struct Section {
     pub up: Vec3,
     /// Centre of the picture [m], on the plane.
     pub centre: Vec3,
+    /// The point marked with a cross (the contact zone's centre) [m].
+    pub mark: Vec3,
     /// Half of the visible width [m].
     pub half_width: f64,
 }
@@ -138,7 +140,7 @@ pub fn render_section(
         img.line((p.0, p.1), (q.0, q.1), lw, body_colour(s.body));
     }
     // The centre of the zone: a small grey cross.
-    let c = proj.project(&section.centre);
+    let c = proj.project(&section.mark);
     let grey = [150, 150, 150];
     img.line((c.0 - 6.0, c.1), (c.0 + 6.0, c.1), 1.0, grey);
     img.line((c.0, c.1 - 6.0), (c.0, c.1 + 6.0), 1.0, grey);
@@ -164,7 +166,11 @@ pub fn render_section(
     drawn.dedup();
     for id in drawn {
         if let Some(b) = frame.bodies.iter().find(|b| b.id == id) {
-            let name = format!("- {}", b.name);
+            let name = if b.name.is_empty() {
+                format!("- body {id}")
+            } else {
+                format!("- {}", b.name)
+            };
             draw_label(&mut img, 8, y, &name, s, body_colour(id));
             y += th + 6;
         }

@@ -10,17 +10,20 @@ use crate::frame::Frame;
 
 /// The section through `zone`: the plane holds the contact normal and passes through
 /// the zone's centre; the picture spans three zone radii each side (at least 20 shell
-/// thicknesses, so a point contact still shows its surroundings).
+/// thicknesses, so a point contact still shows its surroundings), with the centre
+/// below the middle (the kept body is above it).
 pub fn zone_section(frame: &Frame, zone: &ContactZone) -> Section {
     let t = frame.bodies.iter().map(|b| b.thickness).fold(0.0, f64::max);
+    let half_width = (3.0 * zone.radius).max(20.0 * t).max(1e-6);
     Section {
         plane: Plane {
             point: zone.centre,
             normal: zone.section_normal(),
         },
         up: zone.normal,
-        centre: zone.centre,
-        half_width: (3.0 * zone.radius).max(20.0 * t).max(1e-6),
+        centre: zone.centre + zone.normal * (0.35 * half_width),
+        mark: zone.centre,
+        half_width,
     }
 }
 
@@ -28,7 +31,7 @@ fn hidden_name(frame: &Frame, zone: &ContactZone) -> String {
     frame
         .bodies
         .iter()
-        .find(|b| b.id == zone.hidden)
+        .find(|b| b.id == zone.hidden && !b.name.is_empty())
         .map_or_else(|| format!("body {}", zone.hidden), |b| b.name.clone())
 }
 
