@@ -109,6 +109,15 @@ fn bar_length(span: f64) -> f64 {
         .unwrap_or(p)
 }
 
+/// A component for "{:.2}" without "-0.00".
+fn tidy(v: f64) -> f64 {
+    if v.abs() < 0.005 {
+        0.0
+    } else {
+        v
+    }
+}
+
 /// Length with a readable unit: "20 mm", "1.5 m".
 fn format_length(l: f64) -> String {
     if l >= 1.0 {
@@ -190,9 +199,9 @@ pub fn render_section(
         format_number(p.x * 1e3),
         format_number(p.y * 1e3),
         format_number(p.z * 1e3),
-        n.x + 0.0,
-        n.y + 0.0,
-        n.z + 0.0
+        tidy(n.x),
+        tidy(n.y),
+        tidy(n.z)
     );
     let ps = if text_width(&plane, s) + 16 > lx {
         1
