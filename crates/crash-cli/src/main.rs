@@ -42,7 +42,8 @@ enum Command {
     },
     /// Verification ladders (error against wall time) and the stability matrix.
     Study(crash_cli::study::cli::StudyArgs),
-    /// Pictures of a finished run: snapshots, a contact sheet and the energy plot.
+    /// Pictures of a finished run: snapshots, a contact sheet at the key moments with the
+    /// contact zone (from below, section cut), contact-force and energy plots.
     Render {
         /// The run directory (written by `crash run`).
         out: PathBuf,

@@ -64,7 +64,17 @@ fn sphere_on_plate_rebounds_with_energy_balance_and_pictures() {
 
     // pictures exist and are not blank
     let pictures = out.join("pictures");
-    for name in ["sheet.png", "energy.png", "frame_000000.png"] {
+    // (the contact views and the contact-force plot exist because the sphere touched)
+    let names = [
+        "sheet.png",
+        "energy.png",
+        "energies.png",
+        "contact_force.png",
+        "below.png",
+        "section.png",
+        "frame_000000.png",
+    ];
+    for name in names {
         let img = crash_io::render::image::load_png(pictures.join(name)).expect(name);
         let colours: HashSet<[u8; 3]> = img.rgb.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
         println!(

@@ -50,7 +50,7 @@ fn bench(c: &mut Criterion) {
     }
     g.bench_function("render_800x600_stress", |b| {
         let o = RenderOptions {
-            colour: Colouring::ByVonMises { max: None },
+            colour: Colouring::ByVonMises { range: None },
             ..RenderOptions::default()
         };
         b.iter(|| render_frame(&f, &o))

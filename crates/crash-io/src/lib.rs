@@ -7,6 +7,7 @@ pub mod checkpoint;
 pub mod error;
 pub mod frame;
 pub mod history;
+pub mod matsum_read;
 pub mod render;
 pub mod run;
 pub mod series;

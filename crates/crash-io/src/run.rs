@@ -1,94 +1,203 @@
 //! `crash render OUT_DIR`: pictures of a finished (or interrupted) run from its files.
 
 use crate::error::{AtPath, IoError};
-use crate::history::{read_energy_csv, ENERGY_CSV};
+use crate::frame::Frame;
+use crate::history::{read_contacts_csv, read_energy_csv, ContactRow, CONTACTS_CSV, ENERGY_CSV};
+use crate::matsum_read::{read_matsum_csv, MATSUM_CSV};
 use crate::render::camera::Fit;
+use crate::render::contact_zone::contact_zone;
 use crate::render::energy_plot;
-use crate::render::scene::{render_frame, Camera, Colouring, RenderOptions};
+use crate::render::histories::{body_energy_plot, contact_force_plot, total_energy_fallback_plot};
+use crate::render::moments::{key_moments, panels, ForceSeries, Panel};
+use crate::render::scene::{format_time, render_frame, Camera, Colouring, RenderOptions};
 use crate::render::sheet::sheet_from_cells;
+use crate::render::zone_views::{section_view, view_from_below};
 use crate::series::{read_pvd, PVD_FILE};
 use crate::vtu_read::read_vtu;
 use std::path::{Path, PathBuf};
 
 /// Sub-directory of the output directory that receives the pictures.
 pub const PICTURES_DIR: &str = "pictures";
-/// Frames on the contact sheet (evenly spread over the series).
-pub const SHEET_FRAMES: usize = 6;
-pub const SHEET_COLS: usize = 3;
+/// Size of one panel of the contact sheet [px].
+pub const CELL: (u32, u32) = (480, 360);
 
-/// Indices of `n` frames spread evenly over `len` (first and last included).
-fn spread(len: usize, n: usize) -> Vec<usize> {
-    if len <= n {
-        return (0..len).collect();
-    }
-    let mut v: Vec<usize> = (0..n)
-        .map(|k| ((k * (len - 1)) as f64 / (n - 1) as f64).round() as usize)
-        .collect();
-    v.dedup();
-    v
+/// Sum of the magnitudes of a frame's nodal contact forces, halved (each contact force
+/// acts on both bodies): the contact-force history when contacts.csv is missing.
+fn frame_contact_force(f: &Frame) -> f64 {
+    let s: f64 = f
+        .bodies
+        .iter()
+        .flat_map(|b| b.f_contact.iter())
+        .map(|v| v.norm())
+        .filter(|v| v.is_finite())
+        .sum();
+    0.5 * s
 }
 
-/// Read the series in `out_dir` and write, under `out_dir/pictures/`: one von Mises
-/// snapshot per frame (`frame_NNNNNN.png`), `sheet.png` (bodies coloured by id) and
-/// `energy.png` (when energy.csv exists). All pictures share one camera and one stress
-/// scale. Returns the paths written.
+/// The body pair with the largest force at `time` (contacts.csv), if any.
+fn pair_at(rows: &[ContactRow], time: f64) -> Option<(u32, u32)> {
+    rows.iter()
+        .filter(|r| r.time == time && r.force.is_finite())
+        .max_by(|p, q| p.force.total_cmp(&q.force))
+        .map(|r| (r.a, r.b))
+}
+
+/// Read the series and histories in `out_dir` and write under `out_dir/pictures/`:
+/// - `frame_NNNNNN.png`: one snapshot per frame, von Mises stress on its own scale;
+/// - `sheet.png`: the frames nearest the key moments (start, first contact, peak
+///   contact force, separation, end), each labelled, plus the view from below and the
+///   section cut at the peak;
+/// - `below.png`, `section.png`: the contact zone at the peak, full size;
+/// - `contact_force.png`: force per body pair over time (contacts.csv);
+/// - `energies.png`: energies per body (matsum.csv; else totals of energy.csv);
+/// - `energy.png`: the energy balance (energy.csv).
+///
+/// Returns the paths written.
 pub fn render_run(out_dir: impl AsRef<Path>) -> Result<Vec<PathBuf>, IoError> {
     let dir = out_dir.as_ref();
     let entries = read_pvd(&dir.join(PVD_FILE))?;
     let pics = dir.join(PICTURES_DIR);
     std::fs::create_dir_all(&pics).at(&pics)?;
     let mut written = Vec::new();
+    let mut save = |img: crate::render::Image, name: &str| -> Result<(), IoError> {
+        let path = pics.join(name);
+        img.save_png(&path)?;
+        written.push(path);
+        Ok(())
+    };
 
-    // Pass 1: common camera and stress scale (frames are read twice to bound memory).
+    // Pass 1: common camera, frame times and contact forces, body names (frames are
+    // read twice to bound memory).
     let mut fit = Fit::three_quarter();
-    let mut vm_max = 0.0f64;
+    let (mut times, mut frame_force) = (Vec::new(), Vec::new());
+    let mut names: Vec<(u32, String)> = Vec::new();
     for e in &entries {
         let f = read_vtu(&dir.join(&e.file))?;
-        vm_max = vm_max.max(f.max_von_mises());
         fit.add_frame(&f);
+        times.push(f.time);
+        frame_force.push(frame_contact_force(&f));
+        for b in &f.bodies {
+            if !names.iter().any(|(id, _)| *id == b.id) {
+                names.push((b.id, b.name.clone()));
+            }
+        }
     }
     let camera = fit.view().map_or(Camera::Auto, Camera::View);
-    let snap = RenderOptions {
-        colour: Colouring::ByVonMises {
-            max: (vm_max > 0.0).then_some(vm_max),
+    let energy_csv = dir.join(ENERGY_CSV);
+    let energy = if energy_csv.exists() {
+        Some(read_energy_csv(&energy_csv)?)
+    } else {
+        None
+    };
+    let contacts_csv = dir.join(CONTACTS_CSV);
+    let contacts = if contacts_csv.exists() {
+        Some(read_contacts_csv(&contacts_csv)?)
+    } else {
+        None
+    };
+    let series = match &contacts {
+        Some(rows) => {
+            let base: Vec<f64> = energy.iter().flatten().map(|r| r.time).collect();
+            ForceSeries::from_rows(&base, rows)
+        }
+        None => ForceSeries {
+            time: times.clone(),
+            total: frame_force.clone(),
         },
-        camera,
-        ..RenderOptions::default()
     };
-    let cell = RenderOptions {
-        width: 480,
-        height: 360,
-        camera,
-        ..RenderOptions::default()
-    };
-    let on_sheet = spread(entries.len(), SHEET_FRAMES);
-    let mut cells = Vec::new();
+    let sheet_panels = panels(&times, &series);
+    let km = key_moments(&series.total);
+    let peak_pair = km
+        .peak
+        .and_then(|k| pair_at(contacts.as_deref().unwrap_or(&[]), series.time[k]));
+    // The contact zone is shown at the frame nearest the peak if it holds contact
+    // forces, else at the frame with the largest contact force.
+    let peak_frame = sheet_panels
+        .iter()
+        .find(|p| {
+            p.reasons
+                .contains(&crate::render::moments::Reason::PeakForce)
+        })
+        .map(|p| p.frame)
+        .filter(|&k| frame_force[k] > 0.0)
+        .or_else(|| {
+            (0..frame_force.len())
+                .filter(|&k| frame_force[k] > 0.0)
+                .max_by(|&a, &b| frame_force[a].total_cmp(&frame_force[b]).then(b.cmp(&a)))
+        });
 
-    // Pass 2: pictures.
+    // Pass 2: snapshots, sheet panels, contact-zone views.
+    let snap = RenderOptions {
+        colour: Colouring::ByVonMises { range: None },
+        camera,
+        ..RenderOptions::default()
+    };
+    let mut cells: Vec<(usize, crate::render::Image)> = Vec::new();
+    let mut zone_cells: Vec<crate::render::Image> = Vec::new();
     for (k, e) in entries.iter().enumerate() {
         let f = read_vtu(&dir.join(&e.file))?;
         let stem = Path::new(&e.file).file_stem().map_or_else(
             || format!("frame_{k:06}"),
             |s| s.to_string_lossy().into_owned(),
         );
-        let path = pics.join(format!("{stem}.png"));
-        render_frame(&f, &snap).save_png(&path)?;
-        written.push(path);
-        if on_sheet.contains(&k) {
-            cells.push(render_frame(&f, &cell));
+        save(render_frame(&f, &snap), &format!("{stem}.png"))?;
+        if let Some(p) = sheet_panels.iter().find(|p| p.frame == k) {
+            cells.push((k, panel_cell(&f, p, camera)));
+        }
+        if peak_frame == Some(k) {
+            if let Some(z) = contact_zone(&f, peak_pair) {
+                save(view_from_below(&f, &z, 800, 600), "below.png")?;
+                save(section_view(&f, &z, 800, 600), "section.png")?;
+                zone_cells.push(view_from_below(&f, &z, CELL.0, CELL.1));
+                zone_cells.push(section_view(&f, &z, CELL.0, CELL.1));
+            }
         }
     }
-    if !cells.is_empty() {
-        let path = pics.join("sheet.png");
-        sheet_from_cells(&cells, SHEET_COLS).save_png(&path)?;
-        written.push(path);
+    let mut all: Vec<crate::render::Image> = cells.into_iter().map(|(_, c)| c).collect();
+    all.extend(zone_cells);
+    if !all.is_empty() {
+        // One row up to four panels, else two rows (at most four columns).
+        let cols = if all.len() <= 4 {
+            all.len()
+        } else {
+            all.len().div_ceil(2).min(4)
+        };
+        save(sheet_from_cells(&all, cols), "sheet.png")?;
     }
-    let csv = dir.join(ENERGY_CSV);
-    if csv.exists() {
-        let rows = read_energy_csv(&csv)?;
-        let path = pics.join("energy.png");
-        energy_plot(&rows, 1000, 600).save_png(&path)?;
-        written.push(path);
+    if let Some(rows) = &contacts {
+        save(
+            contact_force_plot(&series, rows, &names, 1000, 500).0,
+            "contact_force.png",
+        )?;
+    }
+    let matsum = dir.join(MATSUM_CSV);
+    if matsum.exists() {
+        let rows = read_matsum_csv(&matsum)?;
+        save(body_energy_plot(&rows, &names, 1200, 800), "energies.png")?;
+    } else if let Some(rows) = &energy {
+        save(total_energy_fallback_plot(rows, 1200, 800), "energies.png")?;
+    }
+    if let Some(rows) = &energy {
+        save(energy_plot(rows, 1000, 600), "energy.png")?;
     }
     Ok(written)
+}
+
+/// One panel of the sheet: the frame coloured by von Mises stress on its own scale,
+/// with the moment(s) it stands for and when they happened.
+fn panel_cell(f: &Frame, p: &Panel, camera: Camera) -> crate::render::Image {
+    let caption = if (p.moment_time - f.time).abs() > 0.0 {
+        format!("{} at {}", p.label(), format_time(p.moment_time))
+    } else {
+        p.label()
+    };
+    let opts = RenderOptions {
+        width: CELL.0,
+        height: CELL.1,
+        colour: Colouring::ByVonMises { range: None },
+        camera,
+        caption: Some(&caption),
+        ..RenderOptions::default()
+    };
+    render_frame(f, &opts)
 }

@@ -259,7 +259,7 @@ pub(crate) fn draw_legend(
 }
 
 /// Keep the first, min, max and last point of each pixel column, in order.
-fn decimate(pts: &[(f64, f64)]) -> Vec<(f64, f64)> {
+pub(crate) fn decimate(pts: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::with_capacity(pts.len().min(4096));
     let mut k = 0;
     while k < pts.len() {

@@ -1,11 +1,12 @@
 //! Pictures of a frame: shaded shells coloured by body or by von Mises stress, with the
-//! time and (for stress) a colour legend.
+//! time and (for stress) the picture's one colour scale.
 
 use super::camera::{Projector, View};
-use super::colour::{body_colour, shade, stress_colour};
-use super::font::{draw_label, draw_text, text_height, text_width};
+use super::colour::{body_colour, shade};
+use super::font::{draw_label, text_height, text_width};
 use super::image::{Image, Rgb, BLACK, WHITE};
 use super::raster::Raster;
+use super::scale::{draw_scale, legend_width, Scale};
 use crate::frame::Frame;
 use crash_core::Vec3;
 
@@ -14,9 +15,9 @@ use crash_core::Vec3;
 pub enum Colouring {
     /// One colour per body (by id).
     ByBody,
-    /// Larger of top/bottom von Mises stress per element, 0 .. `max` [Pa]
-    /// (None: the frame's own maximum).
-    ByVonMises { max: Option<f64> },
+    /// Larger of top/bottom von Mises stress per element over `range` [Pa]
+    /// (None: the range of the bodies shown in this picture).
+    ByVonMises { range: Option<(f64, f64)> },
 }
 
 /// Where the camera looks from.
@@ -29,7 +30,7 @@ pub enum Camera {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RenderOptions {
+pub struct RenderOptions<'a> {
     pub width: u32,
     pub height: u32,
     pub colour: Colouring,
@@ -38,9 +39,13 @@ pub struct RenderOptions {
     pub time_label: bool,
     /// Outline elements that are large enough on screen.
     pub edges: bool,
+    /// A body left out of the picture (e.g. the plate in a view from below).
+    pub hidden: Option<u32>,
+    /// A second line under the time label (why this frame was chosen).
+    pub caption: Option<&'a str>,
 }
 
-impl Default for RenderOptions {
+impl Default for RenderOptions<'_> {
     fn default() -> Self {
         Self {
             width: 800,
@@ -49,18 +54,38 @@ impl Default for RenderOptions {
             camera: Camera::Auto,
             time_label: true,
             edges: true,
+            hidden: None,
+            caption: None,
         }
     }
 }
 
 /// Supersampling factor of the 3D part (anti-aliasing).
 const SUPERSAMPLE: u32 = 2;
-const LEGEND_WIDTH: u32 = 120;
 /// Element outlines are drawn for bodies whose elements average at least this many
 /// (final) pixels on screen.
 const EDGE_MIN_PX: f64 = 9.0;
 /// Height of the band above the picture kept free for the time label [px].
 const LABEL_BAND: u32 = 30;
+
+/// The colour scale `render_frame` draws on the picture of `frame` (None when coloured
+/// by body, or when no shown element has a finite stress).
+pub fn frame_scale(frame: &Frame, opts: &RenderOptions) -> Option<Scale> {
+    match opts.colour {
+        Colouring::ByBody => None,
+        Colouring::ByVonMises { range } => {
+            let own = Scale::von_mises(frame, |id| Some(id) != opts.hidden);
+            match range {
+                Some((lo, hi)) if hi >= lo => own.map(|s| Scale {
+                    min: lo,
+                    max: hi,
+                    ..s
+                }),
+                _ => own,
+            }
+        }
+    }
+}
 
 /// Time with a readable unit: "1.250 ms".
 pub fn format_time(t: f64) -> String {
@@ -113,9 +138,9 @@ fn mean_edge_px(pts: &[(f64, f64, f64)], b: &crate::frame::FrameBody) -> f64 {
 
 /// Render one frame.
 pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
-    let legend = matches!(opts.colour, Colouring::ByVonMises { .. });
-    let plot_w = if legend {
-        opts.width.saturating_sub(LEGEND_WIDTH)
+    let scale = frame_scale(frame, opts);
+    let plot_w = if scale.is_some() {
+        opts.width.saturating_sub(legend_width(opts.height))
     } else {
         opts.width
     };
@@ -124,15 +149,12 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
         Camera::View(v) => Some(v),
         Camera::Auto => View::fit_frames(std::iter::once(frame)),
     };
-    let vm_max = match opts.colour {
-        Colouring::ByVonMises { max: Some(m) } if m > 0.0 => m,
-        _ => frame.max_von_mises().max(f64::MIN_POSITIVE),
-    };
     let mut raster = Raster::new(Image::new(plot_w * ss, opts.height * ss, WHITE));
     if let Some(view) = view {
-        // Keep the top band free for the time label.
+        // Keep the top band free for the time label (and caption).
+        let lines = if opts.caption.is_some() { 2 } else { 1 };
         let band = if opts.time_label {
-            LABEL_BAND.min(opts.height / 4)
+            (lines * LABEL_BAND).min(opts.height / 4)
         } else {
             0
         };
@@ -146,16 +168,16 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
         let (r, u, f) = proj.axes();
         let light = (-0.35 * r + 0.55 * u - 0.75 * f).normalize();
         let edge_w = 0.6 * ss as f64;
-        for b in &frame.bodies {
+        for b in frame.bodies.iter().filter(|b| Some(b.id) != opts.hidden) {
             let pts: Vec<_> = b.x.iter().map(|p| proj.project(p)).collect();
             // Outline the elements of a body only if they are large on screen on average:
             // deciding per body keeps a mesh uniformly outlined or not at all.
             let outline = opts.edges && mean_edge_px(&pts, b) > EDGE_MIN_PX * ss as f64;
             let base = body_colour(b.id);
             let colour_of = |e: usize| -> Rgb {
-                match opts.colour {
-                    Colouring::ByBody => base,
-                    Colouring::ByVonMises { .. } => stress_colour(b.von_mises_max(e) / vm_max),
+                match &scale {
+                    None => base,
+                    Some(sc) => sc.colour(b.von_mises_max(e)),
                 }
             };
             let mut draw = |nodes: [u32; 3], c: Rgb, mask: u8| {
@@ -192,37 +214,18 @@ pub fn render_frame(frame: &Frame, opts: &RenderOptions) -> Image {
             format!("t = {}", format_time(frame.time))
         };
         draw_label(&mut img, 8, 8, &text, s, BLACK);
+        if let Some(c) = opts.caption {
+            // Smaller text when the caption would run into the legend.
+            let cs = if text_width(c, s) + 16 > plot_w as i64 {
+                1
+            } else {
+                s
+            };
+            draw_label(&mut img, 8, 14 + text_height(s), c, cs, BLACK);
+        }
     }
-    if legend {
-        draw_legend(&mut img, plot_w as i64, vm_max);
+    if let Some(sc) = &scale {
+        draw_scale(&mut img, plot_w as i64, sc);
     }
     img
-}
-
-/// Vertical colour bar with ticks in MPa, in the strip right of `x0`.
-fn draw_legend(img: &mut Image, x0: i64, max_pa: f64) {
-    let h = img.height as i64;
-    let s = if h >= 400 { 2 } else { 1 };
-    let top = 16 + 2 * text_height(s) + 8;
-    let bottom = h - 8 - text_height(s);
-    if bottom - top < 20 {
-        return;
-    }
-    let bx = x0 + 8;
-    let bw = 18i64;
-    draw_text(img, x0 + 4, 8, "von Mises", s, BLACK);
-    draw_text(img, x0 + 4, 12 + text_height(s), "[MPa]", s, BLACK);
-    for y in top..=bottom {
-        let f = (bottom - y) as f64 / (bottom - top) as f64;
-        img.fill_rect(bx, y, bw, 1, stress_colour(f));
-    }
-    img.stroke_rect(bx - 1, top - 1, bw + 2, bottom - top + 3, BLACK);
-    for k in 0..=4 {
-        let f = k as f64 / 4.0;
-        let y = bottom - ((bottom - top) as f64 * f).round() as i64;
-        img.fill_rect(bx + bw, y, 5, 1, BLACK);
-        let label = format_number(f * max_pa / 1e6);
-        let tx = (bx + bw + 8).min(img.width as i64 - text_width(&label, s) - 2);
-        draw_text(img, tx, y - text_height(s) / 2, &label, s, BLACK);
-    }
 }
