@@ -109,7 +109,7 @@ fn drive<L: WorkerLink>(
                 // a worker gone or frozen: drop it, go back to the last checkpoint on
                 // the others, replay
                 (Err(e), Some(state)) if s.has_lost() => {
-                    tracing::warn!("step {}: {e}", s.clock().step);
+                    tracing::warn!("{e}");
                     let back = s
                         .recover(state)
                         .and_then(|()| sink.rollback(state).map_err(MasterError::sink));

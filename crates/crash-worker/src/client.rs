@@ -398,6 +398,18 @@ fn serve(
             Err(e) => (reply_to_pb(&Reply::Error(e.to_string())), None),
         };
         if tx.send(reply).is_err() {
+            // the master ended the session: say why if it did (a worker it dropped)
+            let why = rt.block_on(async {
+                tokio::time::timeout(Duration::from_secs(1), inbound.message()).await
+            });
+            if let Ok(Ok(Some(m))) = why {
+                if let Ok(Command::Shutdown(r)) = command_from_pb(&m) {
+                    return Err(lost(format!(
+                        "the master dropped this worker: {}",
+                        escape_peer(&r)
+                    )));
+                }
+            }
             return Err(lost("the outbound stream closed".into()));
         }
         if let Some(reason) = shutdown {
