@@ -1,6 +1,7 @@
 //! crash-master + crash-worker processes over gRPC on loopback: the same bits as the
-//! local run; refusal of a protocol mismatch; a lost or silent worker ends the run
-//! with a clear message (bounded waits everywhere, children killed on drop).
+//! local run; refusal of a protocol mismatch; without checkpoints a lost or silent
+//! worker ends the run with a clear message (with them the run continues: faults.rs)
+//! (bounded waits everywhere, children killed on drop).
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_master::{CostModel, RecordSink, RunOptions};
@@ -188,7 +189,8 @@ fn frames_listed(out: &Path) -> usize {
 
 #[test]
 fn a_killed_worker_ends_the_run_with_a_clear_message() {
-    let (mut m, mut w1, mut w2, out) = long_run("killed", &[]);
+    // no checkpoint to go back to: the loss ends the run
+    let (mut m, mut w1, mut w2, out) = long_run("killed", &["--checkpoint-seconds", "0"]);
     w2.kill();
     let status = m.wait(Duration::from_secs(60));
     assert!(!status.success());
@@ -210,7 +212,18 @@ fn a_killed_worker_ends_the_run_with_a_clear_message() {
 
 #[test]
 fn a_silent_worker_ends_the_run_after_the_reply_timeout() {
-    let (mut m, mut w1, w2, out) = long_run("silent", &["--reply-timeout", "2"]);
+    // heartbeats off: the reply timeout, the safety net, still bounds the wait
+    let (mut m, mut w1, w2, out) = long_run(
+        "silent",
+        &[
+            "--reply-timeout",
+            "2",
+            "--heartbeat-timeout",
+            "0",
+            "--checkpoint-seconds",
+            "0",
+        ],
+    );
     w2.signal("STOP");
     let status = m.wait(Duration::from_secs(60));
     assert!(!status.success());

@@ -250,6 +250,7 @@ fn commands_round_trip() {
         },
         Command::Frame(vec![1, 0]),
         Command::States(vec![3, 1]),
+        Command::Reset,
         Command::Shutdown("done".into()),
     ];
     for c in cmds {

@@ -83,6 +83,9 @@ pub enum Command {
     /// The state of these bodies (held by the worker; empty: every body held), for a
     /// checkpoint. The master asks in pieces of bounded size (MAX_MESSAGE).
     States(Vec<u32>),
+    /// Forget every body held, keep the definitions (a rollback to a checkpoint after a
+    /// worker was lost: the checkpoint's states are loaded next).
+    Reset,
     Shutdown(String),
 }
 

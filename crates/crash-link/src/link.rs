@@ -15,6 +15,9 @@ pub enum LinkError {
     /// No reply within the timeout.
     #[error("stopped answering: no reply within {seconds:.1} s")]
     Timeout { seconds: f64 },
+    /// No heartbeat within the heartbeat timeout (frozen, stopped, host gone).
+    #[error("stopped answering: no heartbeat for {seconds:.1} s")]
+    Silent { seconds: f64 },
     /// A reply that breaks the protocol.
     #[error("protocol error: {0}")]
     Protocol(String),
@@ -41,5 +44,21 @@ pub trait WorkerLink {
         if self.send(Command::Shutdown(reason.into())).is_ok() {
             let _ = self.recv();
         }
+    }
+    /// Drop a worker that was lost (its replies are no longer read): tell it why if it
+    /// can still hear, without waiting for anything.
+    fn abandon(&mut self, reason: &str) {
+        let _ = self.send(Command::Shutdown(reason.into()));
+    }
+}
+
+impl LinkError {
+    /// The worker is gone or frozen (as opposed to a worker that answered wrongly):
+    /// the run can continue without it.
+    pub fn is_loss(&self) -> bool {
+        matches!(
+            self,
+            LinkError::Lost(_) | LinkError::Timeout { .. } | LinkError::Silent { .. }
+        )
     }
 }

@@ -227,6 +227,7 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
         }),
         Command::Frame(ids) => PbCommand::Frame(pb::FrameRequest { ids: ids.clone() }),
         Command::States(ids) => PbCommand::States(pb::StatesRequest { ids: ids.clone() }),
+        Command::Reset => PbCommand::Reset(pb::Reset {}),
         Command::Shutdown(reason) => PbCommand::Shutdown(pb::Shutdown {
             reason: reason.clone(),
         }),
@@ -300,6 +301,7 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
             },
             PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
             PbCommand::States(s) => Command::States(s.ids.clone()),
+            PbCommand::Reset(_) => Command::Reset,
             PbCommand::Shutdown(s) => Command::Shutdown(s.reason.clone()),
         },
     )

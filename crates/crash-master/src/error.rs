@@ -37,6 +37,9 @@ pub enum MasterError {
         margin: f64,
         factor: f64,
     },
+    /// Every worker was lost: the run cannot continue here.
+    #[error("step {step}: every worker was lost; the run stopped and its last checkpoint (step {checkpoint}) was kept (crash-master: OUT/restart.ckp): continue with --resume and new workers")]
+    NoWorkers { step: u64, checkpoint: u64 },
     #[error("output: {0}")]
     Sink(String),
     #[error("network: {0}")]

@@ -101,6 +101,9 @@ pub struct FileSink {
     summary: Summary,
     /// Where checkpoints go (None: they are ignored).
     restart: Option<PathBuf>,
+    /// What a rollback returns to: the indicators and warnings at the last checkpoint
+    /// kept in memory.
+    mark: Option<(Indicators, Vec<Warning>)>,
 }
 
 impl FileSink {
@@ -124,6 +127,7 @@ impl FileSink {
             names: BTreeMap::new(),
             summary: Self::summary(scene, scene_hash, size),
             restart: None,
+            mark: None,
         })
     }
 
@@ -150,6 +154,7 @@ impl FileSink {
             names: BTreeMap::new(),
             summary: Self::summary(scene, scene_hash, size),
             restart: None,
+            mark: None,
         })
     }
 
@@ -294,6 +299,30 @@ impl Sink for FileSink {
                 warnings: &self.warnings,
             },
         )?;
+        Ok(())
+    }
+
+    fn remember(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
+        self.mark = Some((self.indicators, self.warnings.clone()));
+        Ok(())
+    }
+
+    /// Back to the checkpoint's time: energy.csv and contacts.csv keep their rows up to
+    /// it (a torn last line is dropped), frames.pvd its frames up to it (later frame
+    /// files removed), as a `--resume` does; the indicators and warnings return to
+    /// what they were then.
+    fn rollback(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        let t = state.clock.time;
+        self.energy.flush()?;
+        self.contacts.flush()?;
+        self.energy = EnergyHistory::reopen(self.dir.join(ENERGY_CSV), t)?;
+        self.contacts = ContactHistory::reopen(self.dir.join(CONTACTS_CSV), t)?;
+        self.series = SeriesWriter::reopen(&self.dir, t)?;
+        if let Some((indicators, warnings)) = &self.mark {
+            self.indicators = *indicators;
+            self.warnings = warnings.clone();
+        }
+        self.fresh.clear();
         Ok(())
     }
 

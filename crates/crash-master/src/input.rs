@@ -130,8 +130,14 @@ pub struct RunOptions {
     /// groups change).
     pub rebalance_interval: u64,
     /// Hand the sink a checkpoint (`Sink::checkpoint`) after every this many steps
-    /// (0: never). The last step of a run takes none.
+    /// (0: never). The last step of a run takes none. These checkpoints go to disk
+    /// (`Sink::checkpoint`), and so do the timed ones below when this is set.
     pub checkpoint_every: u64,
+    /// Also take a checkpoint when this much wall time has passed since the last one
+    /// [s] (0: never). Every checkpoint (of either kind) is kept in memory as the point
+    /// the run goes back to when a worker is lost; with neither kind, a lost worker
+    /// ends the run.
+    pub checkpoint_seconds: f64,
 }
 
 impl Default for RunOptions {
@@ -143,6 +149,7 @@ impl Default for RunOptions {
             balance_tolerance: 0.25,
             rebalance_interval: 500,
             checkpoint_every: 0,
+            checkpoint_seconds: 0.0,
         }
     }
 }

@@ -16,6 +16,7 @@ pub mod checkpoint;
 pub mod error;
 pub mod file_sink;
 pub mod guard;
+pub mod heartbeat;
 pub mod input;
 mod master;
 pub mod meim;
@@ -87,39 +88,48 @@ fn drive<L: WorkerLink>(
             return Err(e);
         }
     };
-    let every = opts.checkpoint_every;
-    let result = (|| {
-        while !s.finished() {
-            s.step(sink)?;
-            if stop::requested() {
-                // the step is complete: checkpoint, then the final frame and summary
-                let t = Instant::now();
-                s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
-                let state = s.checkpoint()?;
-                sink.checkpoint(&state).map_err(MasterError::sink)?;
-                s.stats_mut().stages.output_ns += t.elapsed().as_nanos() as u64;
-                let c = s.clock();
-                return Err(MasterError::Interrupted {
-                    step: c.step,
-                    time: c.time,
-                });
-            }
-            if every > 0 && s.clock().step.is_multiple_of(every) && !s.finished() {
-                let t = Instant::now();
-                s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
-                let state = s.checkpoint()?;
-                sink.checkpoint(&state).map_err(MasterError::sink)?;
-                s.stats_mut().stages.output_ns += t.elapsed().as_nanos() as u64;
-            }
-        }
-        Ok(())
-    })();
-    let result = match result {
-        Ok(()) => s.finish(sink),
-        // a clean stop: the final frame (its hash) as at the end of a run
-        Err(e @ MasterError::Interrupted { .. }) => s.finish(sink).and(Err(e)),
-        Err(e) => Err(e),
+    let mut ck = Checkpoints {
+        every: opts.checkpoint_every,
+        seconds: opts.checkpoint_seconds,
+        last: Instant::now(),
+        saved: None,
+        wall,
+        wall_before,
     };
+    // the first rollback point: the start (or the resumed checkpoint)
+    let mut result = if ck.keep() {
+        ck.take(&mut s, sink, false)
+    } else {
+        Ok(())
+    };
+    if result.is_ok() {
+        result = loop {
+            let r = to_the_end(&mut s, sink, &mut ck);
+            match (&r, &ck.saved) {
+                // a worker gone or frozen: drop it, go back to the last checkpoint on
+                // the others, replay
+                (Err(e), Some(state)) if s.has_lost() => {
+                    tracing::warn!("{e}");
+                    let back = s
+                        .recover(state)
+                        .and_then(|()| sink.rollback(state).map_err(MasterError::sink));
+                    if let Err(e) = back {
+                        // keep the checkpoint on disk to continue with --resume
+                        if sink.rollback(state).is_ok() {
+                            let _ = sink.checkpoint(state);
+                        }
+                        break Err(e);
+                    }
+                    tracing::info!(
+                        "continuing from step {} ({} workers dropped so far)",
+                        state.clock.step,
+                        s.recoveries()
+                    );
+                }
+                _ => break r,
+            }
+        };
+    }
     s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
     s.end(result.as_ref().err());
     match result {
@@ -141,6 +151,77 @@ fn drive<L: WorkerLink>(
             Err(e)
         }
     }
+}
+
+/// When checkpoints are taken, and the last one (the rollback point).
+struct Checkpoints {
+    /// Every this many steps, on disk too (0: never).
+    every: u64,
+    /// After this much wall time since the last one [s] (0: never).
+    seconds: f64,
+    last: Instant,
+    saved: Option<MasterCheckpoint>,
+    wall: Instant,
+    wall_before: f64,
+}
+
+impl Checkpoints {
+    /// Whether checkpoints are kept at all (without, a lost worker ends the run).
+    fn keep(&self) -> bool {
+        self.every > 0 || self.seconds > 0.0
+    }
+
+    /// Whether one is due after step `step`.
+    fn due(&self, step: u64) -> bool {
+        (self.every > 0 && step.is_multiple_of(self.every))
+            || (self.seconds > 0.0 && self.last.elapsed().as_secs_f64() >= self.seconds)
+    }
+
+    /// Take one: in memory (the rollback point) and, when asked, on disk.
+    fn take<L: WorkerLink>(
+        &mut self,
+        s: &mut Session<'_, L>,
+        sink: &mut dyn Sink,
+        disk: bool,
+    ) -> Result<(), MasterError> {
+        let t = Instant::now();
+        s.stats_mut().wall_s = self.wall_before + self.wall.elapsed().as_secs_f64();
+        let state = s.checkpoint()?;
+        if disk {
+            sink.checkpoint(&state).map_err(MasterError::sink)?;
+        }
+        sink.remember(&state).map_err(MasterError::sink)?;
+        s.stats_mut().stages.output_ns += t.elapsed().as_nanos() as u64;
+        self.saved = Some(state);
+        self.last = Instant::now();
+        Ok(())
+    }
+}
+
+/// Step to the end time (checkpoints as due), then the final frame. A stop request
+/// (SIGTERM) ends it after a complete step with a checkpoint on disk and the final frame.
+fn to_the_end<L: WorkerLink>(
+    s: &mut Session<'_, L>,
+    sink: &mut dyn Sink,
+    ck: &mut Checkpoints,
+) -> Result<(), MasterError> {
+    while !s.finished() {
+        s.step(sink)?;
+        if stop::requested() {
+            // the step is complete: checkpoint, then the final frame and summary
+            ck.take(s, sink, true)?;
+            s.finish(sink)?;
+            let c = s.clock();
+            return Err(MasterError::Interrupted {
+                step: c.step,
+                time: c.time,
+            });
+        }
+        if ck.keep() && ck.due(s.clock().step) && !s.finished() {
+            ck.take(s, sink, ck.every > 0)?;
+        }
+    }
+    s.finish(sink).map(|_| ())
 }
 
 /// Remote mode: the master loop over the worker processes attached to `cluster`.

@@ -49,9 +49,19 @@ struct Args {
     /// Wait this long for all workers to attach [s].
     #[arg(long, default_value_t = 300.0)]
     accept_timeout: f64,
-    /// A worker that does not answer a command within this time ends the run [s].
-    #[arg(long, default_value_t = 60.0)]
+    /// A worker that does not answer a command within this time is lost [s] (a safety
+    /// net: a frozen worker is found by its missing heartbeats much sooner).
+    #[arg(long, default_value_t = 600.0)]
     reply_timeout: f64,
+    /// A worker from which no heartbeat came for this long (while the master waits for
+    /// it) is lost [s]; 0: heartbeats are not checked.
+    #[arg(long, default_value_t = 5.0)]
+    heartbeat_timeout: f64,
+    /// Take a checkpoint in memory after this much wall time since the last one [s]:
+    /// when a worker is lost, the run goes back to it on the other workers. 0: none
+    /// (then, unless --checkpoint-every is given, a lost worker ends the run).
+    #[arg(long, default_value_t = 5.0)]
+    checkpoint_seconds: f64,
     /// MEIM boxes are inflated by this multiple of the contact margin (>= 1).
     #[arg(long, default_value_t = 2.0)]
     margin_factor: f64,
@@ -59,7 +69,8 @@ struct Args {
     /// times: placement is then reproducible.
     #[arg(long)]
     estimated_costs: bool,
-    /// Write a restart file OUT/restart.ckp (replaced atomically) every N steps. It is
+    /// Write a restart file OUT/restart.ckp (replaced atomically) every N steps, and at
+    /// every timed checkpoint (--checkpoint-seconds) too. It is
     /// continued with `crash-master --resume OUT/restart.ckp` on any number of workers,
     /// or in one process with `crash run SCENE --restart OUT/restart.ckp`.
     #[arg(long, value_name = "N")]
@@ -150,7 +161,9 @@ fn run(args: Args) -> anyhow::Result<()> {
         args.workers,
         RemoteOptions {
             accept_timeout: Duration::from_secs_f64(args.accept_timeout.max(0.0)),
-            reply_timeout: Duration::from_secs_f64(args.reply_timeout.max(0.001)),
+            reply_timeout: Duration::from_secs_f64(args.reply_timeout.clamp(0.001, 1e9)),
+            heartbeat_timeout: (args.heartbeat_timeout > 0.0)
+                .then(|| Duration::from_secs_f64(args.heartbeat_timeout.min(1e9))),
             handshake_timeout: Duration::from_secs_f64(args.handshake_timeout.clamp(0.1, 3600.0)),
             secret,
             max_message: crash_link::message_limit(
@@ -181,6 +194,11 @@ fn run(args: Args) -> anyhow::Result<()> {
             CostModel::Measured
         },
         checkpoint_every: args.checkpoint_every.unwrap_or(0),
+        checkpoint_seconds: if args.checkpoint_seconds.is_finite() {
+            args.checkpoint_seconds.max(0.0)
+        } else {
+            0.0
+        },
         ..RunOptions::default()
     };
     let stats = match restart {

@@ -1,7 +1,10 @@
 //! One worker process seen from the master: a `WorkerLink` over the worker's open
 //! bidirectional stream. It remembers which body definitions it has sent (ids only),
-//! so a body moving back travels as its state; it keeps no body data.
+//! so a body moving back travels as its state; it keeps no body data. While it waits
+//! for a reply it watches the worker's heartbeats (`heartbeat`): a worker silent for
+//! the heartbeat timeout is lost, however long its step takes otherwise.
 
+use crate::heartbeat::Beats;
 use crash_link::wire::{command_to_pb, reply_from_pb};
 use crash_link::{escape_peer, Command, LinkError, Reply, WorkerLink};
 use crash_proto::pb;
@@ -27,6 +30,8 @@ pub struct RemoteWorker {
     pub(crate) timeout: Duration,
     /// Encoding and decoding time since the last `take_codec_ns` [ns].
     pub(crate) codec_ns: u64,
+    pub(crate) beats: Arc<Beats>,
+    pub(crate) heartbeat_timeout: Option<Duration>,
 }
 
 impl std::fmt::Debug for RemoteWorker {
@@ -45,18 +50,46 @@ impl RemoteWorker {
         self.threads
     }
 
+    /// The next reply within `timeout`; with heartbeats, a worker silent for the
+    /// heartbeat timeout (counted from the later of its last beat and the start of this
+    /// wait: the beats are only handled while the master waits) is lost sooner.
     fn recv_within(&mut self, timeout: Duration) -> Result<Reply, LinkError> {
-        // the timer must be created inside the runtime
+        let start = Instant::now();
+        let (index, beats, silence) = (
+            self.index as u32,
+            self.beats.clone(),
+            self.heartbeat_timeout,
+        );
+        // look at the beats this often while waiting
+        let look = silence.map_or(timeout, |s| {
+            (s / 10).clamp(Duration::from_millis(20), Duration::from_millis(250))
+        });
         let inbound = &mut self.inbound;
-        let msg = match self
-            .rt
-            .block_on(async { tokio::time::timeout(timeout, inbound.message()).await })
-        {
-            Err(_) => {
-                return Err(LinkError::Timeout {
-                    seconds: timeout.as_secs_f64(),
-                })
+        let got = self.rt.block_on(async {
+            loop {
+                let left = timeout.saturating_sub(start.elapsed());
+                if left.is_zero() {
+                    return Err(LinkError::Timeout {
+                        seconds: timeout.as_secs_f64(),
+                    });
+                }
+                // the timer must be created inside the runtime; message() keeps its
+                // state in the stream, so a timed-out wait loses nothing
+                if let Ok(m) = tokio::time::timeout(left.min(look), inbound.message()).await {
+                    return Ok(m);
+                }
+                if let Some(s) = silence {
+                    let since = beats.last(index).map_or(start, |b| b.max(start));
+                    if since.elapsed() > s {
+                        return Err(LinkError::Silent {
+                            seconds: since.elapsed().as_secs_f64(),
+                        });
+                    }
+                }
             }
+        });
+        let msg = match got {
+            Err(e) => return Err(e),
             Ok(Err(s)) => {
                 return Err(LinkError::Lost(format!(
                     "{}: {}",
@@ -110,6 +143,14 @@ impl WorkerLink for RemoteWorker {
 
     fn take_codec_ns(&mut self) -> u64 {
         std::mem::take(&mut self.codec_ns)
+    }
+
+    fn abandon(&mut self, reason: &str) {
+        // its beats are refused from now on (the worker stops beating); a worker that
+        // wakes up later reads the Shutdown and exits
+        self.beats.revoke(self.index as u32);
+        let _ = self.send(Command::Shutdown(reason.into()));
+        self.tx = None;
     }
 
     fn close(&mut self, reason: &str) {

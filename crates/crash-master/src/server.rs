@@ -16,9 +16,13 @@
 //! admitted on a connection, `guard` bounds what it can cost: a handshake deadline,
 //! a Hello-sized message limit, a cap on pending connections. Peer text is escaped
 //! (`crash_link::escape_peer`) before it is logged.
+//!
+//! Heartbeats (`heartbeat`): each admitted worker beats on a connection of its own with
+//! the session token of its Welcome; a valid beat admits that connection too.
 
 use crate::error::MasterError;
 use crate::guard::{limit_request, ConnInfo, Gate};
+use crate::heartbeat::{interval_for, Beats, DEFAULT_TIMEOUT};
 use crate::remote_link::{Outbound, RemoteWorker};
 use crash_link::{
     check_version, escape_peer, HelloFields, Secret, HEALTH_SERVICE, MAX_MESSAGE, MAX_MESSAGE_CAP,
@@ -41,8 +45,12 @@ use tonic::{Request, Response, Status, Streaming};
 pub struct RemoteOptions {
     /// How long to wait for all workers to attach.
     pub accept_timeout: Duration,
-    /// A worker that does not answer a command within this time ends the run.
+    /// A worker that does not answer a command within this time is lost (a safety
+    /// net: heartbeats find a frozen worker sooner).
     pub reply_timeout: Duration,
+    /// A worker from which no heartbeat came for this long, while the master waited
+    /// for it, is lost (None: heartbeats are not checked).
+    pub heartbeat_timeout: Option<Duration>,
     /// A connection on which no worker is admitted within this time is closed.
     pub handshake_timeout: Duration,
     /// The shared secret a worker must prove (None: any peer that reaches the port
@@ -57,7 +65,8 @@ impl Default for RemoteOptions {
     fn default() -> Self {
         Self {
             accept_timeout: Duration::from_secs(300),
-            reply_timeout: Duration::from_secs(60),
+            reply_timeout: Duration::from_secs(600),
+            heartbeat_timeout: Some(DEFAULT_TIMEOUT),
             handshake_timeout: Duration::from_secs(5),
             secret: None,
             max_message: MAX_MESSAGE,
@@ -75,6 +84,7 @@ struct Attached {
 
 struct Service {
     attach: Arc<Mutex<Option<mpsc::UnboundedSender<Attached>>>>,
+    beats: Arc<Beats>,
     secret: Option<Arc<Secret>>,
     handshake: Duration,
 }
@@ -227,6 +237,17 @@ impl Coordinator for Service {
         });
         Ok(Response::new(UnboundedReceiverStream::new(rx)))
     }
+
+    async fn heartbeat(&self, req: Request<pb::Beat>) -> Result<Response<pb::BeatAck>, Status> {
+        let conn = req.extensions().get::<ConnInfo>().cloned();
+        let b = req.into_inner();
+        self.beats.beat(b.worker_index, &b.session_token)?;
+        // the beating connection belongs to an admitted worker: no handshake deadline
+        if let Some(c) = conn {
+            c.admit();
+        }
+        Ok(Response::new(pb::BeatAck {}))
+    }
 }
 
 /// The listening master and its attached workers.
@@ -271,6 +292,7 @@ impl Cluster {
         let (tx, rx) = mpsc::unbounded_channel();
         let service = Arc::new(Service {
             attach: Arc::new(Mutex::new(Some(tx))),
+            beats: Arc::new(Beats::default()),
             secret: opts.secret.clone().map(Arc::new),
             handshake: opts.handshake_timeout,
         });
@@ -388,12 +410,20 @@ impl Cluster {
                 t.as_secs_f64()
             )));
         }
+        let every = interval_for(self.opts.heartbeat_timeout.unwrap_or(DEFAULT_TIMEOUT));
         for (i, a) in attached.into_iter().enumerate() {
+            let token = self
+                .service
+                .beats
+                .register(i as u32)
+                .map_err(|e| MasterError::Network(e.to_string()))?;
             let welcome = pb::MasterMessage {
                 command: Some(master_message::Command::Welcome(pb::Welcome {
                     protocol_version: PROTOCOL_VERSION,
                     worker_index: i as u32,
                     workers: n as u32,
+                    session_token: token,
+                    heartbeat_interval_ms: every.as_millis().clamp(1, 60_000) as u32,
                 })),
             };
             a.outbound.send(Ok(welcome)).map_err(|_| {
@@ -414,6 +444,8 @@ impl Cluster {
                 sent: BTreeSet::new(),
                 codec_ns: 0,
                 timeout: self.opts.reply_timeout,
+                beats: self.service.beats.clone(),
+                heartbeat_timeout: self.opts.heartbeat_timeout,
             });
         }
         Ok(())

@@ -63,6 +63,23 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         self.m.checkpoint()
     }
 
+    /// Whether the last command found workers gone or frozen: `recover` can continue
+    /// without them.
+    pub fn has_lost(&self) -> bool {
+        self.m.has_lost()
+    }
+
+    /// Drop the lost workers and roll the run back to `state` (a checkpoint of this
+    /// run) on the others; then roll the sink back too (`Sink::rollback`).
+    pub fn recover(&mut self, state: &MasterCheckpoint) -> Result<(), MasterError> {
+        self.m.recover(state)
+    }
+
+    /// Workers dropped so far.
+    pub fn recoveries(&self) -> u64 {
+        self.m.recoveries()
+    }
+
     /// The run's clock.
     pub fn clock(&self) -> Clock {
         self.m.clock()

@@ -34,6 +34,21 @@ pub trait Sink {
     fn checkpoint(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
         Ok(())
     }
+    /// A checkpoint the run may roll back to (after a worker was lost), in memory:
+    /// remember what `rollback` needs to return to it. Called after `checkpoint`.
+    fn remember(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
+        Ok(())
+    }
+    /// The run went back to `state` (the last checkpoint handed to `remember`): forget
+    /// every row and frame after its step (a torn last row included), so the steps
+    /// that follow again are written once.
+    fn rollback(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        Err(format!(
+            "this output cannot go back to step {} to continue without a lost worker",
+            state.clock.step
+        )
+        .into())
+    }
     /// A frame at an output time begins; its bodies follow in id order (`frame_body`),
     /// then `frame_end`.
     fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError>;
@@ -98,6 +113,17 @@ impl Sink for RecordSink {
 
     fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
         self.checkpoints.push(state.clone());
+        Ok(())
+    }
+
+    fn rollback(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        let step = state.clock.step;
+        self.energy.retain(|r| r.step <= step);
+        self.frames.retain(|f| f.0 <= step);
+        self.contacts.retain(|c| c.0 <= step);
+        self.contact_stats.retain(|c| c.0 <= step);
+        self.open = None;
+        self.last_hash = self.frames.last().map(|f| f.2);
         Ok(())
     }
 

@@ -3,7 +3,9 @@
 //!
 //! Threads: the calling thread drives a current-thread tokio runtime while it waits for
 //! a command, then computes it outside the runtime as worker 0 of the rayon compute
-//! pool (the other pool threads join by work stealing); see `serve`.
+//! pool (the other pool threads join by work stealing); see `serve`. A thread of its
+//! own, with its own small runtime and its own connection, sends the heartbeats, so a
+//! long step cannot silence them (`heartbeat`).
 
 use crate::engine::Engine;
 use crash_link::wire::{command_from_pb, reply_to_pb};
@@ -14,6 +16,8 @@ use crash_link::{
 use crash_proto::pb::coordinator_client::CoordinatorClient;
 use crash_proto::pb::master_message::Command as PbCommand;
 use crash_proto::pb::{self, worker_message};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use thiserror::Error;
 use tokio::sync::mpsc;
@@ -35,6 +39,8 @@ pub struct WorkerOptions {
     pub secret: Option<Secret>,
     /// Host name announced in Hello (default: $HOSTNAME).
     pub host: String,
+    /// Sleep this long before computing each step (tests of a slow but alive worker).
+    pub step_delay: Duration,
 }
 
 impl WorkerOptions {
@@ -46,6 +52,7 @@ impl WorkerOptions {
             protocol_version: PROTOCOL_VERSION,
             secret: None,
             host: std::env::var("HOSTNAME").unwrap_or_default(),
+            step_delay: Duration::ZERO,
         }
     }
 }
@@ -85,8 +92,63 @@ pub fn run(opts: &WorkerOptions) -> Result<String, WorkerError> {
         .thread_name(|i| format!("crash-compute-{i}"))
         .build()
         .map_err(|e| WorkerError::Start(format!("compute pool: {e}")))?;
-    let (tx, inbound) = rt.block_on(attach(opts))?;
-    serve(opts, &rt, &pool, tx, inbound)
+    let (tx, inbound, welcome) = rt.block_on(attach(opts))?;
+    let alive = Arc::new(AtomicBool::new(true));
+    heartbeat(opts, &welcome, alive.clone())?;
+    let result = serve(opts, &rt, &pool, tx, inbound);
+    alive.store(false, Ordering::Relaxed);
+    result
+}
+
+/// Beat every `heartbeat_interval_ms` on a connection of its own, from a thread with
+/// its own runtime: the master hears the worker while its main thread computes a long
+/// step (the main runtime is driven only between commands). Stops when `alive` turns
+/// false or the master no longer knows this worker.
+fn heartbeat(
+    opts: &WorkerOptions,
+    welcome: &pb::Welcome,
+    alive: Arc<AtomicBool>,
+) -> Result<(), WorkerError> {
+    let url = opts.master.clone();
+    let ep = endpoint(&url)?;
+    let beat = pb::Beat {
+        worker_index: welcome.worker_index,
+        session_token: welcome.session_token.clone(),
+    };
+    let every = Duration::from_millis(u64::from(welcome.heartbeat_interval_ms.clamp(10, 60_000)));
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| WorkerError::Start(format!("heartbeat runtime: {e}")))?;
+    std::thread::Builder::new()
+        .name("crash-heartbeat".into())
+        .spawn(move || {
+            rt.block_on(async move {
+                let mut client: Option<CoordinatorClient<Channel>> = None;
+                while alive.load(Ordering::Relaxed) {
+                    if client.is_none() {
+                        client = ep.connect().await.ok().map(CoordinatorClient::new);
+                    }
+                    if let Some(c) = client.as_mut() {
+                        match tokio::time::timeout(4 * every, c.heartbeat(beat.clone())).await {
+                            Ok(Ok(_)) => {}
+                            Ok(Err(s)) if s.code() == Code::NotFound => {
+                                tracing::warn!(
+                                    "the master at {url} no longer counts this worker: {}",
+                                    escape_peer(s.message())
+                                );
+                                return;
+                            }
+                            // a fresh connection at the next beat
+                            _ => client = None,
+                        }
+                    }
+                    tokio::time::sleep(every).await;
+                }
+            })
+        })
+        .map_err(|e| WorkerError::Start(format!("heartbeat thread: {e}")))?;
+    Ok(())
 }
 
 fn endpoint(url: &str) -> Result<Endpoint, WorkerError> {
@@ -195,6 +257,7 @@ async fn attach(
     (
         mpsc::UnboundedSender<pb::WorkerMessage>,
         Streaming<pb::MasterMessage>,
+        pb::Welcome,
     ),
     WorkerError,
 > {
@@ -267,7 +330,7 @@ async fn attach(
     }
     tx.send(hello(opts, &challenge.nonce))
         .map_err(|_| WorkerError::Start("outbound stream closed".into()))?;
-    match inbound.message().await {
+    let welcome = match inbound.message().await {
         Ok(Some(pb::MasterMessage {
             command: Some(PbCommand::Welcome(w)),
         })) => {
@@ -284,12 +347,13 @@ async fn attach(
                 w.worker_index,
                 w.workers
             );
+            w
         }
         Ok(Some(_)) => return Err(protocol("the message after Hello was not Welcome")),
         Ok(None) => return Err(lost("the master closed the session before Welcome".into())),
         Err(s) => return Err(refused_or_lost(url, &s)),
-    }
-    Ok((tx, inbound))
+    };
+    Ok((tx, inbound, welcome))
 }
 
 /// Answer commands until Shutdown. The runtime is driven only while waiting for the
@@ -331,6 +395,9 @@ fn serve(
                     Command::Shutdown(r) => Some(escape_peer(r)),
                     _ => None,
                 };
+                if matches!(cmd, Command::Step { .. }) && !opts.step_delay.is_zero() {
+                    std::thread::sleep(opts.step_delay);
+                }
                 (pool.install(|| engine.handle(cmd)), shutdown)
             }
             Err(e) => (Reply::Error(e.to_string()), None),
@@ -342,6 +409,18 @@ fn serve(
         let reply = reply_to_pb(&reply);
         last_encode_ns = t1.elapsed().as_nanos() as u64;
         if tx.send(reply).is_err() {
+            // the master ended the session: say why if it did (a worker it dropped)
+            let why = rt.block_on(async {
+                tokio::time::timeout(Duration::from_secs(1), inbound.message()).await
+            });
+            if let Ok(Ok(Some(m))) = why {
+                if let Ok(Command::Shutdown(r)) = command_from_pb(&m) {
+                    return Err(lost(format!(
+                        "the master dropped this worker: {}",
+                        escape_peer(&r)
+                    )));
+                }
+            }
             return Err(lost("the outbound stream closed".into()));
         }
         if let Some(reason) = shutdown {

@@ -105,6 +105,14 @@ impl Engine {
             Command::Frame(ids) => self.frame(&ids).map(Reply::Frame),
             Command::States(ids) if ids.is_empty() => Ok(Reply::States(self.states())),
             Command::States(ids) => self.states_of(&ids).map(Reply::States),
+            Command::Reset => {
+                // a rollback: the checkpoint's states follow in Loads (definitions kept)
+                self.groups.clear();
+                self.loose.clear();
+                self.at = None;
+                self.broken = false;
+                Ok(Reply::Ack)
+            }
             Command::Shutdown(_) => Ok(Reply::Ack),
         };
         res.unwrap_or_else(|e| Reply::Error(e.to_string()))

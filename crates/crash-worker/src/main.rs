@@ -37,6 +37,9 @@ struct Args {
     /// Announce this protocol version instead of the built-in one (tests of refusal).
     #[arg(long, hide = true)]
     protocol_version: Option<u32>,
+    /// Sleep this long before each step [ms] (tests of a slow but alive worker).
+    #[arg(long, hide = true, default_value_t = 0)]
+    step_delay_ms: u64,
 }
 
 fn main() -> ExitCode {
@@ -102,6 +105,7 @@ fn main() -> ExitCode {
     if let Some(v) = args.protocol_version {
         opts.protocol_version = v;
     }
+    opts.step_delay = Duration::from_millis(args.step_delay_ms);
     match crash_worker::run(&opts) {
         Ok(reason) => {
             eprintln!("crash-worker: done ({reason})");

@@ -24,40 +24,74 @@ impl<L: WorkerLink> Master<'_, L> {
         )
     }
 
-    /// Send every link its commands, then collect the replies (in order). Errors and
-    /// faults end the exchange; of several faults the one of the group with the
-    /// smallest body id wins (the same in every placement).
+    /// Send every live link its commands, then collect the replies (in order; a worker
+    /// dropped earlier gets nothing and answers nothing). Every live worker's replies
+    /// are read even when another fails, so the survivors' streams stay in step for a
+    /// rollback: workers that are gone or frozen are recorded in `lost` and the first
+    /// such loss is returned. Otherwise a refused command is returned; of several
+    /// faults the one of the group with the smallest body id wins (the same in every
+    /// placement).
     pub(super) fn exchange(
         &mut self,
         cmds: Vec<Vec<Command>>,
     ) -> Result<Vec<Vec<Reply>>, MasterError> {
         let counts: Vec<usize> = cmds.iter().map(Vec::len).collect();
+        let mut failed: Vec<Option<LinkError>> = vec![None; counts.len()];
         for (w, list) in cmds.into_iter().enumerate() {
+            if !self.live[w] {
+                continue;
+            }
             for c in list {
-                self.links[w].send(c).map_err(|e| self.worker_error(w, e))?;
+                if let Err(e) = self.links[w].send(c) {
+                    failed[w] = Some(e);
+                    break;
+                }
             }
         }
         let mut out = Vec::with_capacity(counts.len());
         let mut fault: Option<(u32, Fault)> = None;
+        let mut refused: Option<(usize, String)> = None;
         for (w, &count) in counts.iter().enumerate() {
             let mut replies = Vec::with_capacity(count);
-            for _ in 0..count {
-                match self.links[w].recv().map_err(|e| self.worker_error(w, e))? {
-                    Reply::Error(reason) => {
-                        return Err(self.worker_error(w, LinkError::Refused(reason)))
-                    }
-                    Reply::Fault {
-                        group_first,
-                        fault: f,
-                    } => {
-                        if fault.as_ref().is_none_or(|(g, _)| group_first < *g) {
-                            fault = Some((group_first, f));
+            if self.live[w] && failed[w].is_none() {
+                for _ in 0..count {
+                    match self.links[w].recv() {
+                        Err(e) => {
+                            failed[w] = Some(e);
+                            break;
                         }
+                        Ok(Reply::Error(reason)) => {
+                            refused.get_or_insert((w, reason));
+                        }
+                        Ok(Reply::Fault {
+                            group_first,
+                            fault: f,
+                        }) => {
+                            if fault.as_ref().is_none_or(|(g, _)| group_first < *g) {
+                                fault = Some((group_first, f));
+                            }
+                        }
+                        Ok(r) => replies.push(r),
                     }
-                    r => replies.push(r),
                 }
             }
             out.push(replies);
+        }
+        let mut first: Option<MasterError> = None;
+        for (w, e) in failed.into_iter().enumerate() {
+            if let Some(e) = e {
+                let err = self.worker_error(w, e.clone());
+                if e.is_loss() {
+                    self.lost.push((w, e));
+                }
+                first.get_or_insert(err);
+            }
+        }
+        if let Some(e) = first {
+            return Err(e);
+        }
+        if let Some((w, reason)) = refused {
+            return Err(self.worker_error(w, LinkError::Refused(reason)));
         }
         if let Some((_, f)) = fault {
             return Err(MasterError::Fault(f));
@@ -72,11 +106,22 @@ impl<L: WorkerLink> Master<'_, L> {
         what: &str,
     ) -> Result<Vec<StepReport>, MasterError> {
         let nw = self.links.len();
-        let replies = self.exchange((0..nw).map(|_| vec![cmd()]).collect())?;
+        let cmds = (0..nw)
+            .map(|w| {
+                if self.live[w] {
+                    vec![cmd()]
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect();
+        let replies = self.exchange(cmds)?;
         let mut reps = Vec::with_capacity(nw);
         for (w, mut r) in replies.into_iter().enumerate() {
             match r.pop() {
                 Some(Reply::Report(rep)) => reps.push(rep),
+                // a dropped worker holds nothing
+                None if !self.live[w] => reps.push(StepReport::default()),
                 _ => return Err(self.bad_reply(w, what)),
             }
         }

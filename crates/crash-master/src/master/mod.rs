@@ -4,23 +4,26 @@
 //! - `barrier`: commands out to every worker, replies back in body-id order;
 //! - `placement`: MEIM update, groups onto workers, migration of bodies;
 //! - `output`: frames gathered from the workers when one is due;
-//! - `resume`: the loop's state into a checkpoint and back.
+//! - `resume`: the loop's state into a checkpoint and back;
+//! - `recover`: a lost worker dropped, the run rolled back to the last checkpoint on
+//!   the survivors.
 //!
 //! The master keeps one small record per body (`BodyInfo`) and the reports of the last
 //! step; it holds no nodal data between output times.
 
 use crate::error::MasterError;
-use crate::input::{RunInput, RunOptions};
+use crate::input::{BodySource, RunInput, RunOptions};
 use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::stats::RunStats;
 use crash_core::contact::{ContactConfig, PairStats};
 use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, RunConfig, Vec3};
-use crash_link::WorkerLink;
+use crash_link::{LinkError, WorkerLink};
 
 mod barrier;
 mod output;
 mod placement;
+mod recover;
 mod resume;
 mod time_loop;
 
@@ -44,6 +47,16 @@ const TIME_EPS: f64 = 1e-12;
 
 pub(crate) struct Master<'a, L: WorkerLink> {
     links: &'a mut [L],
+    /// Workers still in the run (a lost one is dropped for good; indices stay).
+    live: Vec<bool>,
+    /// Workers found gone or frozen by the last exchange, not yet dropped.
+    lost: Vec<(usize, LinkError)>,
+    /// Where definitions come from when a survivor needs one it never received.
+    source: Option<BodySource>,
+    /// Verlet skin of the level-i search (a rollback starts the list afresh).
+    skin: f64,
+    /// Workers dropped so far (each followed by a rollback).
+    recoveries: u64,
     opts: RunOptions,
     cfg: RunConfig,
     contact: ContactConfig,
@@ -125,7 +138,12 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             .map(|b| opts.margin_factor * c.margin_of(b.thickness))
             .fold(0.0, f64::max);
         Ok(Self {
+            live: vec![true; links.len()],
             links,
+            lost: Vec::new(),
+            source: None,
+            skin,
+            recoveries: 0,
             opts,
             cfg: input.config,
             contact: c,
@@ -168,11 +186,23 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         self.ledger.max_error()
     }
 
-    /// Best-effort shutdown of every worker (some may be gone).
+    /// Best-effort shutdown of every worker still in the run (some may be gone).
     pub(crate) fn shutdown(&mut self, reason: &str) {
-        for l in self.links.iter_mut() {
-            l.close(reason);
+        for (l, &live) in self.links.iter_mut().zip(&self.live) {
+            if live {
+                l.close(reason);
+            }
         }
+    }
+
+    /// Workers dropped so far.
+    pub(crate) fn recoveries(&self) -> u64 {
+        self.recoveries
+    }
+
+    /// Workers still in the run.
+    pub(crate) fn live_count(&self) -> usize {
+        self.live.iter().filter(|&&l| l).count()
     }
 }
 

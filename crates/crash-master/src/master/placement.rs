@@ -82,14 +82,21 @@ impl<L: WorkerLink> Master<'_, L> {
             .iter()
             .map(|g| g.iter().filter_map(|&id| self.index(id)).collect())
             .collect();
-        let to = assign(
+        // onto the workers still in the run: assignment sees them as 0..live
+        let live: Vec<usize> = (0..self.links.len()).filter(|&w| self.live[w]).collect();
+        let slot = |w: usize| live.iter().position(|&l| l == w);
+        let current: Vec<Option<usize>> = self.worker_of.iter().map(|w| w.and_then(slot)).collect();
+        let to: Vec<usize> = assign(
             &idx,
             &self.costs(),
-            &self.worker_of,
-            self.links.len(),
+            &current,
+            live.len(),
             self.opts.balance_tolerance,
             true,
-        );
+        )
+        .into_iter()
+        .map(|k| live.get(k).copied().unwrap_or(0))
+        .collect();
         let mut out = vec![0; self.info.len()];
         for (g, &w) in idx.iter().zip(&to) {
             for &b in g {
@@ -131,6 +138,7 @@ impl<L: WorkerLink> Master<'_, L> {
     ) -> Result<(), MasterError> {
         let nw = self.links.len();
         let setup = self.setup();
+        // (a dropped worker's commands are skipped by the exchange)
         self.expect_acks(
             (0..nw).map(|_| vec![Command::Setup(setup)]).collect(),
             "Setup",
@@ -154,7 +162,11 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     /// An exchange whose every reply must be Ack.
-    fn expect_acks(&mut self, cmds: Vec<Vec<Command>>, what: &str) -> Result<(), MasterError> {
+    pub(super) fn expect_acks(
+        &mut self,
+        cmds: Vec<Vec<Command>>,
+        what: &str,
+    ) -> Result<(), MasterError> {
         for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
             if r.iter().any(|x| !matches!(x, Reply::Ack)) {
                 return Err(self.bad_reply(w, what));

@@ -6,6 +6,7 @@ use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
 use crate::input::BodySource;
 use crate::meim::Meim;
+use crate::pairs::PairSearch;
 use crash_core::Body;
 use crash_link::{BodyLoad, Command, Reply, WorkerLink};
 
@@ -55,6 +56,22 @@ impl<L: WorkerLink> Master<'_, L> {
         })
     }
 
+    /// The loop's state as the checkpoint holds it (clock, dt, ledger, MEIM, frame
+    /// schedule, statistics); the Verlet list starts empty (the first update does a
+    /// full search, whose result equals the list's).
+    pub(super) fn restore_loop(&mut self, ck: &MasterCheckpoint) {
+        let ids: Vec<u32> = self.info.iter().map(|i| i.id).collect();
+        self.clock = ck.clock;
+        self.next_dt = ck.next_dt;
+        self.dt0 = ck.dt0;
+        self.ledger = ck.ledger.clone();
+        self.meim = Meim::restore(&ids, self.opts.split_after, &ck.edges);
+        self.search = PairSearch::new(self.contact.margin, self.skin);
+        self.frames = ck.frames;
+        self.last_frame_step = ck.last_frame_step;
+        self.stats = ck.stats.clone();
+    }
+
     /// Continue from a checkpoint instead of `start`: restore the loop's state, place
     /// the restored groups and load each body (the scene's definition with the
     /// checkpoint's state) onto its worker at the checkpoint's clock. Nothing is written
@@ -62,7 +79,7 @@ impl<L: WorkerLink> Master<'_, L> {
     pub(crate) fn resume(
         &mut self,
         ck: MasterCheckpoint,
-        mut bodies: BodySource,
+        bodies: BodySource,
     ) -> Result<(), MasterError> {
         if ck.scene_hash != self.scene_hash {
             return Err(MasterError::Input(format!(
@@ -84,19 +101,15 @@ impl<L: WorkerLink> Master<'_, L> {
                 c.time, ck.next_dt
             )));
         }
-        self.clock = c;
-        self.next_dt = ck.next_dt;
-        self.dt0 = ck.dt0;
-        self.ledger = ck.ledger;
-        self.meim = Meim::restore(&ids, self.opts.split_after, &ck.edges);
-        self.frames = ck.frames;
-        self.last_frame_step = ck.last_frame_step;
-        self.stats = ck.stats;
-        // the Verlet list starts empty: the first update does a full search
+        self.restore_loop(&ck);
         let placement = self.place_all();
+        let mut source = Some(bodies);
         let mut states = ck.states.into_iter();
-        self.load_all(&placement, |id| {
-            let body = bodies.take(id)?;
+        let loaded = self.load_all(&placement, |id| {
+            let body = source
+                .as_mut()
+                .ok_or_else(|| MasterError::Input("no bodies".into()))?
+                .take(id)?;
             let (sid, state) = states.next().filter(|(sid, _)| *sid == id).ok_or_else(|| {
                 MasterError::Input(format!("the checkpoint has no state of body {id}"))
             })?;
@@ -104,7 +117,8 @@ impl<L: WorkerLink> Master<'_, L> {
                 MasterError::Input(format!("the checkpoint's state of body {sid}: {e}"))
             })?;
             Ok(BodyLoad::whole(body))
-        })?;
-        Ok(())
+        });
+        self.source = source;
+        loaded
     }
 }

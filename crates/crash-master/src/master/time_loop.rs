@@ -26,17 +26,27 @@ impl<L: WorkerLink> Master<'_, L> {
     /// first dt.
     pub(crate) fn start(
         &mut self,
-        mut bodies: BodySource,
+        bodies: BodySource,
         briefs: &[BodyBrief],
         sink: &mut dyn Sink,
     ) -> Result<(), MasterError> {
+        // kept: a rollback may need a definition a survivor never received
+        self.source = Some(bodies);
         let t0 = Instant::now();
         let boxes: Vec<BodyBox> = briefs.iter().map(|b| self.inflate(b.bbox())).collect();
         self.update_meim(&boxes);
         let placement = self.place_all();
         self.stats.stages.meim_ns += ns(t0);
         let t1 = Instant::now();
-        self.load_all(&placement, |id| Ok(BodyLoad::whole(bodies.take(id)?)))?;
+        let mut source = self.source.take();
+        let loaded = self.load_all(&placement, |id| {
+            let b = source
+                .as_mut()
+                .ok_or_else(|| MasterError::Input("no bodies".into()))?;
+            Ok(BodyLoad::whole(b.take(id)?))
+        });
+        self.source = source;
+        loaded?;
         let reports = self.reports_of(|| Command::Start, "Start")?;
         self.stats.stages.migration_ns += ns(t1);
         self.gather(reports)?;
@@ -170,7 +180,7 @@ impl<L: WorkerLink> Master<'_, L> {
     pub(crate) fn record_progress(&mut self) {
         self.stats.steps = self.clock.step;
         self.stats.time = self.clock.time;
-        self.stats.workers = self.links.len();
+        self.stats.workers = self.live_count();
         self.stats.max_energy_error = self.ledger.max_error();
         if !self.stats.dt_min.is_finite() && self.stats.last_dt > 0.0 {
             // only a shortened step was taken
