@@ -6,12 +6,14 @@ pub mod atomic;
 pub mod checkpoint;
 pub mod error;
 pub mod frame;
+pub mod frame_writer;
 pub mod history;
 pub mod render;
 pub mod run;
 pub mod series;
 pub mod summary;
 pub mod vtu;
+pub mod vtu_encode;
 pub mod vtu_read;
 
 pub use checkpoint::{read_checkpoint, write_checkpoint};
@@ -30,5 +32,6 @@ pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};
 pub use summary::{
     hash_hex, read_summary, write_summary, Indicators, Summary, Warning, WarningKind, SUMMARY_JSON,
 };
-pub use vtu::Encoding;
+pub use frame_writer::BackgroundSeries;
+pub use vtu::{Precision, VtuFormat};
 pub use vtu_read::read_vtu;
