@@ -77,7 +77,13 @@ impl Spill {
                 .as_ref()
                 .filter(|_| self.mem.len() + bytes.len() > self.memory)
             {
-                let mut f = BufWriter::new(File::create(p)?);
+                let file = std::fs::OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .open(p)?;
+                let mut f = BufWriter::new(file);
                 f.write_all(&self.mem)?;
                 self.mem = Vec::new();
                 self.file = Some(f);
@@ -228,8 +234,8 @@ impl FrameEncoder {
             .map(|s| header(s, self.format.compress))
             .collect();
         self.write_xml(out, &headers)?;
-        writeln!(out, r#"  <AppendedData encoding="raw">"#)?;
-        out.write_all(b"_")?;
+        // the '_' right after the tag: some readers (vtkio) take the data from there
+        write!(out, r#"  <AppendedData encoding="raw">_"#)?;
         let mut buf = Vec::new();
         for (s, h) in self.streams.iter().zip(&headers) {
             out.write_all(h)?;
