@@ -225,7 +225,11 @@ impl BackgroundSeries {
         let mut waited = None;
         while busy(&st) && st.error.is_none() && st.stopped.is_none() && self.thread.is_some() {
             waited.get_or_insert_with(Instant::now);
-            st = self.shared.changed.wait(st).unwrap_or_else(|p| p.into_inner());
+            st = self
+                .shared
+                .changed
+                .wait(st)
+                .unwrap_or_else(|p| p.into_inner());
         }
         if let Some(t) = waited {
             st.stalls += 1;

@@ -19,6 +19,7 @@ pub mod vtu_read;
 pub use checkpoint::{read_checkpoint, write_checkpoint};
 pub use error::IoError;
 pub use frame::{Frame, FrameBody};
+pub use frame_writer::BackgroundSeries;
 pub use history::{
     read_contacts_csv, read_energy_csv, ContactHistory, ContactRow, EnergyHistory, EnergyRow,
     CONTACTS_CSV, ENERGY_CSV,
@@ -32,6 +33,5 @@ pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};
 pub use summary::{
     hash_hex, read_summary, write_summary, Indicators, Summary, Warning, WarningKind, SUMMARY_JSON,
 };
-pub use frame_writer::BackgroundSeries;
 pub use vtu::{Precision, VtuFormat};
 pub use vtu_read::read_vtu;

@@ -175,9 +175,15 @@ pub const ARRAYS: &[ArrayDef] = {
         def(CellData, VM_BOTTOM, 1, |b, _| {
             f64s(b.von_mises_bottom.iter().copied())
         }),
-        def(CellData, MEMBRANE, 3, |b, _| f64s(b.n.iter().flatten().copied())),
-        def(CellData, BENDING, 3, |b, _| f64s(b.m.iter().flatten().copied())),
-        def(CellData, THICKNESS, 1, |b, _| f64s(per_element(b, b.thickness))),
+        def(CellData, MEMBRANE, 3, |b, _| {
+            f64s(b.n.iter().flatten().copied())
+        }),
+        def(CellData, BENDING, 3, |b, _| {
+            f64s(b.m.iter().flatten().copied())
+        }),
+        def(CellData, THICKNESS, 1, |b, _| {
+            f64s(per_element(b, b.thickness))
+        }),
         def(CellData, BODY_ID, 1, |b, _| {
             Values::I64(Box::new(per_element(b, b.id as i64)))
         }),

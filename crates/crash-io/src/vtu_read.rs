@@ -135,7 +135,11 @@ impl Reader<'_> {
             let before = out.len();
             std::io::Read::read_to_end(&mut z, &mut out)
                 .map_err(|e| self.err(format!("array {name}: block {k}: zlib: {e}")))?;
-            let want = if k + 1 == nb && last != 0 { last } else { block };
+            let want = if k + 1 == nb && last != 0 {
+                last
+            } else {
+                block
+            };
             if (out.len() - before) as u64 != want {
                 return Err(self.err(format!(
                     "array {name}: block {k} holds {} bytes, {want} expected",

@@ -49,10 +49,14 @@ fn own_reader_round_trips_f64_exactly_and_f32_to_f32_rounding() {
         let back = read_vtu(&w.write(&frame).expect("write")).expect("read");
         let p = fmt.precision;
         let v3 = |v: &[crash_core::Vec3]| -> Vec<f64> {
-            v.iter().flat_map(|q| [q.x, q.y, q.z]).map(|c| stored(c, p)).collect()
+            v.iter()
+                .flat_map(|q| [q.x, q.y, q.z])
+                .map(|c| stored(c, p))
+                .collect()
         };
         let flat = |v: &[f64]| -> Vec<f64> { v.iter().map(|&c| stored(c, p)).collect() };
-        let t3 = |v: &[[f64; 3]]| -> Vec<f64> { v.iter().flatten().map(|&c| stored(c, p)).collect() };
+        let t3 =
+            |v: &[[f64; 3]]| -> Vec<f64> { v.iter().flatten().map(|&c| stored(c, p)).collect() };
         let bits = |v: Vec<f64>| -> Vec<u64> { v.into_iter().map(f64::to_bits).collect() };
         assert_eq!(back.time.to_bits(), frame.time.to_bits(), "{name}");
         assert_eq!(back.step, frame.step);
@@ -67,7 +71,10 @@ fn own_reader_round_trips_f64_exactly_and_f32_to_f32_rounding() {
             assert_eq!(bits(v3(&a.v)), bits(v3(&b.v)), "{name}: velocities");
             assert_eq!(bits(v3(&a.f_contact)), bits(v3(&b.f_contact)), "{name}");
             assert_eq!(bits(flat(&a.von_mises_top)), bits(flat(&b.von_mises_top)));
-            assert_eq!(bits(flat(&a.von_mises_bottom)), bits(flat(&b.von_mises_bottom)));
+            assert_eq!(
+                bits(flat(&a.von_mises_bottom)),
+                bits(flat(&b.von_mises_bottom))
+            );
             assert_eq!(bits(t3(&a.n)), bits(t3(&b.n)), "{name}: membrane");
             assert_eq!(bits(t3(&a.m)), bits(t3(&b.m)), "{name}: bending");
             // x0 comes back as x - u, u rounded once, then the subtraction
@@ -76,7 +83,10 @@ fn own_reader_round_trips_f64_exactly_and_f32_to_f32_rounding() {
                 Precision::F32 => 2.0 * f32::EPSILON as f64,
             };
             for (q, r) in a.x0.iter().zip(&b.x0) {
-                assert!((q - r).norm() <= eps * (1.0 + r.norm()), "{name}: {q} vs {r}");
+                assert!(
+                    (q - r).norm() <= eps * (1.0 + r.norm()),
+                    "{name}: {q} vs {r}"
+                );
             }
         }
     }
@@ -132,20 +142,27 @@ fn compressed_arrays_follow_vtk_block_format_and_decode_independently() {
     let xml = std::str::from_utf8(&bytes[..at]).expect("utf8");
     assert!(xml.contains(r#"header_type="UInt64""#));
     assert!(xml.contains(r#"compressor="vtkZLibDataCompressor""#));
-    assert!(std::str::from_utf8(&bytes[at..at + 30]).expect("tag").starts_with(r#"<AppendedData encoding="raw">"#));
+    assert!(std::str::from_utf8(&bytes[at..at + 30])
+        .expect("tag")
+        .starts_with(r#"<AppendedData encoding="raw">"#));
     assert_eq!(xml.matches("<Piece").count(), 1, "all bodies in one piece");
     let mark = at + bytes[at..].iter().position(|&c| c == b'_').expect("_") + 1;
     let data = &bytes[mark..];
     assert!(bytes.ends_with(b"\n  </AppendedData>\n</VTKFile>\n"));
 
     // Decode the displacement by hand: [nblocks, blocksize, last, csizes..] + zlib blocks.
-    let off: usize = attr_of(xml, "displacement", "offset").parse().expect("offset");
+    let off: usize = attr_of(xml, "displacement", "offset")
+        .parse()
+        .expect("offset");
     assert_eq!(attr_of(xml, "displacement", "type"), "Float64");
     let raw_len = 24 * b.x.len();
     let h = words(data, off, 3);
     let nblocks = raw_len.div_ceil(BLOCK);
     assert!(nblocks >= 3, "the test array spans several blocks");
-    assert_eq!(h, vec![nblocks as u64, BLOCK as u64, (raw_len % BLOCK) as u64]);
+    assert_eq!(
+        h,
+        vec![nblocks as u64, BLOCK as u64, (raw_len % BLOCK) as u64]
+    );
     let sizes = words(data, off + 24, nblocks);
     let mut pos = off + 24 + 8 * nblocks;
     let mut raw = Vec::new();
@@ -174,7 +191,13 @@ fn compressed_arrays_follow_vtk_block_format_and_decode_independently() {
     };
     write_vtu(&mut small, &frame, f32z).expect("write f32");
     let xml32 = String::from_utf8_lossy(&small[..small.len().min(4000)]).to_string();
-    for name in ["displacement", "velocity", "von_mises_top", "membrane_N", "Points"] {
+    for name in [
+        "displacement",
+        "velocity",
+        "von_mises_top",
+        "membrane_N",
+        "Points",
+    ] {
         assert_eq!(attr_of(&xml32, name, "type"), "Float32", "{name}");
     }
     assert_eq!(attr_of(&xml32, "offsets", "type"), "Int64");
@@ -218,7 +241,8 @@ fn background_writer_writes_the_same_files_as_the_direct_writer() {
     let (d1, d2) = (test_dir("bg_direct"), test_dir("bg_thread"));
     let fmt = formats()[2].0;
     let mut direct = SeriesWriter::create(&d1).expect("create").with_format(fmt);
-    let mut bg = BackgroundSeries::start(SeriesWriter::create(&d2).expect("create")).expect("start");
+    let mut bg =
+        BackgroundSeries::start(SeriesWriter::create(&d2).expect("create")).expect("start");
     bg.set_format(fmt);
     for k in 0..5 {
         frame.time = k as f64 * 1e-5;
@@ -235,17 +259,24 @@ fn background_writer_writes_the_same_files_as_the_direct_writer() {
     bg.finish().expect("finish");
     for k in 0..5 {
         let f = format!("frames/frame_{k:06}.vtu");
-        let (a, b) = (std::fs::read(d1.join(&f)).expect("a"), std::fs::read(d2.join(&f)).expect("b"));
+        let (a, b) = (
+            std::fs::read(d1.join(&f)).expect("a"),
+            std::fs::read(d2.join(&f)).expect("b"),
+        );
         assert!(a == b, "{f} differs");
     }
-    assert_eq!(read_pvd(&d2.join("frames.pvd")).expect("pvd"), read_pvd(&d1.join("frames.pvd")).expect("pvd"));
+    assert_eq!(
+        read_pvd(&d2.join("frames.pvd")).expect("pvd"),
+        read_pvd(&d1.join("frames.pvd")).expect("pvd")
+    );
 }
 
 #[test]
 fn background_writer_error_names_the_file_and_keeps_the_frames_before() {
     let frame = frame_at(2);
     let dir = test_dir("bg_error");
-    let mut bg = BackgroundSeries::start(SeriesWriter::create(&dir).expect("create")).expect("start");
+    let mut bg =
+        BackgroundSeries::start(SeriesWriter::create(&dir).expect("create")).expect("start");
     // the second frame's temporary file cannot be created: a directory has its name
     std::fs::create_dir_all(dir.join("frames/frame_000001.vtu.tmp")).expect("blocker");
     for k in 0..2 {
@@ -256,14 +287,20 @@ fn background_writer_error_names_the_file_and_keeps_the_frames_before() {
         bg.end_frame().expect("end");
     }
     let e = bg.flush().expect_err("the writer failed").to_string();
-    assert!(e.contains("frame_000001.vtu"), "the error names the file: {e}");
+    assert!(
+        e.contains("frame_000001.vtu"),
+        "the error names the file: {e}"
+    );
     let again = bg.begin_frame(2.0, 2).expect_err("stopped").to_string();
     assert!(again.contains("frame_000001.vtu"), "{again}");
     assert!(bg.finish().is_err());
     let list = read_pvd(&dir.join("frames.pvd")).expect("pvd");
     assert_eq!(list.len(), 1, "only the complete frame is listed");
     assert!(dir.join("frames/frame_000000.vtu").exists());
-    assert!(!dir.join("frames/frame_000001.vtu").exists(), "no torn frame");
+    assert!(
+        !dir.join("frames/frame_000001.vtu").exists(),
+        "no torn frame"
+    );
     read_vtu(&dir.join("frames/frame_000000.vtu")).expect("the kept frame reads");
 }
 
@@ -322,7 +359,10 @@ fn older_inline_ascii_and_base64_frames_still_read() {
     let f = read_vtu(&path).expect("read");
     assert_eq!((f.time, f.step, f.bodies.len()), (2.5e-3, 9, 1));
     let b = &f.bodies[0];
-    assert_eq!((b.id, b.thickness, b.tris.clone()), (4, 0.001, vec![[0, 1, 2]]));
+    assert_eq!(
+        (b.id, b.thickness, b.tris.clone()),
+        (4, 0.001, vec![[0, 1, 2]])
+    );
     assert_eq!(b.x[2], crash_core::Vec3::new(0.0, 1.0, 0.5));
     assert_eq!(b.x0[2], crash_core::Vec3::new(0.0, 1.0, 0.0));
     assert_eq!(b.v[2].z, -2.0);
