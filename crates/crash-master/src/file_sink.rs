@@ -105,8 +105,11 @@ pub struct FileSink {
     contacts: ContactHistory,
     series: BackgroundSeries,
     /// Time spent handing frames to the writer thread on the caller's (the step
-    /// loop's) thread [ns]; waits when the writer lags included.
+    /// loop's) thread [ns]; waits when the writer lags and drains at checkpoints
+    /// included.
     handover_ns: u64,
+    /// Time spent at the end waiting for the writer to finish the last frames [ns].
+    drain_ns: u64,
     indicators: Indicators,
     /// Warnings raised so far (each once), and those not yet taken by `take_fresh`.
     warnings: Vec<Warning>,
@@ -135,6 +138,7 @@ impl FileSink {
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
             series: BackgroundSeries::start(SeriesWriter::create(dir)?)?,
             handover_ns: 0,
+            drain_ns: 0,
             indicators: Indicators::default(),
             warnings: Vec::new(),
             fresh: Vec::new(),
@@ -162,6 +166,7 @@ impl FileSink {
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
             series: BackgroundSeries::start(SeriesWriter::reopen(dir, t)?)?,
             handover_ns: 0,
+            drain_ns: 0,
             indicators: restart.indicators,
             warnings: restart.warnings.clone(),
             fresh: Vec::new(),
@@ -367,7 +372,7 @@ impl Sink for FileSink {
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
         let t = Instant::now();
         let frames = self.series.finish();
-        self.handover_ns += t.elapsed().as_nanos() as u64;
+        self.drain_ns += t.elapsed().as_nanos() as u64;
         self.energy.flush()?;
         self.contacts.flush()?;
         let s = &mut self.summary;
@@ -386,6 +391,7 @@ impl Sink for FileSink {
             ("migration", st.migration_ns),
             ("output", st.output_ns),
             ("output_handover", self.handover_ns),
+            ("output_final_drain", self.drain_ns),
         ] {
             s.ns_per_element_cycle.insert(k.into(), v as f64 / cycles);
         }
