@@ -13,7 +13,8 @@
 #   CROSSCHECK_SCENES scene names to run [default: every tests/crosscheck/scenes/*.toml]
 #
 # Makes .venv-crosscheck/ at the repo root if it is missing (pip: numpy, mpi4py and the
-# MPICH wheel, no system MPI). Prints one line per comparison and, last, exactly
+# MPICH wheel, no system MPI; meshio for the frame-readability check).
+# First checks that meshio reads crash's frames (vtu_meshio.py, f64 and f32). Prints one line per comparison and, last, exactly
 # "N passed, M failed"; exits non-zero if anything failed.
 set -u
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -49,10 +50,10 @@ compare() {  # label ref run [tolerances]: one line per comparison
 
 # ---- the environment ----
 py="$venv/bin/python"
-if ! "$py" -c "import numpy, mpi4py" >/dev/null 2>&1; then
-    echo "crosscheck: making $venv (numpy, mpi4py, mpich from PyPI)"
+if ! "$py" -c "import numpy, mpi4py, meshio" >/dev/null 2>&1; then
+    echo "crosscheck: making $venv (numpy, mpi4py, mpich, meshio from PyPI)"
     { [ -x "$py" ] || python3 -m venv "$venv"; } &&
-        "$venv/bin/pip" install --quiet --disable-pip-version-check numpy mpi4py mpich ||
+        "$venv/bin/pip" install --quiet --disable-pip-version-check numpy mpi4py mpich meshio ||
         { line FAIL "environment: could not make $venv"; finish; }
 fi
 mpiexec="$venv/bin/mpiexec"
@@ -64,6 +65,25 @@ fi
 if [ ! -x "$crash" ]; then
     line FAIL "crash binary $crash not found (set CRASH_BIN or build target/release/crash)"
     finish
+fi
+
+# ---- the frames read by meshio (an independent VTU reader) ----
+dump="$(dirname "$crash")/examples/vtu_dump"
+if [ -x "$dump" ]; then
+    compare_lines() {
+        local status rest got=0
+        while read -r status rest; do
+            case "$status" in
+                PASS|FAIL) line "$status" "$rest" ;;
+                RESULT) got=1 ;;
+            esac
+        done < <("$@" 2>&1)
+        [ "$got" = 1 ] || line FAIL "vtu meshio: the check did not complete"
+    }
+    compare_lines "$py" "$here/vtu_meshio.py" "$crash" "$dump" \
+        "$root/scenes/sphere-on-plate-small.toml" "$out/vtu-meshio"
+else
+    line FAIL "vtu meshio: $dump not found (cargo build --release -p crash-io --examples)"
 fi
 
 # ---- the scenes ----

@@ -120,12 +120,16 @@ impl Sink for CliSink {
         self.files.frame_begin(step, time)
     }
 
-    fn frame_body(&mut self, body: &FrameBody) -> Result<(), SinkError> {
+    fn frame_body(&mut self, body: FrameBody) -> Result<(), SinkError> {
         self.files.frame_body(body)
     }
 
     fn frame_end(&mut self) -> Result<(), SinkError> {
-        self.files.frame_end()
+        let r = self.files.frame_end();
+        for n in self.files.take_notes() {
+            self.progress.message(&format!("crash: note: {n}"));
+        }
+        r
     }
 
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
@@ -195,6 +199,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         anyhow::bail!("{}", penetration_message(&built, &p));
     }
     let energy_limit = built.energy_limit;
+    let frame_format = crash_master::frame_format(&built.outputs);
     let restart = match &args.restart {
         Some(path) => Some((path, load_restart(path, built.scene_hash, args)?)),
         None => None,
@@ -231,6 +236,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         .with_checkpoints(out.join(RESTART_FILE))
         .with_simd_path(simd)
         .with_energy_limit(energy_limit)
+        .with_frame_format(frame_format)
         .with_body_names(names);
     let mut sink = CliSink {
         files,

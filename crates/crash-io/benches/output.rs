@@ -4,7 +4,7 @@
 use crash_core::shapes::{icosphere, plate, ElementKind};
 use crash_core::{Body, Material, Section, Stabilization, Vec3};
 use crash_io::vtu::write_vtu;
-use crash_io::{render_frame, Colouring, Encoding, Frame, RenderOptions};
+use crash_io::{render_frame, Colouring, Frame, Precision, RenderOptions, VtuFormat};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn frame() -> Frame {
@@ -38,12 +38,20 @@ fn bench(c: &mut Criterion) {
         .expect("p");
         b.iter(|| Frame::capture(0.0, 0, &[&p]))
     });
-    for enc in [Encoding::Ascii, Encoding::Base64] {
-        g.bench_function(format!("write_vtu_{enc:?}"), |b| {
+    for (precision, compress, name) in [
+        (Precision::F64, false, "f64_raw"),
+        (Precision::F64, true, "f64_zlib"),
+        (Precision::F32, true, "f32_zlib"),
+    ] {
+        let fmt = VtuFormat {
+            precision,
+            compress,
+        };
+        g.bench_function(format!("write_vtu_{name}"), |b| {
             let mut buf = Vec::with_capacity(1 << 24);
             b.iter(|| {
                 buf.clear();
-                write_vtu(&mut buf, &f, enc).expect("write");
+                write_vtu(&mut buf, &f, fmt).expect("write");
                 buf.len()
             })
         });

@@ -21,7 +21,12 @@ pub fn write_atomic(
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), IoError> {
     let mut f = AtomicFile::create(path)?;
-    fill(f.writer()).at(f.temp())?;
+    if let Err(e) = fill(f.writer()) {
+        let tmp = f.temp().to_path_buf();
+        drop(f);
+        let _ = fs::remove_file(&tmp);
+        return Err(IoError::io(&tmp, e));
+    }
     f.commit()
 }
 
@@ -54,15 +59,22 @@ impl AtomicFile {
         &self.tmp
     }
 
-    /// Flush, sync and rename to the final name.
+    /// Flush, sync and rename to the final name. On failure the temporary file is
+    /// removed (a full disk leaves no partial file behind).
     pub fn commit(self) -> Result<(), IoError> {
         let Self { path, tmp, w } = self;
-        let file = w
-            .into_inner()
-            .map_err(|e| IoError::io(&tmp, e.into_error()))?;
-        file.sync_all().at(&tmp)?;
-        drop(file);
-        fs::rename(&tmp, &path).at(&path)?;
+        let done = (|| {
+            let file = w
+                .into_inner()
+                .map_err(|e| IoError::io(&tmp, e.into_error()))?;
+            file.sync_all().at(&tmp)?;
+            drop(file);
+            fs::rename(&tmp, &path).at(&path)
+        })();
+        if done.is_err() {
+            let _ = fs::remove_file(&tmp);
+        }
+        done?;
         sync_dir(&path);
         Ok(())
     }

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 /// One body in a frame. Element arrays hold triangles first, then quads (the order of
 /// `Body::resultants`), and so do the cells of the .vtu file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FrameBody {
     pub id: u32,
     pub name: String,

@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod checkpoint;
 pub mod error;
 pub mod frame;
+pub mod frame_writer;
 pub mod history;
 pub mod matsum_read;
 pub mod render;
@@ -13,11 +14,13 @@ pub mod run;
 pub mod series;
 pub mod summary;
 pub mod vtu;
+pub mod vtu_encode;
 pub mod vtu_read;
 
 pub use checkpoint::{read_checkpoint, write_checkpoint};
 pub use error::IoError;
 pub use frame::{Frame, FrameBody};
+pub use frame_writer::BackgroundSeries;
 pub use history::{
     read_contacts_csv, read_energy_csv, ContactHistory, ContactRow, EnergyHistory, EnergyRow,
     CONTACTS_CSV, ENERGY_CSV,
@@ -31,5 +34,5 @@ pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};
 pub use summary::{
     hash_hex, read_summary, write_summary, Indicators, Summary, Warning, WarningKind, SUMMARY_JSON,
 };
-pub use vtu::Encoding;
+pub use vtu::{Precision, VtuFormat};
 pub use vtu_read::read_vtu;

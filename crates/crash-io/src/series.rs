@@ -6,7 +6,8 @@
 use crate::atomic::{write_atomic, AtomicFile};
 use crate::error::{AtPath, IoError};
 use crate::frame::{Frame, FrameBody};
-use crate::vtu::{write_vtu_footer, write_vtu_header, write_vtu_piece, Encoding};
+use crate::vtu::VtuFormat;
+use crate::vtu_encode::{FrameEncoder, Spill};
 use roxmltree::Document;
 use std::path::{Path, PathBuf};
 
@@ -27,7 +28,7 @@ pub struct PvdEntry {
 #[derive(Debug)]
 pub struct SeriesWriter {
     dir: PathBuf,
-    encoding: Encoding,
+    format: VtuFormat,
     entries: Vec<PvdEntry>,
     next_index: u64,
     /// The frame being written body by body.
@@ -39,7 +40,7 @@ struct OpenFrame {
     time: f64,
     file: String,
     path: PathBuf,
-    out: AtomicFile,
+    enc: FrameEncoder,
 }
 
 fn frame_file(index: u64) -> String {
@@ -112,7 +113,7 @@ impl SeriesWriter {
         remove_frames(&dir, &old)?;
         Ok(Self {
             dir,
-            encoding: Encoding::default(),
+            format: VtuFormat::default(),
             entries: Vec::new(),
             next_index: 0,
             open: None,
@@ -142,17 +143,22 @@ impl SeriesWriter {
         remove_frames(&dir, &drop)?;
         Ok(Self {
             dir,
-            encoding: Encoding::default(),
+            format: VtuFormat::default(),
             entries: keep,
             next_index,
             open: None,
         })
     }
 
-    /// Choose how data arrays are stored (default: base64 binary).
-    pub fn with_encoding(mut self, encoding: Encoding) -> Self {
-        self.encoding = encoding;
+    /// Choose how data arrays are stored (default: Float64, zlib-compressed).
+    pub fn with_format(mut self, format: VtuFormat) -> Self {
+        self.format = format;
         self
+    }
+
+    /// The format of the frames begun from now on.
+    pub fn set_format(&mut self, format: VtuFormat) {
+        self.format = format;
     }
 
     /// Write one frame and rewrite the .pvd. A frame at or before the last listed time
@@ -166,7 +172,8 @@ impl SeriesWriter {
     }
 
     /// Start a frame that arrives body by body (`frame_body`, then `end_frame`): the
-    /// .vtu is written as a temporary file and takes its name only when complete.
+    /// data is staged (memory, then `NAME.vtu.spill` for a large frame) and the .vtu is
+    /// written as a temporary file that takes its name only when complete.
     pub fn begin_frame(&mut self, time: f64, step: u64) -> Result<(), IoError> {
         if !time.is_finite() {
             return Err(IoError::Invalid(format!(
@@ -175,39 +182,55 @@ impl SeriesWriter {
         }
         let file = frame_file(self.next_index);
         let path = self.dir.join(&file);
-        let mut out = AtomicFile::create(&path)?;
-        write_vtu_header(out.writer(), time, step).at(out.temp())?;
+        let mut spill_name = path.clone().into_os_string();
+        spill_name.push(".spill");
+        let spill = Spill::with_file(PathBuf::from(spill_name));
         self.open = Some(OpenFrame {
             time,
             file,
             path,
-            out,
+            enc: FrameEncoder::new(time, step, self.format, spill),
         });
         Ok(())
     }
 
     /// One body of the frame begun last (bodies in id order).
     pub fn frame_body(&mut self, body: &FrameBody) -> Result<(), IoError> {
-        let enc = self.encoding;
         let f = self
             .open
             .as_mut()
             .ok_or_else(|| IoError::Invalid("a frame body arrived outside a frame".into()))?;
-        write_vtu_piece(f.out.writer(), body, enc).at(f.out.temp())
+        let r = f.enc.body(body).at(&f.path);
+        if r.is_err() {
+            self.open = None;
+        }
+        r
     }
 
-    /// Finish the frame begun last: close and rename its .vtu, list it in the .pvd.
+    /// Drop the frame begun last (after an error): its staged data is removed and
+    /// no .vtu of it appears.
+    pub fn abort_frame(&mut self) {
+        self.open = None;
+    }
+
+    /// Finish the frame begun last: write and rename its .vtu, list it in the .pvd.
     pub fn end_frame(&mut self) -> Result<PathBuf, IoError> {
         let OpenFrame {
             time,
             file,
             path,
-            mut out,
+            enc,
         } = self
             .open
             .take()
             .ok_or_else(|| IoError::Invalid("end of a frame that was not begun".into()))?;
-        write_vtu_footer(out.writer()).at(out.temp())?;
+        let mut out = AtomicFile::create(&path)?;
+        if let Err(e) = enc.finish(out.writer()) {
+            let temp = out.temp().to_path_buf();
+            drop(out);
+            let _ = std::fs::remove_file(&temp);
+            return Err(IoError::io(&path, e));
+        }
         out.commit()?;
         let mut replaced = Vec::new();
         if self.entries.last().is_some_and(|e| e.time >= time) {

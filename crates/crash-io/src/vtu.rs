@@ -1,23 +1,54 @@
-//! Writes one frame as a VTK XML UnstructuredGrid (.vtu): triangles stay VTK_TRIANGLE,
-//! quads VTK_QUAD, f64 everywhere so values survive exactly (ascii uses the shortest
-//! round-trip form; binary is base64 of the raw little-endian bytes).
+//! What one frame's .vtu (VTK XML UnstructuredGrid) holds: the list of named arrays,
+//! their types and how they are stored. Triangles stay VTK_TRIANGLE and quads VTK_QUAD;
+//! all bodies of a frame form one `Piece` (points body after body, in id order).
+//!
+//! The arrays are stored as VTK "appended raw" data after the XML, zlib-compressed in
+//! VTK's block format by default (`vtu_encode`); floats are Float64 (every bit kept) or
+//! Float32 (`Precision::F32`, half the bytes), ids and connectivity stay integers.
 
 use crate::frame::{Frame, FrameBody};
-use base64::Engine;
-use crash_core::Vec3;
+use crate::vtu_encode::{FrameEncoder, Spill};
 use std::io::{self, Write};
 
 pub const VTK_TRIANGLE: u8 = 5;
 pub const VTK_QUAD: u8 = 9;
 
-/// How data arrays are stored inside the XML. ParaView reads both.
+/// How wide the float arrays are written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Encoding {
-    /// Human-readable text; about twice the size of base64.
-    Ascii,
-    /// Inline base64 of the raw bytes with a UInt64 byte-count header.
+pub enum Precision {
+    /// Float64: values survive bit for bit.
     #[default]
-    Base64,
+    F64,
+    /// Float32: half the bytes; values rounded to the nearest f32.
+    F32,
+}
+
+impl Precision {
+    /// The scene keyword ("f64" or "f32").
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "f64" => Some(Self::F64),
+            "f32" => Some(Self::F32),
+            _ => None,
+        }
+    }
+}
+
+/// How a frame's arrays are stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VtuFormat {
+    pub precision: Precision,
+    /// zlib-compress the appended data (VTK's `vtkZLibDataCompressor` block format).
+    pub compress: bool,
+}
+
+impl Default for VtuFormat {
+    fn default() -> Self {
+        Self {
+            precision: Precision::F64,
+            compress: true,
+        }
+    }
 }
 
 /// Point- and cell-data names (ParaView shows these).
@@ -35,261 +66,171 @@ pub mod names {
     pub const STEP: &str = "step";
 }
 
-/// A typed array to write.
-enum Values<'a> {
+/// Where an array goes in the .vtu.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Section {
+    PointData,
+    CellData,
+    Points,
+    Cells,
+}
+
+impl Section {
+    pub fn tag(self) -> &'static str {
+        match self {
+            Section::PointData => "PointData",
+            Section::CellData => "CellData",
+            Section::Points => "Points",
+            Section::Cells => "Cells",
+        }
+    }
+}
+
+/// The values of one array for one body. Floats are written at the frame's precision.
+pub enum Values<'a> {
     F64(Box<dyn Iterator<Item = f64> + 'a>),
     I64(Box<dyn Iterator<Item = i64> + 'a>),
     U8(Box<dyn Iterator<Item = u8> + 'a>),
 }
 
-impl Values<'_> {
-    fn type_name(&self) -> &'static str {
-        match self {
-            Values::F64(_) => "Float64",
-            Values::I64(_) => "Int64",
-            Values::U8(_) => "UInt8",
-        }
+impl std::fmt::Debug for Values<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Values::F64(_) => "Values::F64",
+            Values::I64(_) => "Values::I64",
+            Values::U8(_) => "Values::U8",
+        })
     }
 }
 
-fn vec3s<'a>(it: impl Iterator<Item = &'a Vec3> + 'a) -> Values<'a> {
-    Values::F64(Box::new(it.flat_map(|p| [p.x, p.y, p.z])))
+/// Where a body starts in the frame's piece: its first point and its first
+/// connectivity entry (connectivity and offsets count from the piece's start).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Base {
+    pub point: i64,
+    pub conn: i64,
 }
 
-fn triples<'a>(it: impl Iterator<Item = &'a [f64; 3]> + 'a) -> Values<'a> {
-    Values::F64(Box::new(it.flat_map(|p| *p)))
+/// One named array of the frame: its place, width and how to get a body's values.
+#[derive(Clone, Copy)]
+pub struct ArrayDef {
+    pub section: Section,
+    pub name: &'static str,
+    pub components: usize,
+    pub values: fn(&FrameBody, Base) -> Values<'_>,
 }
 
-fn data_array(
-    w: &mut dyn Write,
-    enc: Encoding,
-    name: Option<&str>,
+impl std::fmt::Debug for ArrayDef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.section.tag(), self.name)
+    }
+}
+
+const fn def(
+    section: Section,
+    name: &'static str,
     components: usize,
-    values: Values,
-) -> io::Result<()> {
-    write!(w, r#"        <DataArray type="{}""#, values.type_name())?;
-    if let Some(n) = name {
-        write!(w, r#" Name="{n}""#)?;
+    values: fn(&FrameBody, Base) -> Values<'_>,
+) -> ArrayDef {
+    ArrayDef {
+        section,
+        name,
+        components,
+        values,
     }
-    if components > 1 {
-        write!(w, r#" NumberOfComponents="{components}""#)?;
-    }
-    match enc {
-        Encoding::Ascii => {
-            writeln!(w, r#" format="ascii">"#)?;
-            let per_line = if components > 1 { components } else { 8 };
-            let mut k = 0usize;
-            let mut sep = |w: &mut dyn Write| -> io::Result<()> {
-                k += 1;
-                if k.is_multiple_of(per_line) {
-                    writeln!(w)
-                } else {
-                    write!(w, " ")
-                }
-            };
-            match values {
-                Values::F64(it) => {
-                    for v in it {
-                        write!(w, "{v:e}")?;
-                        sep(w)?;
-                    }
-                }
-                Values::I64(it) => {
-                    for v in it {
-                        write!(w, "{v}")?;
-                        sep(w)?;
-                    }
-                }
-                Values::U8(it) => {
-                    for v in it {
-                        write!(w, "{v}")?;
-                        sep(w)?;
-                    }
-                }
-            }
-            if !k.is_multiple_of(per_line) {
-                writeln!(w)?;
-            }
-        }
-        Encoding::Base64 => {
-            write!(w, r#" format="binary">"#)?;
-            // Uncompressed inline binary: one base64 stream of header + data.
-            let mut bytes = vec![0u8; 8];
-            match values {
-                Values::F64(it) => it.for_each(|v| bytes.extend_from_slice(&v.to_le_bytes())),
-                Values::I64(it) => it.for_each(|v| bytes.extend_from_slice(&v.to_le_bytes())),
-                Values::U8(it) => it.for_each(|v| bytes.push(v)),
-            }
-            let n = (bytes.len() - 8) as u64;
-            bytes[..8].copy_from_slice(&n.to_le_bytes());
-            writeln!(w)?;
-            writeln!(
-                w,
-                "{}",
-                base64::engine::general_purpose::STANDARD.encode(&bytes)
-            )?;
-        }
-    }
-    writeln!(w, "        </DataArray>")
 }
 
-/// Write `frame` as a .vtu document: one `Piece` per body, so a frame can also be
-/// written body by body as the bodies arrive (`write_vtu_header`, `write_vtu_piece`,
-/// `write_vtu_footer`).
-pub fn write_vtu(w: &mut dyn Write, frame: &Frame, enc: Encoding) -> io::Result<()> {
-    write_vtu_header(w, frame.time, frame.step)?;
+fn f64s<'a>(it: impl Iterator<Item = f64> + 'a) -> Values<'a> {
+    Values::F64(Box::new(it))
+}
+
+fn vec3s(v: &[crash_core::Vec3]) -> Values<'_> {
+    f64s(v.iter().flat_map(|p| [p.x, p.y, p.z]))
+}
+
+fn per_element<T: Copy + 'static>(b: &FrameBody, v: T) -> impl Iterator<Item = T> + '_ {
+    std::iter::repeat_n(v, b.element_count())
+}
+
+/// Every array of a frame, in file order (within a section, in this order). A new
+/// point or cell field is one line here; the reader and ParaView pick it up by name.
+pub const ARRAYS: &[ArrayDef] = {
+    use names::*;
+    use Section::*;
+    &[
+        def(PointData, DISPLACEMENT, 3, |b, _| {
+            f64s(b.x.iter().zip(&b.x0).flat_map(|(x, x0)| {
+                let u = x - x0;
+                [u.x, u.y, u.z]
+            }))
+        }),
+        def(PointData, VELOCITY, 3, |b, _| vec3s(&b.v)),
+        def(PointData, CONTACT_FORCE, 3, |b, _| vec3s(&b.f_contact)),
+        def(PointData, BODY_ID, 1, |b, _| {
+            Values::I64(Box::new(std::iter::repeat_n(b.id as i64, b.x.len())))
+        }),
+        def(CellData, VM_TOP, 1, |b, _| {
+            f64s(b.von_mises_top.iter().copied())
+        }),
+        def(CellData, VM_BOTTOM, 1, |b, _| {
+            f64s(b.von_mises_bottom.iter().copied())
+        }),
+        def(CellData, MEMBRANE, 3, |b, _| {
+            f64s(b.n.iter().flatten().copied())
+        }),
+        def(CellData, BENDING, 3, |b, _| {
+            f64s(b.m.iter().flatten().copied())
+        }),
+        def(CellData, THICKNESS, 1, |b, _| {
+            f64s(per_element(b, b.thickness))
+        }),
+        def(CellData, BODY_ID, 1, |b, _| {
+            Values::I64(Box::new(per_element(b, b.id as i64)))
+        }),
+        def(Points, "Points", 3, |b, _| vec3s(&b.x)),
+        def(Cells, "connectivity", 1, |b, base| {
+            let tris = b.tris.iter().flatten();
+            let quads = b.quads.iter().flatten();
+            Values::I64(Box::new(
+                tris.chain(quads).map(move |&n| base.point + n as i64),
+            ))
+        }),
+        def(Cells, "offsets", 1, |b, base| {
+            let sizes = per_element_sizes(b);
+            Values::I64(Box::new(sizes.scan(base.conn, |end, k| {
+                *end += k;
+                Some(*end)
+            })))
+        }),
+        def(Cells, "types", 1, |b, _| {
+            let t = std::iter::repeat_n(VTK_TRIANGLE, b.tris.len());
+            Values::U8(Box::new(
+                t.chain(std::iter::repeat_n(VTK_QUAD, b.quads.len())),
+            ))
+        }),
+    ]
+};
+
+/// Nodes per element, triangles first.
+fn per_element_sizes(b: &FrameBody) -> impl Iterator<Item = i64> + '_ {
+    std::iter::repeat_n(3i64, b.tris.len()).chain(std::iter::repeat_n(4i64, b.quads.len()))
+}
+
+/// The `Scalars`/`Vectors` attributes of a data section (ParaView's default colouring).
+pub(crate) fn section_attributes(s: Section) -> &'static str {
+    match s {
+        Section::PointData => r#" Scalars="body_id" Vectors="displacement""#,
+        Section::CellData => r#" Scalars="von_mises_top""#,
+        _ => "",
+    }
+}
+
+/// Write a whole `frame` as one .vtu document to `w` (the data staged in memory; the
+/// run's series stages large frames in a file instead, `SeriesWriter`).
+pub fn write_vtu(w: &mut dyn Write, frame: &Frame, format: VtuFormat) -> io::Result<()> {
+    let mut enc = FrameEncoder::new(frame.time, frame.step, format, Spill::in_memory());
     for b in &frame.bodies {
-        write_vtu_piece(w, b, enc)?;
+        enc.body(b)?;
     }
-    write_vtu_footer(w)
-}
-
-/// The start of a .vtu document: the grid and its time and step.
-pub fn write_vtu_header(w: &mut dyn Write, time: f64, step: u64) -> io::Result<()> {
-    use names::*;
-    writeln!(w, r#"<?xml version="1.0"?>"#)?;
-    writeln!(
-        w,
-        r#"<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
-    )?;
-    writeln!(w, "  <UnstructuredGrid>")?;
-    writeln!(w, "    <FieldData>")?;
-    writeln!(
-        w,
-        r#"      <DataArray type="Float64" Name="{TIME}" NumberOfTuples="1" format="ascii">{:e}</DataArray>"#,
-        time
-    )?;
-    writeln!(
-        w,
-        r#"      <DataArray type="Int64" Name="{STEP}" NumberOfTuples="1" format="ascii">{}</DataArray>"#,
-        step
-    )?;
-    writeln!(w, "    </FieldData>")
-}
-
-/// The end of a .vtu document.
-pub fn write_vtu_footer(w: &mut dyn Write) -> io::Result<()> {
-    writeln!(w, "  </UnstructuredGrid>")?;
-    writeln!(w, "</VTKFile>")
-}
-
-/// One body as one `Piece`.
-pub fn write_vtu_piece(w: &mut dyn Write, body: &FrameBody, enc: Encoding) -> io::Result<()> {
-    use names::*;
-    let bodies = std::slice::from_ref(body);
-    let np = body.x.len();
-    let nc = body.element_count();
-    writeln!(
-        w,
-        r#"    <Piece NumberOfPoints="{np}" NumberOfCells="{nc}">"#
-    )?;
-
-    writeln!(
-        w,
-        r#"      <PointData Scalars="{BODY_ID}" Vectors="{DISPLACEMENT}">"#
-    )?;
-    let disp = bodies.iter().flat_map(|b| {
-        b.x.iter()
-            .zip(&b.x0)
-            .flat_map(|(x, x0)| [x.x - x0.x, x.y - x0.y, x.z - x0.z])
-    });
-    data_array(w, enc, Some(DISPLACEMENT), 3, Values::F64(Box::new(disp)))?;
-    data_array(
-        w,
-        enc,
-        Some(VELOCITY),
-        3,
-        vec3s(bodies.iter().flat_map(|b| b.v.iter())),
-    )?;
-    let fc = vec3s(bodies.iter().flat_map(|b| b.f_contact.iter()));
-    data_array(w, enc, Some(CONTACT_FORCE), 3, fc)?;
-    let ids = bodies
-        .iter()
-        .flat_map(|b| std::iter::repeat_n(b.id as i64, b.x.len()));
-    data_array(w, enc, Some(BODY_ID), 1, Values::I64(Box::new(ids)))?;
-    writeln!(w, "      </PointData>")?;
-
-    writeln!(w, r#"      <CellData Scalars="{VM_TOP}">"#)?;
-    let f = |g: fn(&crate::frame::FrameBody) -> &Vec<f64>| {
-        Values::F64(Box::new(
-            bodies.iter().flat_map(move |b| g(b).iter().copied()),
-        ))
-    };
-    data_array(w, enc, Some(VM_TOP), 1, f(|b| &b.von_mises_top))?;
-    data_array(w, enc, Some(VM_BOTTOM), 1, f(|b| &b.von_mises_bottom))?;
-    data_array(
-        w,
-        enc,
-        Some(MEMBRANE),
-        3,
-        triples(bodies.iter().flat_map(|b| b.n.iter())),
-    )?;
-    data_array(
-        w,
-        enc,
-        Some(BENDING),
-        3,
-        triples(bodies.iter().flat_map(|b| b.m.iter())),
-    )?;
-    let th = bodies
-        .iter()
-        .flat_map(|b| std::iter::repeat_n(b.thickness, b.element_count()));
-    data_array(w, enc, Some(THICKNESS), 1, Values::F64(Box::new(th)))?;
-    let ids = bodies
-        .iter()
-        .flat_map(|b| std::iter::repeat_n(b.id as i64, b.element_count()));
-    data_array(w, enc, Some(BODY_ID), 1, Values::I64(Box::new(ids)))?;
-    writeln!(w, "      </CellData>")?;
-
-    writeln!(w, "      <Points>")?;
-    data_array(
-        w,
-        enc,
-        Some("Points"),
-        3,
-        vec3s(bodies.iter().flat_map(|b| b.x.iter())),
-    )?;
-    writeln!(w, "      </Points>")?;
-
-    writeln!(w, "      <Cells>")?;
-    let mut conn = Vec::with_capacity(3 * nc);
-    let mut offsets = Vec::with_capacity(nc);
-    let mut types = Vec::with_capacity(nc);
-    let mut base = 0i64;
-    for b in bodies {
-        for t in &b.tris {
-            conn.extend(t.iter().map(|&n| base + n as i64));
-            offsets.push(conn.len() as i64);
-            types.push(VTK_TRIANGLE);
-        }
-        for q in &b.quads {
-            conn.extend(q.iter().map(|&n| base + n as i64));
-            offsets.push(conn.len() as i64);
-            types.push(VTK_QUAD);
-        }
-        base += b.x.len() as i64;
-    }
-    data_array(
-        w,
-        enc,
-        Some("connectivity"),
-        1,
-        Values::I64(Box::new(conn.into_iter())),
-    )?;
-    data_array(
-        w,
-        enc,
-        Some("offsets"),
-        1,
-        Values::I64(Box::new(offsets.into_iter())),
-    )?;
-    data_array(
-        w,
-        enc,
-        Some("types"),
-        1,
-        Values::U8(Box::new(types.into_iter())),
-    )?;
-    writeln!(w, "      </Cells>")?;
-    writeln!(w, "    </Piece>")
+    enc.finish(w)
 }

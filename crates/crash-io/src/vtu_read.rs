@@ -1,6 +1,7 @@
-//! Reads back a .vtu written by `vtu::write_vtu` (ascii or inline base64 binary) into a
-//! `Frame`, for `crash render`. Body names are not stored in the .vtu and come back empty;
-//! initial positions come back as x - displacement.
+//! Reads back a .vtu written by crash into a `Frame`, for `crash render` and tests: the
+//! appended raw data of today's files (zlib-compressed or not, Float64 or Float32) and
+//! the inline ascii or base64 arrays of older ones. Body names are not stored in the .vtu
+//! and come back empty; initial positions come back as x - displacement.
 
 use crate::error::{AtPath, IoError};
 use crate::frame::{Frame, FrameBody};
@@ -37,6 +38,10 @@ impl Array {
 struct Reader<'a> {
     path: &'a Path,
     header64: bool,
+    /// The bytes after the `_` of `<AppendedData encoding="raw">`, if any.
+    appended: Option<&'a [u8]>,
+    /// `compressor="vtkZLibDataCompressor"`.
+    zlib: bool,
 }
 
 impl Reader<'_> {
@@ -74,8 +79,76 @@ impl Reader<'_> {
                     .ok_or_else(|| self.err(format!("array {name}: no header")))?;
                 self.binary(name, ty, data)
             }
+            "appended" => {
+                let offset: usize = node
+                    .attribute("offset")
+                    .and_then(|o| o.trim().parse().ok())
+                    .ok_or_else(|| self.err(format!("array {name}: no valid offset")))?;
+                let data = self.appended_array(name, offset)?;
+                self.binary(name, ty, &data)
+            }
             f => Err(self.err(format!("array {name}: format '{f}' is not supported"))),
         }
+    }
+
+    /// Header word `k` of the array at `at` in the appended data.
+    fn word(&self, name: &str, data: &[u8], at: usize) -> Result<u64, IoError> {
+        let hb = if self.header64 { 8 } else { 4 };
+        let b = data
+            .get(at..at + hb)
+            .ok_or_else(|| self.err(format!("array {name}: appended data is truncated")))?;
+        Ok(if self.header64 {
+            u64::from_le_bytes(b.try_into().unwrap_or_default())
+        } else {
+            u32::from_le_bytes(b.try_into().unwrap_or_default()) as u64
+        })
+    }
+
+    /// The raw bytes of the array at `offset` in the appended data (decompressed).
+    fn appended_array(&self, name: &str, offset: usize) -> Result<Vec<u8>, IoError> {
+        let data = self
+            .appended
+            .ok_or_else(|| self.err(format!("array {name}: appended, but no AppendedData")))?;
+        let hb = if self.header64 { 8 } else { 4 };
+        let slice = |from: usize, len: u64| -> Result<&[u8], IoError> {
+            usize::try_from(len)
+                .ok()
+                .and_then(|l| data.get(from..from.checked_add(l)?))
+                .ok_or_else(|| self.err(format!("array {name}: appended data is truncated")))
+        };
+        if !self.zlib {
+            let n = self.word(name, data, offset)?;
+            return Ok(slice(offset + hb, n)?.to_vec());
+        }
+        let nblocks = self.word(name, data, offset)?;
+        let block = self.word(name, data, offset + hb)?;
+        let last = self.word(name, data, offset + 2 * hb)?;
+        let nb = usize::try_from(nblocks)
+            .ok()
+            .filter(|&n| n <= data.len())
+            .ok_or_else(|| self.err(format!("array {name}: bad block count {nblocks}")))?;
+        let mut at = offset + (3 + nb) * hb;
+        let mut out = Vec::new();
+        for k in 0..nb {
+            let csize = self.word(name, data, offset + (3 + k) * hb)?;
+            let mut z = flate2::read::ZlibDecoder::new(slice(at, csize)?);
+            let before = out.len();
+            std::io::Read::read_to_end(&mut z, &mut out)
+                .map_err(|e| self.err(format!("array {name}: block {k}: zlib: {e}")))?;
+            let want = if k + 1 == nb && last != 0 {
+                last
+            } else {
+                block
+            };
+            if (out.len() - before) as u64 != want {
+                return Err(self.err(format!(
+                    "array {name}: block {k} holds {} bytes, {want} expected",
+                    out.len() - before
+                )));
+            }
+            at += csize as usize;
+        }
+        Ok(out)
     }
 
     fn binary(&self, name: &str, ty: &str, d: &[u8]) -> Result<Array, IoError> {
@@ -131,15 +204,61 @@ fn vecs(v: &[f64], range: std::ops::Range<usize>) -> Vec<Vec3> {
         .collect()
 }
 
+/// Split a .vtu into its XML (closed again without the appended section) and the
+/// appended raw bytes after the `_` marker, if it has them.
+fn split_appended(path: &Path, bytes: &[u8]) -> Result<(String, Option<usize>), IoError> {
+    const TAG: &[u8] = b"<AppendedData";
+    let Some(at) = bytes.windows(TAG.len()).position(|w| w == TAG) else {
+        let text = std::str::from_utf8(bytes)
+            .map_err(|e| IoError::format(path, format!("not UTF-8 text: {e}")))?;
+        return Ok((text.to_string(), None));
+    };
+    let end = bytes[at..]
+        .iter()
+        .position(|&b| b == b'>')
+        .map(|k| at + k)
+        .ok_or_else(|| IoError::format(path, "AppendedData tag is not closed"))?;
+    let tag = String::from_utf8_lossy(&bytes[at..end]);
+    if !tag.contains(r#"encoding="raw""#) {
+        return Err(IoError::format(
+            path,
+            format!("{tag}>: only raw appended data is supported"),
+        ));
+    }
+    let mark = bytes[end..]
+        .iter()
+        .position(|&b| b == b'_')
+        .map(|k| end + k + 1)
+        .ok_or_else(|| IoError::format(path, "AppendedData has no '_' marker"))?;
+    let xml = std::str::from_utf8(&bytes[..at])
+        .map_err(|e| IoError::format(path, format!("XML part is not UTF-8: {e}")))?;
+    Ok((format!("{xml}</VTKFile>"), Some(mark)))
+}
+
 /// Read one .vtu file into a frame.
 pub fn read_vtu(path: &Path) -> Result<Frame, IoError> {
-    let text = std::fs::read_to_string(path).at(path)?;
+    let bytes = std::fs::read(path).at(path)?;
+    let (text, mark) = split_appended(path, &bytes)?;
     let doc = Document::parse(&text).map_err(|e| IoError::format(path, format!("XML: {e}")))?;
     let root = doc.root_element();
     let r = Reader {
         path,
         header64: root.attribute("header_type") == Some("UInt64"),
+        appended: mark.map(|m| &bytes[m..]),
+        zlib: match root.attribute("compressor") {
+            None => false,
+            Some("vtkZLibDataCompressor") => true,
+            Some(c) => {
+                return Err(IoError::format(
+                    path,
+                    format!("compressor {c} is not supported (vtkZLibDataCompressor is)"),
+                ))
+            }
+        },
     };
+    if r.zlib && mark.is_none() {
+        return Err(r.err("compressed inline arrays are not supported (appended raw data is)"));
+    }
     if root.attribute("type") != Some("UnstructuredGrid") {
         return Err(r.err("not an UnstructuredGrid .vtu file"));
     }

@@ -1,5 +1,5 @@
 //! A sink that writes the run directory with crash-io: energy.csv, contacts.csv, frames
-//! (VTU + PVD)
+//! (VTU + PVD, written by a background thread: `BackgroundSeries`)
 //! and summary.json (with the per-stage timing of the master), and the restart file.
 
 use crate::checkpoint::MasterCheckpoint;
@@ -11,12 +11,14 @@ use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
 use crash_io::summary::{penetration_message, PENETRATION_LIMIT};
 use crash_io::{
-    hash_hex, write_summary, ContactHistory, ContactRow, EnergyHistory, FrameBody, Indicators,
-    SeriesWriter, Summary, Warning, WarningKind, CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
+    hash_hex, write_summary, BackgroundSeries, ContactHistory, ContactRow, EnergyHistory,
+    FrameBody, Indicators, SeriesWriter, Summary, VtuFormat, Warning, WarningKind, CONTACTS_CSV,
+    ENERGY_CSV, SUMMARY_JSON,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Name of the restart file inside the run directory (one file, replaced atomically at
 /// every checkpoint).
@@ -78,6 +80,18 @@ mod warnings_bits {
     }
 }
 
+/// The frame format a scene's `[outputs]` asks for (`precision`, `compression`).
+pub fn frame_format(o: &crash_scene::outputs::Outputs) -> VtuFormat {
+    VtuFormat {
+        precision: if o.frames_f32 {
+            crash_io::Precision::F32
+        } else {
+            crash_io::Precision::F64
+        },
+        compress: !o.frames_uncompressed,
+    }
+}
+
 /// Read a restart file (errors name the file: missing, not a checkpoint, truncated,
 /// corrupt, other version).
 pub fn read_restart(path: &Path) -> Result<RestartFile, crash_io::IoError> {
@@ -89,7 +103,13 @@ pub struct FileSink {
     dir: PathBuf,
     energy: EnergyHistory,
     contacts: ContactHistory,
-    series: SeriesWriter,
+    series: BackgroundSeries,
+    /// Time spent handing frames to the writer thread on the caller's (the step
+    /// loop's) thread [ns]; waits when the writer lags and drains at checkpoints
+    /// included.
+    handover_ns: u64,
+    /// Time spent at the end waiting for the writer to finish the last frames [ns].
+    drain_ns: u64,
     indicators: Indicators,
     /// Warnings raised so far (each once), and those not yet taken by `take_fresh`.
     warnings: Vec<Warning>,
@@ -119,7 +139,9 @@ impl FileSink {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::create(dir.join(ENERGY_CSV))?,
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
-            series: SeriesWriter::create(dir)?,
+            series: BackgroundSeries::start(SeriesWriter::create(dir)?)?,
+            handover_ns: 0,
+            drain_ns: 0,
             indicators: Indicators::default(),
             warnings: Vec::new(),
             fresh: Vec::new(),
@@ -146,7 +168,9 @@ impl FileSink {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
-            series: SeriesWriter::reopen(dir, t)?,
+            series: BackgroundSeries::start(SeriesWriter::reopen(dir, t)?)?,
+            handover_ns: 0,
+            drain_ns: 0,
             indicators: restart.indicators,
             warnings: restart.warnings.clone(),
             fresh: Vec::new(),
@@ -156,6 +180,18 @@ impl FileSink {
             restart: None,
             mark: None,
         })
+    }
+
+    /// How frames are stored (the scene's `[outputs] precision`; zlib by default).
+    pub fn with_frame_format(mut self, format: VtuFormat) -> Self {
+        self.series.set_format(format);
+        self
+    }
+
+    /// Notes for the log (not warnings: nothing about the results), each once: the
+    /// frame writer lagging behind the run.
+    pub fn take_notes(&mut self) -> Vec<String> {
+        self.series.take_stall_note().into_iter().collect()
     }
 
     /// Record the element kernels' instruction-set path in summary.json.
@@ -289,6 +325,10 @@ impl Sink for FileSink {
         let Some(path) = &self.restart else {
             return Ok(());
         };
+        // the restart promises the frames up to its time: wait for the writer
+        let t = Instant::now();
+        self.series.flush()?;
+        self.handover_ns += t.elapsed().as_nanos() as u64;
         self.energy.flush()?;
         self.contacts.flush()?;
         crash_io::write_checkpoint(
@@ -317,7 +357,12 @@ impl Sink for FileSink {
         self.contacts.flush()?;
         self.energy = EnergyHistory::reopen(self.dir.join(ENERGY_CSV), t)?;
         self.contacts = ContactHistory::reopen(self.dir.join(CONTACTS_CSV), t)?;
-        self.series = SeriesWriter::reopen(&self.dir, t)?;
+        // the writer thread first writes what it holds, then starts again from the
+        // frames up to the checkpoint
+        self.series.finish()?;
+        let format = self.series.format();
+        self.series = BackgroundSeries::start(SeriesWriter::reopen(&self.dir, t)?)?;
+        self.series.set_format(format);
         if let Some((indicators, warnings)) = &self.mark {
             self.indicators = *indicators;
             self.warnings = warnings.clone();
@@ -326,24 +371,42 @@ impl Sink for FileSink {
         Ok(())
     }
 
+    /// The frame goes to the writer thread: these three return once it is queued.
     fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError> {
-        self.series.begin_frame(time, step)?;
-        Ok(())
+        let t = Instant::now();
+        let r = self.series.begin_frame(time, step);
+        self.handover_ns += t.elapsed().as_nanos() as u64;
+        Ok(r?)
     }
 
-    fn frame_body(&mut self, body: &FrameBody) -> Result<(), SinkError> {
-        self.series.frame_body(body)?;
-        Ok(())
+    fn frame_body(&mut self, body: FrameBody) -> Result<(), SinkError> {
+        let t = Instant::now();
+        let r = self.series.frame_body(body);
+        self.handover_ns += t.elapsed().as_nanos() as u64;
+        Ok(r?)
     }
 
     fn frame_end(&mut self) -> Result<(), SinkError> {
-        self.series.end_frame()?;
+        let t = Instant::now();
+        let r = self.series.end_frame();
+        self.handover_ns += t.elapsed().as_nanos() as u64;
+        r?;
+        if self.echo {
+            for n in self.take_notes() {
+                eprintln!("crash: note: {n}");
+            }
+        }
         self.energy.flush()?;
         self.contacts.flush()?;
         Ok(())
     }
 
+    /// Drains the frame writer first: summary.json comes after the last frame. A
+    /// writer error becomes the run's fault (when it has none) and is returned.
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
+        let t = Instant::now();
+        let frames = self.series.finish();
+        self.drain_ns += t.elapsed().as_nanos() as u64;
         self.energy.flush()?;
         self.contacts.flush()?;
         let s = &mut self.summary;
@@ -361,6 +424,8 @@ impl Sink for FileSink {
             ("meim", st.meim_ns),
             ("migration", st.migration_ns),
             ("output", st.output_ns),
+            ("output_handover", self.handover_ns),
+            ("output_final_drain", self.drain_ns),
         ] {
             s.ns_per_element_cycle.insert(k.into(), v as f64 / cycles);
         }
@@ -384,13 +449,17 @@ impl Sink for FileSink {
         s.energy_limit = self.indicators.energy_limit;
         s.indicators = self.indicators;
         s.warnings = self.warnings.clone();
-        s.final_state_hash = if error.is_none() {
+        s.final_state_hash = if error.is_none() && frames.is_ok() {
             hash_hex(stats.final_hash)
         } else {
             String::new()
         };
-        s.fault = error.map(|e| e.to_string());
+        s.fault = match (error, &frames) {
+            (Some(e), _) => Some(e.to_string()),
+            (None, Err(e)) => Some(format!("output: {e}")),
+            (None, Ok(())) => None,
+        };
         write_summary(self.dir.join(SUMMARY_JSON), s)?;
-        Ok(())
+        Ok(frames?)
     }
 }

@@ -124,6 +124,7 @@ fn run(args: Args) -> anyhow::Result<()> {
     // master's memory does not grow with the model
     let plan = scene.plan()?;
     let energy_limit = plan.energy_limit;
+    let frame_format = crash_master::frame_format(&plan.outputs);
     let names: Vec<(u32, String)> = scene
         .spec
         .bodies
@@ -145,6 +146,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
         .with_checkpoints(args.out.join(RESTART_FILE))
         .with_energy_limit(energy_limit)
+        .with_frame_format(frame_format)
         .with_body_names(names)
         .with_echo(true);
     let secret = Secret::configured(args.secret_file.as_deref())?;

@@ -52,7 +52,7 @@ pub trait Sink {
     /// A frame at an output time begins; its bodies follow in id order (`frame_body`),
     /// then `frame_end`.
     fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError>;
-    fn frame_body(&mut self, body: &FrameBody) -> Result<(), SinkError>;
+    fn frame_body(&mut self, body: FrameBody) -> Result<(), SinkError>;
     fn frame_end(&mut self) -> Result<(), SinkError>;
     /// The run ended: normally (`error` None, the final frame was written) or not (the
     /// frames written so far are the last complete ones).
@@ -132,7 +132,7 @@ impl Sink for RecordSink {
         Ok(())
     }
 
-    fn frame_body(&mut self, b: &FrameBody) -> Result<(), SinkError> {
+    fn frame_body(&mut self, b: FrameBody) -> Result<(), SinkError> {
         let (_, _, h) = self.open.as_mut().ok_or("a frame body outside a frame")?;
         h.add(b.id, &b.x, &b.v, &b.w);
         Ok(())

@@ -1,6 +1,7 @@
 //! `[outputs]`: result intervals beyond the frames (named after the LS-DYNA files they
-//! stand for) and the nodes whose histories are wanted. Parsed and checked here and
-//! handed over in `Built::outputs`; the run does not write these files yet.
+//! stand for) and the nodes whose histories are wanted, and how the frames are stored
+//! (`precision`, `compression`). Parsed and checked here and handed over in
+//! `Built::outputs`; the run does not write the interval files yet.
 
 use crate::context::Ctx;
 use crate::error::{ErrorKind, SceneError};
@@ -16,10 +17,41 @@ pub struct Outputs {
     pub spcforc: Option<f64>,
     /// (body id, node index in the body, node id in its mesh file).
     pub history: Vec<(u32, usize, u64)>,
+    /// Frames store their float arrays as Float32 (`precision = "f32"`).
+    pub frames_f32: bool,
+    /// Frames are not compressed (`compression = "none"`).
+    pub frames_uncompressed: bool,
+}
+
+/// `precision` and `compression` as flags (f32, uncompressed).
+fn frame_storage(ctx: &Ctx, s: &SceneFile) -> Result<(bool, bool), SceneError> {
+    let o = &s.outputs;
+    let f32 = match o.precision.as_deref() {
+        None | Some("f64") => false,
+        Some("f32") => true,
+        Some(_) => {
+            return Err(ctx.invalid(
+                "outputs.precision",
+                "must be \"f64\" (default, every bit kept) or \"f32\" (half the size)",
+            ))
+        }
+    };
+    let raw = match o.compression.as_deref() {
+        None | Some("zlib") => false,
+        Some("none") => true,
+        Some(_) => {
+            return Err(ctx.invalid(
+                "outputs.compression",
+                "must be \"zlib\" (default) or \"none\"",
+            ))
+        }
+    };
+    Ok((f32, raw))
 }
 
 /// Intervals finite and > 0, history bodies named (before the meshes exist).
 pub fn check(ctx: &Ctx, s: &SceneFile) -> Result<(), SceneError> {
+    frame_storage(ctx, s)?;
     let o = &s.outputs;
     for (name, v) in [
         ("glstat", o.glstat),
@@ -91,7 +123,10 @@ pub fn resolve(
             history.push((ids[i], *n, id as u64));
         }
     }
+    let (frames_f32, frames_uncompressed) = frame_storage(ctx, s)?;
     Ok(Outputs {
+        frames_f32,
+        frames_uncompressed,
         glstat: o.glstat,
         matsum: o.matsum,
         rcforc: o.rcforc,

@@ -66,6 +66,10 @@ pub struct OutputsSpec {
     /// Nodes whose histories are requested, by body and mesh node id.
     #[serde(default)]
     pub history: Vec<HistorySpec>,
+    /// Float arrays of the frames: "f64" (default) or "f32".
+    pub precision: Option<String>,
+    /// Frame data compression: "zlib" (default) or "none".
+    pub compression: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]

@@ -187,3 +187,44 @@ fn output_requests_are_checked_and_carried() {
         &["generated mesh"],
     );
 }
+
+#[test]
+fn frame_precision_and_compression_are_checked_and_carried() {
+    let b = build(&BASE.to_string());
+    assert_eq!(
+        (b.outputs.frames_f32, b.outputs.frames_uncompressed),
+        (false, false)
+    );
+    let b = build(&format!(
+        "{BASE}\n[outputs]\nprecision = \"f32\"\ncompression = \"none\"\n"
+    ));
+    assert_eq!(
+        (b.outputs.frames_f32, b.outputs.frames_uncompressed),
+        (true, true)
+    );
+    let b = build(&format!(
+        "{BASE}\n[outputs]\nprecision = \"f64\"\ncompression = \"zlib\"\n"
+    ));
+    assert_eq!(
+        (b.outputs.frames_f32, b.outputs.frames_uncompressed),
+        (false, false)
+    );
+    let e = error(&format!("{BASE}\n[outputs]\nprecision = \"half\"\n"));
+    check(
+        &e,
+        ErrorKind::Invalid,
+        27,
+        13,
+        "outputs.precision",
+        &["\"f64\"", "\"f32\""],
+    );
+    let e = error(&format!("{BASE}\n[outputs]\ncompression = \"lz4\"\n"));
+    check(
+        &e,
+        ErrorKind::Invalid,
+        27,
+        15,
+        "outputs.compression",
+        &["\"zlib\"", "\"none\""],
+    );
+}

@@ -55,7 +55,7 @@ impl Sink for Quiet {
     fn frame_begin(&mut self, _: u64, _: f64) -> Result<(), SinkError> {
         Ok(())
     }
-    fn frame_body(&mut self, _: &FrameBody) -> Result<(), SinkError> {
+    fn frame_body(&mut self, _: FrameBody) -> Result<(), SinkError> {
         Ok(())
     }
     fn frame_end(&mut self) -> Result<(), SinkError> {

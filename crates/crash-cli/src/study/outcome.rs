@@ -131,7 +131,7 @@ impl Sink for Watch {
         Ok(())
     }
 
-    fn frame_body(&mut self, b: &FrameBody) -> Result<(), SinkError> {
+    fn frame_body(&mut self, b: FrameBody) -> Result<(), SinkError> {
         let finite = |v: &[crash_core::Vec3]| v.iter().all(|p| p.iter().all(|c| c.is_finite()));
         if !(finite(&b.x) && finite(&b.v) && finite(&b.w)) {
             let step = self.frame_step;

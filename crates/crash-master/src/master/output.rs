@@ -1,7 +1,8 @@
 //! Output: when a frame is due, the master asks the workers for it in pieces of at most
 //! `FRAME_PIECE` elements (consecutive bodies of one worker, in id order) and hands each
 //! body to the sink as it arrives: neither the master nor the sink holds a large
-//! model's frame at once.
+//! model's frame at once (the file sink passes each body to its background writer,
+//! whose queue is bounded).
 
 use super::{ns, Master, TIME_EPS};
 use crate::error::MasterError;
@@ -49,7 +50,8 @@ impl<L: WorkerLink> Master<'_, L> {
                     LinkError::Protocol("a frame piece holds other bodies than asked".into()),
                 ));
             }
-            for b in &bodies {
+            // the state hash comes from the bodies as received, whatever the file format
+            for b in bodies {
                 hash.add(b.id, &b.x, &b.v, &b.w);
                 sink.frame_body(b).map_err(MasterError::sink)?;
             }

@@ -1,0 +1,364 @@
+//! Encodes a frame, body by body, into a .vtu with VTK "appended raw" data.
+//!
+//! The XML must come before the data and give each array's byte offset, which is known
+//! only once every body is in. So each array is cut into blocks of `BLOCK` bytes as its
+//! values arrive; a full block is compressed (zlib, VTK's `vtkZLibDataCompressor`) and
+//! staged in a `Spill` (memory, then a temporary file beyond `SPILL_MEMORY`), and at the
+//! end the XML is written, then every array's header and blocks copied from the spill.
+//! Memory stays bounded whatever the model size: one block per array plus the spill's
+//! memory part.
+//!
+//! A compressed array is `[nblocks, blocksize, last_blocksize, csize_1..csize_n]`
+//! (UInt64) then the compressed blocks; `last_blocksize` is the uncompressed size of a
+//! partial last block (0 when every block is full). An uncompressed array is `[nbytes]`
+//! then the bytes.
+
+use crate::frame::FrameBody;
+use crate::vtu::{names, section_attributes, Base, Precision, Section, Values, VtuFormat, ARRAYS};
+use flate2::{write::ZlibEncoder, Compression};
+use std::fs::File;
+use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::PathBuf;
+
+/// Uncompressed bytes per block (a multiple of 8, so no value straddles two blocks).
+pub const BLOCK: usize = 1 << 16;
+/// Staged data kept in memory before the spill moves to its file.
+pub const SPILL_MEMORY: usize = 16 << 20;
+
+/// zlib level 1 (fastest): on a showcase frame the default level 6 saves 0.3% of the
+/// bytes for 1.6x the time (docs/performance.md, Output).
+const LEVEL: u32 = 1;
+
+/// Where compressed blocks wait until the XML is written.
+#[derive(Debug)]
+pub struct Spill {
+    mem: Vec<u8>,
+    /// The temporary file to use once `mem` would outgrow `SPILL_MEMORY` (None: memory
+    /// only), and the open file once it is used.
+    path: Option<PathBuf>,
+    file: Option<BufWriter<File>>,
+    len: u64,
+    /// Bytes kept in memory before the file is used.
+    memory: usize,
+}
+
+impl Spill {
+    /// Everything in memory (tests, `write_vtu`).
+    pub fn in_memory() -> Self {
+        Self {
+            mem: Vec::new(),
+            path: None,
+            file: None,
+            len: 0,
+            memory: usize::MAX,
+        }
+    }
+
+    /// Memory first (`SPILL_MEMORY` bytes), then `path` (removed again when the spill
+    /// is dropped).
+    pub fn with_file(path: PathBuf) -> Self {
+        Self::with_file_after(path, SPILL_MEMORY)
+    }
+
+    /// Memory for the first `memory` bytes, then `path`.
+    pub fn with_file_after(path: PathBuf, memory: usize) -> Self {
+        let mut s = Self::in_memory();
+        s.path = Some(path);
+        s.memory = memory;
+        s
+    }
+
+    /// Append `bytes`; returns where they start.
+    fn append(&mut self, bytes: &[u8]) -> io::Result<u64> {
+        let at = self.len;
+        if self.file.is_none() {
+            if let Some(p) = self
+                .path
+                .as_ref()
+                .filter(|_| self.mem.len() + bytes.len() > self.memory)
+            {
+                let file = std::fs::OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .open(p)?;
+                let mut f = BufWriter::new(file);
+                f.write_all(&self.mem)?;
+                self.mem = Vec::new();
+                self.file = Some(f);
+            }
+        }
+        match &mut self.file {
+            Some(f) => f.write_all(bytes)?,
+            None => self.mem.extend_from_slice(bytes),
+        }
+        self.len += bytes.len() as u64;
+        Ok(at)
+    }
+
+    /// Copy `len` bytes from `at` to `out`.
+    fn copy(
+        &mut self,
+        at: u64,
+        len: u64,
+        out: &mut dyn Write,
+        buf: &mut Vec<u8>,
+    ) -> io::Result<()> {
+        match &mut self.file {
+            None => out.write_all(&self.mem[at as usize..(at + len) as usize]),
+            Some(f) => {
+                f.flush()?;
+                let file = f.get_mut();
+                file.seek(SeekFrom::Start(at))?;
+                buf.resize(len as usize, 0);
+                file.read_exact(buf)?;
+                out.write_all(buf)
+            }
+        }
+    }
+}
+
+impl Drop for Spill {
+    fn drop(&mut self) {
+        if let (Some(_), Some(p)) = (self.file.take(), &self.path) {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
+/// One array being cut into blocks.
+#[derive(Debug)]
+struct ArrayStream {
+    buf: Vec<u8>,
+    /// (where in the spill, stored size) of each block, in order.
+    blocks: Vec<(u64, u64)>,
+    raw_len: u64,
+    float32: bool,
+    type_name: &'static str,
+}
+
+/// A frame being encoded.
+#[derive(Debug)]
+pub struct FrameEncoder {
+    time: f64,
+    step: u64,
+    format: VtuFormat,
+    streams: Vec<ArrayStream>,
+    spill: Spill,
+    base: Base,
+    cells: u64,
+    scratch: Vec<u8>,
+}
+
+impl FrameEncoder {
+    pub fn new(time: f64, step: u64, format: VtuFormat, spill: Spill) -> Self {
+        // each array's type, from its values for a body without nodes or elements
+        let empty = FrameBody::default();
+        let streams = ARRAYS
+            .iter()
+            .map(|def| {
+                let (type_name, float32) =
+                    match ((def.values)(&empty, Base::default()), format.precision) {
+                        (Values::F64(_), Precision::F64) => ("Float64", false),
+                        (Values::F64(_), Precision::F32) => ("Float32", true),
+                        (Values::I64(_), _) => ("Int64", false),
+                        (Values::U8(_), _) => ("UInt8", false),
+                    };
+                ArrayStream {
+                    buf: Vec::with_capacity(BLOCK),
+                    blocks: Vec::new(),
+                    raw_len: 0,
+                    float32,
+                    type_name,
+                }
+            })
+            .collect();
+        Self {
+            time,
+            step,
+            format,
+            streams,
+            spill,
+            base: Base::default(),
+            cells: 0,
+            scratch: Vec::new(),
+        }
+    }
+
+    /// The next body (bodies in id order).
+    pub fn body(&mut self, b: &FrameBody) -> io::Result<()> {
+        for (def, s) in ARRAYS.iter().zip(&mut self.streams) {
+            let values = (def.values)(b, self.base);
+            let (spill, scratch, compress) =
+                (&mut self.spill, &mut self.scratch, self.format.compress);
+            let mut put = |s: &mut ArrayStream, bytes: &[u8]| -> io::Result<()> {
+                s.buf.extend_from_slice(bytes);
+                if s.buf.len() >= BLOCK {
+                    store_block(s, spill, scratch, compress)?;
+                }
+                Ok(())
+            };
+            match values {
+                Values::F64(it) if s.float32 => {
+                    for v in it {
+                        put(s, &(v as f32).to_le_bytes())?;
+                    }
+                }
+                Values::F64(it) => {
+                    for v in it {
+                        put(s, &v.to_le_bytes())?;
+                    }
+                }
+                Values::I64(it) => {
+                    for v in it {
+                        put(s, &v.to_le_bytes())?;
+                    }
+                }
+                Values::U8(it) => {
+                    for v in it {
+                        put(s, &[v])?;
+                    }
+                }
+            }
+        }
+        let conn: usize = 3 * b.tris.len() + 4 * b.quads.len();
+        self.base.point += b.x.len() as i64;
+        self.base.conn += conn as i64;
+        self.cells += b.element_count() as u64;
+        Ok(())
+    }
+
+    /// Write the whole .vtu to `out`: XML, then the appended data from the spill.
+    pub fn finish(mut self, out: &mut dyn Write) -> io::Result<()> {
+        for s in &mut self.streams {
+            if !s.buf.is_empty() {
+                store_block(s, &mut self.spill, &mut self.scratch, self.format.compress)?;
+            }
+        }
+        let headers: Vec<Vec<u8>> = self
+            .streams
+            .iter()
+            .map(|s| header(s, self.format.compress))
+            .collect();
+        self.write_xml(out, &headers)?;
+        // the '_' right after the tag: some readers (vtkio) take the data from there
+        write!(out, r#"  <AppendedData encoding="raw">_"#)?;
+        let mut buf = Vec::new();
+        for (s, h) in self.streams.iter().zip(&headers) {
+            out.write_all(h)?;
+            for &(at, len) in &s.blocks {
+                self.spill.copy(at, len, out, &mut buf)?;
+            }
+        }
+        writeln!(out)?;
+        writeln!(out, "  </AppendedData>")?;
+        writeln!(out, "</VTKFile>")
+    }
+
+    fn write_xml(&self, w: &mut dyn Write, headers: &[Vec<u8>]) -> io::Result<()> {
+        use names::*;
+        let compressor = if self.format.compress {
+            r#" compressor="vtkZLibDataCompressor""#
+        } else {
+            ""
+        };
+        writeln!(w, r#"<?xml version="1.0"?>"#)?;
+        writeln!(
+            w,
+            r#"<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64"{compressor}>"#
+        )?;
+        writeln!(w, "  <UnstructuredGrid>")?;
+        writeln!(w, "    <FieldData>")?;
+        writeln!(
+            w,
+            r#"      <DataArray type="Float64" Name="{TIME}" NumberOfTuples="1" format="ascii">{:e}</DataArray>"#,
+            self.time
+        )?;
+        writeln!(
+            w,
+            r#"      <DataArray type="Int64" Name="{STEP}" NumberOfTuples="1" format="ascii">{}</DataArray>"#,
+            self.step
+        )?;
+        writeln!(w, "    </FieldData>")?;
+        writeln!(
+            w,
+            r#"    <Piece NumberOfPoints="{}" NumberOfCells="{}">"#,
+            self.base.point, self.cells
+        )?;
+        // byte offset of each array in the appended data
+        let mut offsets = Vec::with_capacity(self.streams.len());
+        let mut at = 0u64;
+        for (s, h) in self.streams.iter().zip(headers) {
+            offsets.push(at);
+            at += h.len() as u64 + s.blocks.iter().map(|b| b.1).sum::<u64>();
+        }
+        for section in [
+            Section::PointData,
+            Section::CellData,
+            Section::Points,
+            Section::Cells,
+        ] {
+            writeln!(
+                w,
+                "      <{}{}>",
+                section.tag(),
+                section_attributes(section)
+            )?;
+            for ((def, s), off) in ARRAYS.iter().zip(&self.streams).zip(&offsets) {
+                if def.section != section {
+                    continue;
+                }
+                write!(
+                    w,
+                    r#"        <DataArray type="{}" Name="{}""#,
+                    s.type_name, def.name
+                )?;
+                if def.components > 1 {
+                    write!(w, r#" NumberOfComponents="{}""#, def.components)?;
+                }
+                writeln!(w, r#" format="appended" offset="{off}"/>"#)?;
+            }
+            writeln!(w, "      </{}>", section.tag())?;
+        }
+        writeln!(w, "    </Piece>")?;
+        writeln!(w, "  </UnstructuredGrid>")
+    }
+}
+
+/// Move the stream's buffered bytes to the spill as one block.
+fn store_block(
+    s: &mut ArrayStream,
+    spill: &mut Spill,
+    scratch: &mut Vec<u8>,
+    compress: bool,
+) -> io::Result<()> {
+    let stored = if compress {
+        scratch.clear();
+        let mut z = ZlibEncoder::new(std::mem::take(scratch), Compression::new(LEVEL));
+        z.write_all(&s.buf)?;
+        *scratch = z.finish()?;
+        &scratch[..]
+    } else {
+        &s.buf[..]
+    };
+    let at = spill.append(stored)?;
+    s.blocks.push((at, stored.len() as u64));
+    s.raw_len += s.buf.len() as u64;
+    s.buf.clear();
+    Ok(())
+}
+
+/// The array's header (UInt64 values, little endian).
+fn header(s: &ArrayStream, compress: bool) -> Vec<u8> {
+    let words: Vec<u64> = if compress {
+        let last = s.raw_len % BLOCK as u64;
+        [s.blocks.len() as u64, BLOCK as u64, last]
+            .into_iter()
+            .chain(s.blocks.iter().map(|b| b.1))
+            .collect()
+    } else {
+        vec![s.raw_len]
+    };
+    words.iter().flat_map(|w| w.to_le_bytes()).collect()
+}
