@@ -86,7 +86,11 @@ fn start(tag: &str, workers: usize, extra: &[&str]) -> (Proc, Vec<Proc>, PathBuf
     let mut args = vec!["--end-time", END_TIME];
     args.extend_from_slice(extra);
     let (m, url) = master(&test_scene(SCENE), workers, &out, &args);
-    let w = (0..workers).map(|_| worker(&url, 1, &[])).collect();
+    // 2 ms per step (>= 4.4 s per run): the fault lands mid-run however fast the
+    // machine is (results do not depend on it)
+    let w = (0..workers)
+        .map(|_| worker(&url, 1, &["--step-delay-ms", "2"]))
+        .collect();
     m.expect_line("workers attached", Duration::from_secs(60));
     (m, w, out)
 }
