@@ -341,12 +341,15 @@ impl Sink for FileSink {
         s.energy_limit = self.indicators.energy_limit;
         s.indicators = self.indicators;
         s.warnings = self.warnings.clone();
-        s.final_state_hash = if error.is_none() {
+        // a clean stop wrote its last frame: its hash is known
+        let interrupted = matches!(error, Some(MasterError::Interrupted { .. }));
+        s.final_state_hash = if error.is_none() || interrupted {
             hash_hex(stats.final_hash)
         } else {
             String::new()
         };
         s.fault = error.map(|e| e.to_string());
+        s.interrupted = interrupted;
         write_summary(self.dir.join(SUMMARY_JSON), s)?;
         Ok(())
     }
