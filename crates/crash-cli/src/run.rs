@@ -117,6 +117,8 @@ impl Sink for CliSink {
     }
 
     fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        // a stop's checkpoint is the first call after the signal
+        self.progress.note_stop();
         self.files.checkpoint(state)
     }
 

@@ -137,12 +137,21 @@ impl FileSink {
         size: RunSize,
         restart: &RestartFile,
     ) -> Result<Self, SinkError> {
-        let t = restart.master.clock.time;
+        let m = &restart.master;
+        let t = m.clock.time;
+        // a frame at the checkpoint's time that the schedule did not ask for is the
+        // last frame of a run stopped by a signal: dropped, so the restarted series
+        // is the uninterrupted one
+        let frames_until = if m.last_frame_step == Some(m.clock.step) || t <= 0.0 {
+            t
+        } else {
+            f64::from_bits(t.to_bits() - 1)
+        };
         Ok(Self {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
-            series: SeriesWriter::reopen(dir, t)?,
+            series: SeriesWriter::reopen(dir, frames_until)?,
             indicators: restart.indicators,
             warnings: restart.warnings.clone(),
             fresh: Vec::new(),

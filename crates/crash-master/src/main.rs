@@ -86,11 +86,13 @@ fn main() -> ExitCode {
     if let Err(e) = crash_master::stop::install_handlers() {
         eprintln!("crash-master: warning: cannot handle SIGTERM/SIGINT: {e}");
     }
-    match run(Args::parse()) {
+    let args = Args::parse();
+    let out = args.out.clone();
+    match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             if let Some(i @ MasterError::Interrupted { .. }) = e.downcast_ref::<MasterError>() {
-                eprintln!("crash-master: {i}");
+                eprintln!("crash-master: {i}: continue with --resume {}/{RESTART_FILE} (and the same options)", out.display());
                 return ExitCode::from(crash_master::stop::EXIT_INTERRUPTED);
             }
             eprintln!("crash-master: error: {e:#}");
