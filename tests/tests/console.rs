@@ -120,7 +120,10 @@ fn sigint_stops_crash_run_cleanly_and_the_restart_matches_the_uninterrupted_run(
     let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
     assert!(s.interrupted, "{s:?}");
     assert!(
-        s.fault.as_deref().unwrap_or("").contains("interrupted at step"),
+        s.fault
+            .as_deref()
+            .unwrap_or("")
+            .contains("interrupted at step"),
         "{:?}",
         s.fault
     );
@@ -132,7 +135,10 @@ fn sigint_stops_crash_run_cleanly_and_the_restart_matches_the_uninterrupted_run(
     );
     assert_eq!(s.final_state_hash.len(), 16, "{s:?}");
     let ckp = crash_master::read_restart(&out.join(crash_master::RESTART_FILE)).unwrap();
-    assert_eq!(ckp.master.clock.step, s.steps, "checkpoint at the last step");
+    assert_eq!(
+        ckp.master.clock.step, s.steps,
+        "checkpoint at the last step"
+    );
     // the last frame is that step's, complete and readable
     let pvd = crash_io::read_pvd(&out.join(crash_io::PVD_FILE)).unwrap();
     let last = crash_io::read_vtu(&out.join(&pvd.last().unwrap().file)).unwrap();
@@ -154,7 +160,10 @@ fn sigint_stops_crash_run_cleanly_and_the_restart_matches_the_uninterrupted_run(
         log.contains("is before the checkpoint's time") && log.contains("restart.ckp"),
         "{log}"
     );
-    assert_eq!(std::fs::read(out.join(crash_io::ENERGY_CSV)).unwrap(), energy);
+    assert_eq!(
+        std::fs::read(out.join(crash_io::ENERGY_CSV)).unwrap(),
+        energy
+    );
 
     let (code, log) = restart(&[]);
     assert_eq!(code, Some(0), "{log}");
@@ -164,7 +173,11 @@ fn sigint_stops_crash_run_cleanly_and_the_restart_matches_the_uninterrupted_run(
     assert_eq!(r.steps, reference.steps);
     // the series and the histories are the uninterrupted run's (the stop's extra
     // frame is dropped at the restart)
-    for f in [crash_io::PVD_FILE, crash_io::ENERGY_CSV, crash_io::CONTACTS_CSV] {
+    for f in [
+        crash_io::PVD_FILE,
+        crash_io::ENERGY_CSV,
+        crash_io::CONTACTS_CSV,
+    ] {
         let a = std::fs::read(full.join(f)).unwrap();
         let b = std::fs::read(out.join(f)).unwrap();
         assert!(a == b, "{f} differs from the uninterrupted run's");

@@ -65,8 +65,10 @@ fn the_recipe_runs_one_master_and_one_worker_per_node_with_the_tasks_cpus_as_thr
     );
     assert_eq!(
         get(&l, "master"),
-        ["/shared/crash/target/release/crash-master scenes/ten-spheres-three-plates.toml \
-          --listen 0.0.0.0:50051 --workers 3 --out out/ten"]
+        [
+            "/shared/crash/target/release/crash-master scenes/ten-spheres-three-plates.toml \
+          --listen 0.0.0.0:50051 --workers 3 --out out/ten"
+        ]
     );
 }
 
@@ -81,8 +83,14 @@ fn the_recipe_expands_slurm_node_lists_and_follows_its_settings() {
         ["gpu8 gpu9 gpu10 gpu012 r1-n08 r1-n09 r2-n08 r2-n09 login"]
     );
     let w = get(&l, "workers")[0];
-    assert!(w.starts_with("srun --nodes=9 --ntasks=9 --ntasks-per-node=1 --cpus-per-task=32 "), "{w}");
-    assert!(w.ends_with("--master http://gpu8:50051 --threads 32"), "{w}");
+    assert!(
+        w.starts_with("srun --nodes=9 --ntasks=9 --ntasks-per-node=1 --cpus-per-task=32 "),
+        "{w}"
+    );
+    assert!(
+        w.ends_with("--master http://gpu8:50051 --threads 32"),
+        "{w}"
+    );
     assert!(get(&l, "master")[0].contains("--workers 9 "));
 
     let l = render(
@@ -99,9 +107,15 @@ fn the_recipe_expands_slurm_node_lists_and_follows_its_settings() {
     assert_eq!(get(&l, "worker nodes"), ["node02 node03"]);
     let w = get(&l, "workers")[0];
     assert!(w.starts_with("srun --nodes=2 --ntasks=2 --ntasks-per-node=1 --cpus-per-task=8 --overlap --exclude=node01 "), "{w}");
-    assert!(w.ends_with("--master http://node01-ib:6000 --threads 6"), "{w}");
+    assert!(
+        w.ends_with("--master http://node01-ib:6000 --threads 6"),
+        "{w}"
+    );
     let m = get(&l, "master")[0];
-    assert!(m.contains("--listen 0.0.0.0:6000 --workers 2 --out out/ten --end-time 2e-3"), "{m}");
+    assert!(
+        m.contains("--listen 0.0.0.0:6000 --workers 2 --out out/ten --end-time 2e-3"),
+        "{m}"
+    );
 }
 
 /// The recipe run here (srun and scontrol stand-ins, 3 "nodes" on 127.0.0.1): 3

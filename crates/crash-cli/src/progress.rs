@@ -271,7 +271,15 @@ mod tests {
     fn status_lines_carry_step_time_dt_energy_error_and_eta_without_escape_codes() {
         let s = status();
         for line in [s.plain_line(), s.bar_message()] {
-            for part in ["123456", "1.2346e-3", "5.0000e-3", "1.2", "e-7", "e-4", "ETA 75s"] {
+            for part in [
+                "123456",
+                "1.2346e-3",
+                "5.0000e-3",
+                "1.2",
+                "e-7",
+                "e-4",
+                "ETA 75s",
+            ] {
                 assert!(line.contains(part), "{part} in {line}");
             }
             assert!(!line.contains('\x1b'), "{line:?}");
@@ -299,13 +307,22 @@ mod tests {
             // the warning above (a plain line: it wraps like any), the bar on one row
             let warning_rows = warning.len().div_ceil(usize::from(width));
             assert_eq!(rows.len(), warning_rows + 1, "width {width}: {screen:?}");
-            assert!(rows[0].starts_with("crash: warning:"), "width {width}: {screen:?}");
+            assert!(
+                rows[0].starts_with("crash: warning:"),
+                "width {width}: {screen:?}"
+            );
             let bar = rows[warning_rows];
-            assert!(bar.chars().count() <= usize::from(width), "width {width}: {bar:?}");
+            assert!(
+                bar.chars().count() <= usize::from(width),
+                "width {width}: {bar:?}"
+            );
             assert!(bar.contains("24.7%"), "width {width}: {bar:?}");
             // 145 columns (where the hand-written line used to break) show it all
             if width >= 145 {
-                assert!(bar.starts_with('[') && bar.contains("energy error"), "{bar:?}");
+                assert!(
+                    bar.starts_with('[') && bar.contains("energy error"),
+                    "{bar:?}"
+                );
             }
         }
     }

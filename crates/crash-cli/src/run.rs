@@ -207,7 +207,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     }
     let energy_limit = built.energy_limit;
     let restart = match &args.restart {
-        Some(path) => Some((path, load_restart(path, built.scene_hash, built.end_time, args)?)),
+        Some(path) => Some((
+            path,
+            load_restart(path, built.scene_hash, built.end_time, args)?,
+        )),
         None => None,
     };
     let out = match (&args.out, &restart) {

@@ -148,7 +148,11 @@ mod tests {
         .expect_err("the write must fail");
         assert!(e.to_string().contains("summary.json.tmp"), "{e}");
         assert_eq!(names(&d), ["summary.json"], "no *.tmp left");
-        assert_eq!(fs::read(&path).expect("read"), b"old", "the old file stays whole");
+        assert_eq!(
+            fs::read(&path).expect("read"),
+            b"old",
+            "the old file stays whole"
+        );
         let _ = fs::remove_dir_all(&d);
     }
 

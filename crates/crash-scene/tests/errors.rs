@@ -569,7 +569,16 @@ fn overlapping_boxes_without_penetration_are_accepted() {
 /// with a backslash or a control character) must not reach the file system.
 #[test]
 fn scene_name_that_would_leave_the_output_root_is_refused() {
-    for bad in ["../../x", "/tmp/x", "..", ".", "", "a\\\\b", "C:x", "a\\u0000b"] {
+    for bad in [
+        "../../x",
+        "/tmp/x",
+        "..",
+        ".",
+        "",
+        "a\\\\b",
+        "C:x",
+        "a\\u0000b",
+    ] {
         let text = format!("name = \"{bad}\"\n{BASE}");
         let e = error(&text);
         let shown = e.to_string();
