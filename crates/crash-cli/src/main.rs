@@ -82,9 +82,18 @@ fn main() -> ExitCode {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
         )
         .with_writer(std::io::stderr)
+        // colour codes only on a terminal: logs kept in files stay plain text
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let result = match Cli::parse().command {
-        Command::Run(args) => crash_cli::run::run(&args),
+        Command::Run(args) => {
+            // SIGINT, SIGTERM: finish the step, last frame, restart file, summary.json
+            // (interrupted), exit 130; a second one quits at once
+            if let Err(e) = crash_master::stop::install_handlers() {
+                eprintln!("crash: warning: cannot handle SIGINT/SIGTERM: {e}");
+            }
+            crash_cli::run::run(&args)
+        }
         Command::Study(args) => crash_cli::study::cli::study(&args),
         Command::Check {
             scene,

@@ -66,6 +66,10 @@ pub const EXIT_FAILED: u8 = 1;
 /// Exit code of a run stopped by a physical fault (a pass-through, tunnelling, an
 /// instability, a collapsed element...): the results from that point on are wrong.
 pub const EXIT_FAULT: u8 = 3;
+/// Exit code of a run stopped by SIGINT (Ctrl-C) or SIGTERM after a complete step, with
+/// its last frame, a restart file and summary.json marked interrupted:
+/// `crash_master::stop::EXIT_INTERRUPTED` (130).
+pub const EXIT_INTERRUPTED: u8 = crash_master::stop::EXIT_INTERRUPTED;
 /// Exit code of a run that finished with a warning that makes its results doubtful
 /// (energy balance beyond the scene's `energy_limit`, hourglass, contact energy,
 /// penetration; docs/output.md), unless `--allow-warnings`.
@@ -113,6 +117,8 @@ impl Sink for CliSink {
     }
 
     fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
+        // a stop's checkpoint is the first call after the signal
+        self.progress.note_stop();
         self.files.checkpoint(state)
     }
 
@@ -159,10 +165,12 @@ pub fn penetration_message(built: &crash_scene::Built, p: &crash_scene::Penetrat
     )
 }
 
-/// Read a restart file and check that it belongs to this scene.
+/// Read a restart file and check that it belongs to this scene and that the end time
+/// lies after it (before the run directory is reopened).
 fn load_restart(
     path: &Path,
     scene_hash: u64,
+    end_time: f64,
     args: &RunArgs,
 ) -> anyhow::Result<crash_master::RestartFile> {
     let r =
@@ -176,6 +184,9 @@ fn load_restart(
             scene_hash
         );
     }
+    r.master
+        .check_continues(scene_hash, end_time)
+        .with_context(|| format!("cannot restart from {}", path.display()))?;
     Ok(r)
 }
 
@@ -201,7 +212,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let energy_limit = built.energy_limit;
     let frame_format = crash_master::frame_format(&built.outputs);
     let restart = match &args.restart {
-        Some(path) => Some((path, load_restart(path, built.scene_hash, args)?)),
+        Some(path) => Some((
+            path,
+            load_restart(path, built.scene_hash, built.end_time, args)?,
+        )),
         None => None,
     };
     let out = match (&args.out, &restart) {
@@ -238,10 +252,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         .with_energy_limit(energy_limit)
         .with_frame_format(frame_format)
         .with_body_names(names);
+    let start_time = restart.as_ref().map_or(0.0, |(_, r)| r.master.clock.time);
     let mut sink = CliSink {
         files,
-        progress: Progress::new(input.config.end_time, args.quiet),
-        last_time: restart.as_ref().map_or(0.0, |(_, r)| r.master.clock.time),
+        progress: Progress::new(input.config.end_time, start_time, args.quiet),
+        last_time: start_time,
     };
     let opts = RunOptions {
         checkpoint_every: args.checkpoint_every.unwrap_or(0),
@@ -271,6 +286,16 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     });
     let stats = match result {
         Ok(s) => s,
+        Err(MasterError::Interrupted { step, time }) => {
+            eprintln!(
+                "crash: interrupted at step {step}, t = {time:.6e} s: the last frame, {} and summary.json (interrupted) are in {}; continue with: crash run {} --restart {} (and the same options)",
+                RESTART_FILE,
+                out.display(),
+                args.scene.display(),
+                out.join(RESTART_FILE).display()
+            );
+            return Ok(ExitCode::from(EXIT_INTERRUPTED));
+        }
         Err(e) => {
             let (clock_step, clock_time) = sink_progress(&out);
             eprintln!("crash: run stopped: {e}");

@@ -32,11 +32,14 @@ pub fn write_atomic(
 
 /// A file written under a temporary name that takes its own name only when complete
 /// (`commit`): for files written piece by piece, e.g. a frame as its bodies arrive.
+/// Dropped without a successful commit (a write error, a full disk, an abandoned
+/// frame), it removes its temporary file: no `*.tmp` is left behind.
 #[derive(Debug)]
 pub struct AtomicFile {
     path: PathBuf,
     tmp: PathBuf,
     w: BufWriter<File>,
+    committed: bool,
 }
 
 impl AtomicFile {
@@ -47,6 +50,7 @@ impl AtomicFile {
             path: path.to_path_buf(),
             tmp,
             w,
+            committed: false,
         })
     }
 
@@ -59,24 +63,24 @@ impl AtomicFile {
         &self.tmp
     }
 
-    /// Flush, sync and rename to the final name. On failure the temporary file is
-    /// removed (a full disk leaves no partial file behind).
-    pub fn commit(self) -> Result<(), IoError> {
-        let Self { path, tmp, w } = self;
-        let done = (|| {
-            let file = w
-                .into_inner()
-                .map_err(|e| IoError::io(&tmp, e.into_error()))?;
-            file.sync_all().at(&tmp)?;
-            drop(file);
-            fs::rename(&tmp, &path).at(&path)
-        })();
-        if done.is_err() {
-            let _ = fs::remove_file(&tmp);
-        }
-        done?;
-        sync_dir(&path);
+    /// Flush, sync and rename to the final name (on failure the temporary file is
+    /// removed when `self` drops).
+    pub fn commit(mut self) -> Result<(), IoError> {
+        self.w.flush().at(&self.tmp)?;
+        self.w.get_ref().sync_all().at(&self.tmp)?;
+        fs::rename(&self.tmp, &self.path).at(&self.path)?;
+        self.committed = true;
+        sync_dir(&self.path);
         Ok(())
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            // best effort: the error that got us here is the one worth reporting
+            let _ = fs::remove_file(&self.tmp);
+        }
     }
 }
 
@@ -91,5 +95,85 @@ fn sync_dir(path: &Path) {
         if let Ok(d) = File::open(dir) {
             let _ = d.sync_all();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("crash-atomic-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).expect("test dir");
+        d
+    }
+
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = fs::read_dir(d)
+            .expect("list")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    /// A writer that fails like a full disk after `left` bytes.
+    struct FullAfter<'a> {
+        inner: &'a mut dyn Write,
+        left: usize,
+    }
+
+    impl Write for FullAfter<'_> {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.left == 0 {
+                return Err(std::io::Error::from_raw_os_error(28)); // ENOSPC
+            }
+            let n = buf.len().min(self.left);
+            self.left -= n;
+            self.inner.write(&buf[..n])
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            self.inner.flush()
+        }
+    }
+
+    #[test]
+    fn a_write_error_leaves_neither_a_temp_file_nor_a_torn_file() {
+        let d = dir("fail");
+        let path = d.join("summary.json");
+        write_atomic(&path, |w| w.write_all(b"old")).expect("first write");
+        let e = write_atomic(&path, |w| {
+            let mut full = FullAfter {
+                inner: w,
+                left: 10_000,
+            };
+            full.write_all(&[b'x'; 100_000])
+        })
+        .expect_err("the write must fail");
+        assert!(e.to_string().contains("summary.json.tmp"), "{e}");
+        assert_eq!(names(&d), ["summary.json"], "no *.tmp left");
+        assert_eq!(
+            fs::read(&path).expect("read"),
+            b"old",
+            "the old file stays whole"
+        );
+        let _ = fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn an_atomic_file_dropped_before_commit_removes_its_temp_file() {
+        let d = dir("drop");
+        let path = d.join("frame_0001.vtu");
+        let mut f = AtomicFile::create(&path).expect("create");
+        f.writer().write_all(b"half a frame").expect("write");
+        assert_eq!(names(&d), ["frame_0001.vtu.tmp"]);
+        drop(f);
+        assert!(names(&d).is_empty(), "{:?}", names(&d));
+        let mut f = AtomicFile::create(&path).expect("create");
+        f.writer().write_all(b"a frame").expect("write");
+        f.commit().expect("commit");
+        assert_eq!(names(&d), ["frame_0001.vtu"]);
+        let _ = fs::remove_dir_all(&d);
     }
 }

@@ -249,10 +249,15 @@ pub struct Summary {
     /// Every warning raised, in the order raised.
     pub warnings: Vec<Warning>,
     /// `crash_core::hash::state_hash` of the final state, 16 hex digits (empty after a
-    /// fault).
+    /// fault; after an interruption, the state the run stopped at).
     pub final_state_hash: String,
     /// Why the run stopped early, if it did.
     pub fault: Option<String>,
+    /// Stopped on request (SIGINT, SIGTERM) after a complete step: `fault` says at
+    /// which, the last frame and a restart file (restart.ckp) were written and
+    /// `final_state_hash` is the state of that frame. Absent in older files: false.
+    #[serde(default)]
+    pub interrupted: bool,
     /// The element kernels' instruction-set path ("avx512", "avx2", "baseline") of the
     /// process that computed (empty for crash-master: each worker prints its own).
     #[serde(default)]

@@ -115,6 +115,7 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
         warnings: vec![warning],
         final_state_hash: hash_hex(42),
         fault: None,
+        interrupted: false,
         simd_path: "avx2".into(),
     };
     write_summary(&path, &s).expect("write");
@@ -124,6 +125,12 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
     assert_eq!(v["final_state_hash"], "000000000000002a");
     assert_eq!(v["scene_hash"], "00000000deadbeef");
     assert_eq!(v["ns_per_element_cycle"]["total"], 60.25);
+    assert_eq!(v["interrupted"], false);
+    // a summary.json written before `interrupted` existed still reads (as false)
+    let mut old = v.clone();
+    old.as_object_mut().expect("object").remove("interrupted");
+    std::fs::write(&path, old.to_string()).expect("write old");
+    assert_eq!(read_summary(&path).expect("read old"), s);
     assert_eq!(v["indicators"]["hourglass_internal_ratio"], 0.02);
     assert_eq!(v["warnings"][0]["kind"], "penetration");
     assert_eq!(v["warnings"][0]["step"], 12);

@@ -7,6 +7,7 @@
 //! measured group costs and the placement (a group computes the same bits on any
 //! worker), so a run resumes on any number of workers.
 
+use crate::error::MasterError;
 use crate::meim::Interaction;
 use crate::stats::RunStats;
 use crash_core::{BodyState, Clock, EnergyLedger};
@@ -33,4 +34,27 @@ pub struct MasterCheckpoint {
     pub stats: RunStats,
     /// Every body's state, sorted by id.
     pub states: Vec<(u32, BodyState)>,
+}
+
+impl MasterCheckpoint {
+    /// Whether this checkpoint can continue the run of the scene with `scene_hash` to
+    /// `end_time`. Checked before the run directory is reopened (a reopen drops the
+    /// rows after the checkpoint): an end time before the checkpoint's time would
+    /// otherwise end the run at once with a final frame and summary as if it had run.
+    pub fn check_continues(&self, scene_hash: u64, end_time: f64) -> Result<(), MasterError> {
+        if self.scene_hash != scene_hash {
+            return Err(MasterError::Input(format!(
+                "the checkpoint belongs to another scene (scene hash {:016x}, this scene {scene_hash:016x}); continue with the scene file of the original run",
+                self.scene_hash
+            )));
+        }
+        let c = self.clock;
+        if end_time < c.time {
+            return Err(MasterError::Input(format!(
+                "the end time {end_time:.6e} s is before the checkpoint's time {:.6e} s (step {}): give an end time after it (--end-time) or continue from an earlier checkpoint",
+                c.time, c.step
+            )));
+        }
+        Ok(())
+    }
 }

@@ -46,7 +46,9 @@ pub enum MasterError {
     Network(String),
     /// Stopped on request (SIGTERM, SIGINT) after a complete step: a checkpoint and
     /// the final frame of that step were written.
-    #[error("interrupted at step {step} (t = {time:.6e} s) by a signal; continue with --resume")]
+    #[error(
+        "interrupted at step {step} (t = {time:.6e} s) by a signal; a restart file was written"
+    )]
     Interrupted { step: u64, time: f64 },
 }
 

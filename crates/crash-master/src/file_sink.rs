@@ -163,12 +163,21 @@ impl FileSink {
         size: RunSize,
         restart: &RestartFile,
     ) -> Result<Self, SinkError> {
-        let t = restart.master.clock.time;
+        let m = &restart.master;
+        let t = m.clock.time;
+        // a frame at the checkpoint's time that the schedule did not ask for is the
+        // last frame of a run stopped by a signal: dropped, so the restarted series
+        // is the uninterrupted one
+        let frames_until = if m.last_frame_step == Some(m.clock.step) || t <= 0.0 {
+            t
+        } else {
+            f64::from_bits(t.to_bits() - 1)
+        };
         Ok(Self {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
-            series: BackgroundSeries::start(SeriesWriter::reopen(dir, t)?)?,
+            series: BackgroundSeries::start(SeriesWriter::reopen(dir, frames_until)?)?,
             handover_ns: 0,
             drain_ns: 0,
             indicators: restart.indicators,
@@ -449,7 +458,9 @@ impl Sink for FileSink {
         s.energy_limit = self.indicators.energy_limit;
         s.indicators = self.indicators;
         s.warnings = self.warnings.clone();
-        s.final_state_hash = if error.is_none() && frames.is_ok() {
+        // a clean stop wrote its last frame: its hash is known
+        let interrupted = matches!(error, Some(MasterError::Interrupted { .. }));
+        s.final_state_hash = if (error.is_none() || interrupted) && frames.is_ok() {
             hash_hex(stats.final_hash)
         } else {
             String::new()
@@ -459,6 +470,7 @@ impl Sink for FileSink {
             (None, Err(e)) => Some(format!("output: {e}")),
             (None, Ok(())) => None,
         };
+        s.interrupted = interrupted;
         write_summary(self.dir.join(SUMMARY_JSON), s)?;
         Ok(frames?)
     }

@@ -94,20 +94,17 @@ fn main() -> ExitCode {
         .init();
     // SIGTERM, SIGINT: finish the step, checkpoint, last frame, summary, exit 130;
     // a second signal ends the process at once (exit 130)
-    let stop = crash_master::stop::flag();
-    for sig in [signal_hook::consts::SIGTERM, signal_hook::consts::SIGINT] {
-        let registered = signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())
-            .and_then(|_| signal_hook::flag::register(sig, stop.clone()));
-        if let Err(e) = registered {
-            eprintln!("crash-master: warning: cannot handle signal {sig}: {e}");
-        }
+    if let Err(e) = crash_master::stop::install_handlers() {
+        eprintln!("crash-master: warning: cannot handle SIGTERM/SIGINT: {e}");
     }
-    match run(Args::parse()) {
+    let args = Args::parse();
+    let out = args.out.clone();
+    match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             if let Some(i @ MasterError::Interrupted { .. }) = e.downcast_ref::<MasterError>() {
-                eprintln!("crash-master: {i}");
-                return ExitCode::from(130);
+                eprintln!("crash-master: {i}: continue with --resume {}/{RESTART_FILE} (and the same options)", out.display());
+                return ExitCode::from(crash_master::stop::EXIT_INTERRUPTED);
             }
             eprintln!("crash-master: error: {e:#}");
             ExitCode::FAILURE
@@ -134,7 +131,14 @@ fn run(args: Args) -> anyhow::Result<()> {
         .collect();
     let input = RunInput::from_plan(scene, plan);
     let restart = match &args.resume {
-        Some(path) => Some(read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?),
+        Some(path) => {
+            let r = read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+            // before the run directory is reopened (that drops rows after the checkpoint)
+            r.master
+                .check_continues(input.scene_hash, input.config.end_time)
+                .with_context(|| format!("cannot resume from {}", path.display()))?;
+            Some(r)
+        }
         None => None,
     };
     let sink = match &restart {

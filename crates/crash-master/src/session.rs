@@ -119,6 +119,11 @@ impl<'a, L: WorkerLink> Session<'a, L> {
     pub fn end(&mut self, error: Option<&MasterError>) {
         match error {
             None => self.m.shutdown("the run is complete"),
+            // a clean stop is no error: the caller says so in its own words
+            Some(e @ MasterError::Interrupted { .. }) => {
+                tracing::info!("{e}");
+                self.m.shutdown(&format!("the run stopped: {e}"));
+            }
             Some(e) => {
                 tracing::error!("run stopped at step {}: {e}", self.m.clock().step);
                 self.m.shutdown(&format!("the run stopped: {e}"));

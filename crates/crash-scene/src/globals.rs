@@ -50,6 +50,27 @@ pub fn check_end_time(ctx: &Ctx, end_time: f64, overridden: bool) -> Result<f64,
     }
 }
 
+/// `name` names the run directory (`out/<name>`), so it must be one plain path
+/// component: a name that is empty, `.` or `..`, or holds a path separator, a drive
+/// colon or a control character could write outside the output root. Refused, not
+/// rewritten, so the directory is always called what the file says.
+pub fn check_name(ctx: &Ctx, name: Option<&str>) -> Result<(), SceneError> {
+    let Some(name) = name else { return Ok(()) };
+    let bad = name.is_empty()
+        || name == "."
+        || name == ".."
+        || name
+            .chars()
+            .any(|c| matches!(c, '/' | '\\' | ':') || c.is_control());
+    if bad {
+        return Err(ctx.invalid(
+            "name",
+            "must be one plain file name (it names the run directory out/<name>): not empty, not `.` or `..`, without `/`, `\\`, `:` or control characters, e.g. \"sphere-on-plate\"",
+        ));
+    }
+    Ok(())
+}
+
 pub fn globals(
     ctx: &Ctx,
     s: &SceneFile,

@@ -150,6 +150,7 @@ pub fn parse_with(
     ctx.origins = origins;
     let spec: SceneFile = toml::from_str(text).map_err(|e| ctx.from_toml(&e))?;
     let end_time = globals::check_end_time(&ctx, spec.end_time, false)?;
+    globals::check_name(&ctx, spec.name.as_deref())?;
     let g = globals::globals(&ctx, &spec, end_time, None)?;
     let materials = globals::materials(&ctx, &spec)?;
     globals::references(&ctx, &spec, &materials)?;
@@ -157,10 +158,14 @@ pub fn parse_with(
     globals::curve_references(&ctx, &spec, &curves)?;
     outputs::check(&ctx, &spec)?;
     check_files(&ctx, &spec, &dir, &inputs)?;
+    // the file stem is one path component; `.`/`..` (a file named "..." or "...toml")
+    // would still leave the output root
     let name = spec.name.clone().unwrap_or_else(|| {
         Path::new(file)
             .file_stem()
-            .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned())
+            .map(|s| s.to_string_lossy().into_owned())
+            .filter(|s| !matches!(s.as_str(), "" | "." | ".."))
+            .unwrap_or_else(|| "scene".to_string())
     });
     let mut hash = Fnv::default();
     hash.bytes(text.as_bytes());

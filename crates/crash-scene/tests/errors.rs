@@ -564,3 +564,34 @@ fn overlapping_boxes_without_penetration_are_accepted() {
         .expect("builds");
     assert_eq!(b.bodies.len(), 2);
 }
+
+/// The run directory is out/<name>: a name that is a path (`../../x`, absolute, `..`,
+/// with a backslash or a control character) must not reach the file system.
+#[test]
+fn scene_name_that_would_leave_the_output_root_is_refused() {
+    for bad in [
+        "../../x",
+        "/tmp/x",
+        "..",
+        ".",
+        "",
+        "a\\\\b",
+        "C:x",
+        "a\\u0000b",
+    ] {
+        let text = format!("name = \"{bad}\"\n{BASE}");
+        let e = error(&text);
+        let shown = e.to_string();
+        assert_eq!(e.kind, ErrorKind::Invalid, "{bad:?}: {shown}");
+        assert_eq!((e.line, e.key.as_str()), (1, "name"), "{bad:?}: {shown}");
+        assert!(
+            shown.starts_with("scene.toml:1:") && shown.contains("one plain file name"),
+            "{bad:?}: {shown}"
+        );
+    }
+    for good in ["sphere-on-plate", "run 2", "ten_spheres.v2", "Kugel-Ü"] {
+        let text = format!("name = \"{good}\"\n{BASE}");
+        let s = crash_scene::parse(&text, "scene.toml").unwrap_or_else(|e| panic!("{good}: {e}"));
+        assert_eq!(s.name, good);
+    }
+}

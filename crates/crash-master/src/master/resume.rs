@@ -81,12 +81,7 @@ impl<L: WorkerLink> Master<'_, L> {
         ck: MasterCheckpoint,
         bodies: BodySource,
     ) -> Result<(), MasterError> {
-        if ck.scene_hash != self.scene_hash {
-            return Err(MasterError::Input(format!(
-                "the checkpoint belongs to another scene (scene hash {:016x}, this scene {:016x})",
-                ck.scene_hash, self.scene_hash
-            )));
-        }
+        ck.check_continues(self.scene_hash, self.cfg.end_time)?;
         let ids: Vec<u32> = self.info.iter().map(|i| i.id).collect();
         let ck_ids: Vec<u32> = ck.states.iter().map(|s| s.0).collect();
         if ck_ids != ids {
