@@ -239,6 +239,12 @@ pub fn write_vtu_piece(w: &mut dyn Write, body: &FrameBody, enc: Encoding) -> io
         .iter()
         .flat_map(|b| std::iter::repeat_n(b.id as i64, b.element_count()));
     data_array(w, enc, Some(BODY_ID), 1, Values::I64(Box::new(ids)))?;
+    if let Some(p) = body.placement {
+        for (name, v) in [("worker", p.worker), ("group", p.group)] {
+            let vals = std::iter::repeat_n(v as i64, nc);
+            data_array(w, enc, Some(name), 1, Values::I64(Box::new(vals)))?;
+        }
+    }
     writeln!(w, "      </CellData>")?;
 
     writeln!(w, "      <Points>")?;

@@ -7,8 +7,10 @@ use thiserror::Error;
 /// meaning. v2: bodies split into definition and state, the clock in Step and Load,
 /// frames and states requested apart. v3: the master's Challenge opens the session and
 /// the worker's Hello carries a proof of the shared secret. v4: the contact settings
-/// carry the closing-speed rule, faults include a pass-through.
-pub const PROTOCOL_VERSION: u32 = 4;
+/// carry the closing-speed rule, faults include a pass-through. v5: read-only copies of
+/// kinematic bodies (Regroup lists them per group, Load of copies, Unload that keeps),
+/// contact statistics carry the work on kinematic bodies.
+pub const PROTOCOL_VERSION: u32 = 5;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -5,7 +5,8 @@
 use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
 use crate::input::RunSize;
-use crate::sink::{Sink, SinkError};
+use crate::groups_csv::{GroupsCsv, GROUPS_CSV};
+use crate::sink::{GroupRow, Sink, SinkError};
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
@@ -89,6 +90,7 @@ pub struct FileSink {
     dir: PathBuf,
     energy: EnergyHistory,
     contacts: ContactHistory,
+    groups: GroupsCsv,
     series: SeriesWriter,
     indicators: Indicators,
     /// Warnings raised so far (each once), and those not yet taken by `take_fresh`.
@@ -116,6 +118,7 @@ impl FileSink {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::create(dir.join(ENERGY_CSV))?,
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
+            groups: GroupsCsv::create(&dir.join(GROUPS_CSV))?,
             series: SeriesWriter::create(dir)?,
             indicators: Indicators::default(),
             warnings: Vec::new(),
@@ -142,6 +145,7 @@ impl FileSink {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
+            groups: GroupsCsv::reopen(&dir.join(GROUPS_CSV), t)?,
             series: SeriesWriter::reopen(dir, t)?,
             indicators: restart.indicators,
             warnings: restart.warnings.clone(),
@@ -286,6 +290,7 @@ impl Sink for FileSink {
         };
         self.energy.flush()?;
         self.contacts.flush()?;
+        self.groups.flush()?;
         crash_io::write_checkpoint(
             path,
             &RestartRef {
@@ -295,6 +300,10 @@ impl Sink for FileSink {
             },
         )?;
         Ok(())
+    }
+
+    fn groups(&mut self, _step: u64, time: f64, rows: &[GroupRow]) -> Result<(), SinkError> {
+        Ok(self.groups.rows(time, rows)?)
     }
 
     fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), SinkError> {
@@ -311,12 +320,14 @@ impl Sink for FileSink {
         self.series.end_frame()?;
         self.energy.flush()?;
         self.contacts.flush()?;
+        self.groups.flush()?;
         Ok(())
     }
 
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError> {
         self.energy.flush()?;
         self.contacts.flush()?;
+        self.groups.flush()?;
         let s = &mut self.summary;
         s.steps = stats.steps;
         s.time_reached_s = stats.time;
@@ -337,7 +348,23 @@ impl Sink for FileSink {
         }
         s.ns_per_element_cycle
             .insert("total".into(), stats.wall_s * 1e9 / cycles);
-        s.energy_balance_error = stats.max_energy_error;
+        s.cluster = crash_io::ClusterSummary {
+            workers: stats.workers,
+            migrations: stats.migrations.len(),
+            group_changes: stats.group_changes,
+            max_groups: stats.max_groups,
+            final_groups: stats
+                .final_groups
+                .iter()
+                .map(|(ids, w)| crash_io::GroupSummary {
+                    group: ids.first().copied().unwrap_or(0),
+                    bodies: ids.clone(),
+                    worker: *w,
+                })
+                .collect(),
+            compute_ns_per_worker: stats.worker_compute_ns.clone(),
+        };
+                s.energy_balance_error = stats.max_energy_error;
         s.energy_limit = self.indicators.energy_limit;
         s.indicators = self.indicators;
         s.warnings = self.warnings.clone();

@@ -24,6 +24,7 @@ pub mod remote_link;
 pub mod server;
 pub mod session;
 pub mod sink;
+pub mod groups_csv;
 pub mod stats;
 pub mod stop;
 
@@ -35,7 +36,7 @@ pub use input::{BodySource, CostModel, RunInput, RunOptions, RunSize};
 pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions};
 pub use session::Session;
-pub use sink::{EnergyRecord, RecordSink, Sink, SinkError};
+pub use sink::{EnergyRecord, GroupRow, RecordSink, Sink, SinkError};
 pub use stats::{Migration, RunStats, StageTimes};
 
 use crash_link::WorkerLink;

@@ -77,7 +77,7 @@ impl RemoteWorker {
 impl WorkerLink for RemoteWorker {
     fn send(&mut self, cmd: Command) -> Result<(), LinkError> {
         let msg = command_to_pb(&cmd, |id| self.sent.contains(&id));
-        if let Command::Load { bodies, .. } = &cmd {
+        if let Command::Load { bodies, .. } | Command::LoadCopies { bodies, .. } = &cmd {
             self.sent
                 .extend(bodies.iter().filter(|b| b.def.is_some()).map(|b| b.id));
         }

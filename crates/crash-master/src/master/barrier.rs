@@ -88,6 +88,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let n = self.info.len();
         self.reports.clear();
         self.contacts.clear();
+        self.group_ns.clear();
         let mut slot: Vec<Option<BodyReport>> = vec![None; n];
         let mut count = 0;
         for (w, rep) in reps.into_iter().enumerate() {
@@ -118,11 +119,17 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         self.reports.extend(slot.into_iter().flatten());
         self.contacts.sort_by_key(|c| (c.a, c.b));
+        // the contact work on kinematic bodies, in pair order as the driver adds it
+        self.kinematic.add(&self.contacts);
+        self.kinematic.apply(&mut self.reports);
         Ok(())
     }
 
     /// Measured group times shared among members by their estimated cost (EMA).
     fn account(&mut self, groups: &[GroupTime]) {
+        for g in groups {
+            self.group_ns.insert(g.first, g.nanos);
+        }
         if self.opts.cost != CostModel::Measured {
             return;
         }
