@@ -193,12 +193,16 @@ fn kinematic_scene() -> Vec<Body> {
         },
     );
     assert!(p.def.kinematic);
+    p.def_mut().contact = true;
     let ball = |id: u32, x: f64| {
         let mut mesh = icosphere(0.02, 1);
+        // lowest node 1.2 mm above the plate's mid-surface: 0.2 mm from contact
+        let low = mesh.nodes.iter().map(|n| n.z).fold(f64::INFINITY, f64::min);
         for n in &mut mesh.nodes {
-            *n += Vec3::new(x, 0.0, 0.0215);
+            *n += Vec3::new(x, 0.0, 0.0012 - low);
         }
         let mut s = Body::new(id, "ball", &mesh, sec, Stabilization::default()).unwrap();
+        s.def_mut().contact = true;
         s.set_rigid_velocity(Vec3::new(0.0, 0.0, -2.0), Vec3::zeros(), Vec3::zeros());
         s
     };
