@@ -52,7 +52,11 @@ fn groups_never_contain_a_kinematic_touch_as_a_link_between_two_bodies() {
         for r in rows {
             let ids: Vec<u32> = r.bodies.iter().map(|n| id_of[n]).collect();
             if ids.iter().any(|id| kin_ids.contains(id)) {
-                assert_eq!(ids.len(), 1, "step {step}: a kinematic body in group {ids:?}");
+                assert_eq!(
+                    ids.len(),
+                    1,
+                    "step {step}: a kinematic body in group {ids:?}"
+                );
                 continue;
             }
             // the members are connected by edges between deformable bodies alone
@@ -106,7 +110,10 @@ fn groups_csv_is_consistent_with_summary_json() {
     assert_eq!(c.compute_ns_per_worker.len(), 2);
     let text = std::fs::read_to_string(out.join("groups.csv")).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("time_s,group,bodies,worker,elements,step_ns"));
+    assert_eq!(
+        lines.next(),
+        Some("time_s,group,bodies,worker,elements,step_ns")
+    );
     let rows: Vec<Vec<String>> = lines
         .map(|l| {
             // time,group,"names",worker,elements,step_ns

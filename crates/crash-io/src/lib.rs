@@ -28,8 +28,8 @@ pub use render::{
 pub use run::render_run;
 pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};
 pub use summary::{
-    hash_hex, read_summary, write_summary, ClusterSummary, GroupSummary, Indicators, Summary, Warning,
-    WarningKind, SUMMARY_JSON,
+    hash_hex, read_summary, write_summary, ClusterSummary, GroupSummary, Indicators, Summary,
+    Warning, WarningKind, SUMMARY_JSON,
 };
 pub use vtu::Encoding;
 pub use vtu_read::read_vtu;

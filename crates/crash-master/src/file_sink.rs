@@ -4,8 +4,8 @@
 
 use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
-use crate::input::RunSize;
 use crate::groups_csv::{GroupsCsv, GROUPS_CSV};
+use crate::input::RunSize;
 use crate::sink::{GroupRow, Sink, SinkError};
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
@@ -364,7 +364,7 @@ impl Sink for FileSink {
                 .collect(),
             compute_ns_per_worker: stats.worker_compute_ns.clone(),
         };
-                s.energy_balance_error = stats.max_energy_error;
+        s.energy_balance_error = stats.max_energy_error;
         s.energy_limit = self.indicators.energy_limit;
         s.indicators = self.indicators;
         s.warnings = self.warnings.clone();

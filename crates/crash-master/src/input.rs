@@ -68,8 +68,11 @@ pub struct RunSize {
 impl RunInput {
     /// Body names in the order of `ids` ("body ID" where the scene gave none).
     pub fn names_by_id(&self, ids: &[u32]) -> Vec<String> {
-        let by_id: std::collections::BTreeMap<u32, &str> =
-            self.briefs.iter().map(|b| (b.id, b.name.as_str())).collect();
+        let by_id: std::collections::BTreeMap<u32, &str> = self
+            .briefs
+            .iter()
+            .map(|b| (b.id, b.name.as_str()))
+            .collect();
         ids.iter()
             .map(|id| {
                 by_id

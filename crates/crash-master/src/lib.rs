@@ -15,6 +15,7 @@ pub mod assign;
 pub mod checkpoint;
 pub mod error;
 pub mod file_sink;
+pub mod groups_csv;
 pub mod guard;
 pub mod input;
 mod master;
@@ -24,7 +25,6 @@ pub mod remote_link;
 pub mod server;
 pub mod session;
 pub mod sink;
-pub mod groups_csv;
 pub mod stats;
 pub mod stop;
 

@@ -282,13 +282,20 @@ fn kinematic_copies_stay_bit_identical_to_the_owner() {
         clock = clock.after(dt);
         let owner = motion_bits(a.instances(0)[0]);
         for inst in a.instances(0).into_iter().chain(b.instances(0)) {
-            assert_eq!(motion_bits(inst), owner, "a copy left its owner at {clock:?}");
+            assert_eq!(
+                motion_bits(inst),
+                owner,
+                "a copy left its owner at {clock:?}"
+            );
         }
         if stats.iter().any(|s| s.active_nodes > 0) {
             touched += 1;
         }
     }
-    assert!(touched > 50, "the balls never pressed on the plate ({touched} steps)");
+    assert!(
+        touched > 50,
+        "the balls never pressed on the plate ({touched} steps)"
+    );
     // every body moves exactly as in the single group
     for body in &one.bodies {
         let id = body.def.id;

@@ -76,7 +76,10 @@ impl<L: WorkerLink> Master<'_, L> {
         let (old_of, new_of) = (of(&old), of(&new));
         let step = self.clock.step;
         for (members, w) in &new {
-            let mut from: Vec<usize> = members.iter().filter_map(|id| old_of.get(id).copied()).collect();
+            let mut from: Vec<usize> = members
+                .iter()
+                .filter_map(|id| old_of.get(id).copied())
+                .collect();
             from.sort_unstable();
             from.dedup();
             if from.len() > 1 {
@@ -97,7 +100,10 @@ impl<L: WorkerLink> Master<'_, L> {
             }
         }
         for (members, _) in &old {
-            let mut to: Vec<usize> = members.iter().filter_map(|id| new_of.get(id).copied()).collect();
+            let mut to: Vec<usize> = members
+                .iter()
+                .filter_map(|id| new_of.get(id).copied())
+                .collect();
             to.sort_unstable();
             to.dedup();
             if to.len() > 1 {

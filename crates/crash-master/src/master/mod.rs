@@ -178,7 +178,11 @@ impl<'a, L: WorkerLink> Master<'a, L> {
     }
 
     fn kinematic_ids(&self) -> Vec<u32> {
-        self.info.iter().filter(|i| i.kinematic).map(|i| i.id).collect()
+        self.info
+            .iter()
+            .filter(|i| i.kinematic)
+            .map(|i| i.id)
+            .collect()
     }
 
     /// A body's name for messages (escaped where it came from a peer: names come from
