@@ -103,3 +103,63 @@ impl EnergyLedger {
         }
     }
 }
+
+/// Work contact has done on each kinematic body so far (a prescribed body's motion never
+/// feels contact; the work is the same figure the body's reaction pays, so it enters
+/// both the contact and the external column). Summed from the per-pair figures
+/// (`PairStats::work_on_a` / `work_on_b`) in pair order: every loop (the single-group
+/// driver, the master over any number of workers) performs the same additions in the
+/// same order, whichever groups hold read-only copies of the body.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct KinematicWork {
+    /// (kinematic body id, work so far [J]), sorted by id.
+    work: Vec<(u32, f64)>,
+}
+
+impl KinematicWork {
+    /// Tracks the bodies `ids` (the kinematic ones; any order).
+    pub fn new(ids: impl IntoIterator<Item = u32>) -> Self {
+        let mut work: Vec<(u32, f64)> = ids.into_iter().map(|id| (id, 0.0)).collect();
+        work.sort_by_key(|w| w.0);
+        work.dedup_by_key(|w| w.0);
+        Self { work }
+    }
+
+    fn slot(&mut self, id: u32) -> Option<&mut f64> {
+        let k = self.work.binary_search_by_key(&id, |w| w.0).ok()?;
+        Some(&mut self.work[k].1)
+    }
+
+    /// Add one force pass's pair statistics (sorted by pair, as every loop has them).
+    pub fn add(&mut self, stats: &[crate::contact::PairStats]) {
+        for s in stats {
+            if let Some(w) = self.slot(s.a) {
+                *w += s.work_on_a;
+            }
+            if s.a != s.b {
+                if let Some(w) = self.slot(s.b) {
+                    *w += s.work_on_b;
+                }
+            }
+        }
+    }
+
+    /// The work so far on body `id` (0 for a body not tracked).
+    pub fn of(&self, id: u32) -> f64 {
+        self.work
+            .binary_search_by_key(&id, |w| w.0)
+            .map_or(0.0, |k| self.work[k].1)
+    }
+
+    /// Into the reports' energy records: work W done by contact on a kinematic body
+    /// is absorbed by contact (-W) and paid by its prescribed motion (-W external).
+    pub fn apply(&self, reports: &mut [crate::group::BodyReport]) {
+        for r in reports {
+            if let Ok(k) = self.work.binary_search_by_key(&r.id, |w| w.0) {
+                let w = self.work[k].1;
+                r.energy.contact -= w;
+                r.energy.external -= w;
+            }
+        }
+    }
+}
