@@ -153,7 +153,9 @@ fn groups_csv_is_consistent_with_summary_json() {
         .filter_map(|e| e.ok())
         .find(|e| e.path().extension().is_some_and(|x| x == "vtu"))
         .unwrap();
-    let frame = std::fs::read_to_string(vtu.path()).unwrap();
+    // the header is XML; the arrays after it are binary (appended raw data)
+    let bytes = std::fs::read(vtu.path()).unwrap();
+    let frame = String::from_utf8_lossy(&bytes);
     assert!(frame.contains(r#"Name="worker""#) && frame.contains(r#"Name="group""#));
 }
 
