@@ -61,7 +61,7 @@ fn cluster_with(n: usize, make: fn(u32) -> Body) -> Cluster {
                 at: Clock::default(),
                 bodies: vec![BodyLoad::whole(make(i as u32))],
             },
-            Command::regroup(vec![vec![i as u32]]),
+            Command::Regroup(vec![vec![i as u32]]),
             Command::Start,
         ] {
             l.send(cmd).unwrap();

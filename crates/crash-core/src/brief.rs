@@ -5,12 +5,9 @@ use crate::contact::BodyBox;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BodyBrief {
     pub id: u32,
-    /// The scene's name of the body (for messages: groups named by their bodies).
-    #[serde(default)]
-    pub name: String,
     pub thickness: f64,
     /// Takes part in contact.
     pub contact: bool,
@@ -28,7 +25,6 @@ impl BodyBrief {
         let bbox = BodyBox::of(b);
         Self {
             id: b.def.id,
-            name: b.def.name.clone(),
             thickness: b.def.section.thickness,
             contact: b.def.contact,
             kinematic: b.def.kinematic,

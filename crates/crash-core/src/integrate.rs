@@ -141,10 +141,7 @@ impl Body {
                     }
                     let (fe, me) = (f, mom);
                     let mut fcon = Vec3::zeros();
-                    // a kinematic body's motion never feels contact: the work contact
-                    // does on it is counted per pair (PairStats::work_on_a, KinematicWork)
-                    // so that it does not depend on which group holds which copy
-                    if !fc.is_empty() && !kinematic {
+                    if !fc.is_empty() {
                         fcon = fc[i];
                         f += fcon;
                     }

@@ -85,7 +85,7 @@ pub fn reports_from_pb(p: &pb::BodyReports) -> Result<Vec<BodyReport>, ProtoErro
     Ok(out)
 }
 
-const CONTACT_VALUES: usize = 8;
+const CONTACT_VALUES: usize = 6;
 
 /// Column-pack contact statistics.
 pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
@@ -104,8 +104,6 @@ pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
             s.force_on_a.x,
             s.force_on_a.y,
             s.force_on_a.z,
-            s.work_on_a,
-            s.work_on_b,
         ]);
     }
     out
@@ -135,8 +133,6 @@ pub fn contacts_from_pb(p: &pb::ContactStats) -> Result<Vec<PairStats>, ProtoErr
             max_penetration_ratio: v[1],
             normal_force: v[2],
             force_on_a: vec3(&v[3..6]),
-            work_on_a: v[6],
-            work_on_b: v[7],
         });
     }
     Ok(out)

@@ -35,14 +35,6 @@ pub struct PairStats {
     pub normal_force: f64,
     /// Resultant contact force on body a from body b [N].
     pub force_on_a: Vec3,
-    /// Work of this pair's contact forces on body a (on body b) over the step that led
-    /// here, h f . v_{n+1/2} summed over the pushes in hit order: kept only for a
-    /// kinematic body (0 otherwise), whose own motion never feels contact. Per pair, so
-    /// the energy ledger (`KinematicWork`) sums it in pair order whatever the grouping.
-    #[serde(default)]
-    pub work_on_a: f64,
-    #[serde(default)]
-    pub work_on_b: f64,
 }
 
 /// Search caches of a group (R-trees, Verlet reference positions) and the last pass's
@@ -66,9 +58,7 @@ impl ContactState {
 }
 
 /// Candidate pairs among the contact bodies (indices into `bodies`), sorted by ids,
-/// with self pairs for bodies that have self-contact on. Pairs of two kinematic bodies
-/// are left out: contact cannot move either (and such a pair may meet in several
-/// groups as read-only copies: it must not be counted twice).
+/// with self pairs for bodies that have self-contact on.
 fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
     let index: BTreeMap<u32, usize> = bodies
         .iter()
@@ -88,7 +78,6 @@ fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
     pairs
         .into_iter()
         .filter_map(|(a, b)| Some((*index.get(&a)?, *index.get(&b)?)))
-        .filter(|&(a, b)| !(bodies[a].def.kinematic && bodies[b].def.kinematic))
         .collect()
 }
 
@@ -250,8 +239,6 @@ pub fn contact_forces(
             max_penetration_ratio: 0.0,
             normal_force: 0.0,
             force_on_a: Vec3::zeros(),
-            work_on_a: 0.0,
-            work_on_b: 0.0,
         };
         let thin = a.def.section.thickness.min(b.def.section.thickness);
         let segs_b: Vec<Segment> = first
@@ -262,8 +249,8 @@ pub fn contact_forces(
             .iter()
             .map(|p| sa.segments[p.hit.segment as usize])
             .collect();
-        apply(bodies, ia, ib, &first, &segs_b, &mut st, true, h);
-        apply(bodies, ib, ia, &second, &segs_a, &mut st, false, h);
+        apply(bodies, ia, ib, &first, &segs_b, &mut st, true);
+        apply(bodies, ib, ia, &second, &segs_a, &mut st, false);
         st.max_penetration_ratio = st.max_penetration / thin;
         state.stats.push(st);
     }
@@ -271,10 +258,7 @@ pub fn contact_forces(
 }
 
 /// Add the pushes of one pass: +f on the node of body `inode`, -w_k f on the segment
-/// nodes of body `iseg`, sequentially in hit order. The work of these forces on a
-/// kinematic body over the step `h` that led here (h f . v_{n+1/2}) goes into the
-/// pair's statistics.
-#[allow(clippy::too_many_arguments)]
+/// nodes of body `iseg`, sequentially in hit order.
 fn apply(
     bodies: &mut [Body],
     inode: usize,
@@ -283,38 +267,18 @@ fn apply(
     segs: &[Segment],
     st: &mut PairStats,
     node_body_is_a: bool,
-    h: f64,
 ) {
-    let (kin_node, kin_seg) = (bodies[inode].def.kinematic, bodies[iseg].def.kinematic);
-    let (mut w_node, mut w_seg) = (0.0, 0.0);
     for (p, seg) in pushes.iter().zip(segs) {
-        let node = p.hit.node as usize;
-        bodies[inode].state.f_contact[node] += p.force;
-        if kin_node {
-            w_node += h * p.force.dot(&bodies[inode].state.v[node]);
-        }
-        let b = &mut bodies[iseg];
+        bodies[inode].state.f_contact[p.hit.node as usize] += p.force;
+        let fc = &mut bodies[iseg].state.f_contact;
         for (q, &n) in seg.nodes().iter().enumerate() {
-            let f = p.force * p.weights[q];
-            b.state.f_contact[n as usize] -= f;
-            if kin_seg {
-                w_seg -= h * f.dot(&b.state.v[n as usize]);
-            }
+            fc[n as usize] -= p.force * p.weights[q];
         }
         st.max_penetration = st.max_penetration.max(p.hit.depth);
         st.normal_force += p.normal_force;
         if inode != iseg {
             st.force_on_a += if node_body_is_a { p.force } else { -p.force };
         }
-    }
-    let (wa, wb) = if node_body_is_a {
-        (w_node, w_seg)
-    } else {
-        (w_seg, w_node)
-    };
-    st.work_on_a += wa;
-    if inode != iseg {
-        st.work_on_b += wb;
     }
 }
 

@@ -134,7 +134,6 @@ impl<L: WorkerLink> Master<'_, L> {
         // `seen` (kept between steps) marks the slots filled by this step.
         let n = self.info.len();
         self.contacts.clear();
-        self.group_ns.clear();
         if self.reports.len() != n {
             self.reports.clear();
             self.reports
@@ -171,17 +170,11 @@ impl<L: WorkerLink> Master<'_, L> {
             });
         }
         self.contacts.sort_by_key(|c| (c.a, c.b));
-        // the contact work on kinematic bodies, in pair order as the driver adds it
-        self.kinematic.add(&self.contacts);
-        self.kinematic.apply(&mut self.reports);
         Ok(())
     }
 
     /// Measured group times shared among members by their estimated cost (EMA).
     fn account(&mut self, groups: &[GroupTime]) {
-        for g in groups {
-            self.group_ns.insert(g.first, g.nanos);
-        }
         if self.opts.cost != CostModel::Measured {
             return;
         }

@@ -17,11 +17,10 @@ use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::stats::RunStats;
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, KinematicWork, RunConfig, Vec3};
+use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, RunConfig, Vec3};
 use crash_link::{LinkError, WorkerLink};
 
 mod barrier;
-mod groups;
 mod output;
 mod placement;
 mod recover;
@@ -41,12 +40,7 @@ struct BodyInfo {
     allowed: f64,
     estimate: f64,
     elements: usize,
-    /// Every DOF prescribed: never joins a group, lends read-only copies.
-    kinematic: bool,
 }
-
-/// One group as a worker holds it: its members and its read-only copies (ids, sorted).
-pub(crate) type GroupLayout = (Vec<u32>, Vec<u32>);
 
 /// Relative tolerance of the end-time and output-time comparisons (as the driver).
 const TIME_EPS: f64 = 1e-12;
@@ -72,16 +66,8 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     cost: Vec<f64>,
     measured: Vec<Option<f64>>,
     worker_of: Vec<Option<usize>>,
-    layout: Vec<Vec<GroupLayout>>,
+    layout: Vec<Vec<Vec<u32>>>,
     meim: Meim,
-    /// Contact work on the kinematic bodies so far (summed in pair order).
-    kinematic: KinematicWork,
-    /// Body names (index = position in the sorted id list), for messages.
-    names: Vec<String>,
-    /// Compute time of each group (by its smallest id) in the last step [ns].
-    group_ns: std::collections::BTreeMap<u32, u64>,
-    /// Step of the last group rows handed to the sink.
-    groups_step: Option<u64>,
     search: PairSearch,
     scene_hash: u64,
     /// The run's one clock.
@@ -141,12 +127,10 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                         + if b.kinematic { 0.0 } else { b.elements as f64 }
                         + if meshes { b.nodes as f64 } else { 0.0 },
                     elements: b.elements,
-                    kinematic: b.kinematic,
                 }
             })
             .collect();
         let n = info.len();
-        let kinematic: Vec<u32> = info.iter().filter(|i| i.kinematic).map(|i| i.id).collect();
         // Verlet skin of the level-i search: the MEIM margin of the widest body
         let skin = sorted
             .iter()
@@ -169,11 +153,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             measured: vec![None; n],
             worker_of: vec![None; n],
             layout: Vec::new(),
-            meim: Meim::new(&ids, opts.split_after).with_kinematic(&kinematic),
-            kinematic: KinematicWork::new(kinematic.iter().copied()),
-            names: input.names_by_id(&ids),
-            group_ns: Default::default(),
-            groups_step: None,
+            meim: Meim::new(&ids, opts.split_after),
             search: PairSearch::new(c.margin, skin),
             info,
             scene_hash: input.scene_hash,
@@ -196,20 +176,6 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             return Some(i);
         }
         self.info.binary_search_by_key(&id, |b| b.id).ok()
-    }
-
-    fn kinematic_ids(&self) -> Vec<u32> {
-        self.info
-            .iter()
-            .filter(|i| i.kinematic)
-            .map(|i| i.id)
-            .collect()
-    }
-
-    /// A body's name for messages (escaped where it came from a peer: names come from
-    /// the scene the master read itself).
-    fn name(&self, id: u32) -> &str {
-        self.index(id).map_or("?", |i| self.names[i].as_str())
     }
 
     pub(crate) fn links(&self) -> &[L] {

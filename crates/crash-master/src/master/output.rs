@@ -51,9 +51,8 @@ impl<L: WorkerLink> Master<'_, L> {
                 ));
             }
             // the state hash comes from the bodies as received, whatever the file format
-            for mut b in bodies {
+            for b in bodies {
                 hash.add(b.id, &b.x, &b.v, &b.w);
-                b.placement = self.placement_of(b.id);
                 sink.frame_body(b).map_err(MasterError::sink)?;
             }
         }
@@ -72,7 +71,6 @@ impl<L: WorkerLink> Master<'_, L> {
         let t = Instant::now();
         let _s = tracing::debug_span!("output").entered();
         self.stats.final_hash = self.stream_frame(sink)?;
-        self.write_groups(sink)?;
         self.last_frame_step = Some(self.clock.step);
         if self.output_interval > 0.0 {
             // the next frame is the first whose time lies beyond now: in closed form, so

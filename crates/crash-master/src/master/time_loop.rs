@@ -101,11 +101,6 @@ impl<L: WorkerLink> Master<'_, L> {
             .unwrap_or(0)
             .min(wall);
         self.stats.stages.compute_ns += slowest;
-        let per = &mut self.stats.worker_compute_ns;
-        per.resize(per.len().max(reps.len()), 0);
-        for (t, r) in per.iter_mut().zip(&reps) {
-            *t += r.compute_ns;
-        }
         self.stats.stages.barrier_ns += wall - slowest;
         let master_codec: u64 = self.links.iter_mut().map(|l| l.take_codec_ns()).sum();
         let worker_codec = reps.iter().map(|r| r.codec_ns).max().unwrap_or(0);
@@ -146,9 +141,6 @@ impl<L: WorkerLink> Master<'_, L> {
             let t2 = Instant::now();
             self.migrate(changed)?;
             self.stats.stages.migration_ns += ns(t2);
-        }
-        if changed {
-            self.write_groups(sink)?;
         }
         self.output(sink, false)
     }
