@@ -3,8 +3,7 @@
 
 use super::font::{draw_text, text_height, text_width};
 use super::image::{Image, Rgb, BLACK, WHITE};
-use super::plot::{decimate, draw_legend, nice_ticks, PlotArea, GREY};
-use super::scene::format_number;
+use super::plot::{decimate, draw_legend, PlotArea};
 
 /// One named line.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,33 +103,7 @@ pub fn line_plot(
     let ((t0, t1), (y0, y1)) = (axes.x, axes.y);
     let px = |v: f64| left as f64 + (v - t0) / (t1 - t0) * pw as f64;
     let py = |v: f64| (top + ph) as f64 - (v - y0) / (y1 - y0) * ph as f64;
-    for v in nice_ticks(y0, y1, 6) {
-        let y = py(v).round() as i64;
-        img.fill_rect(left, y, pw, 1, GREY);
-        let l = format_number(v);
-        draw_text(
-            &mut img,
-            left - 8 - text_width(&l, s),
-            y - th / 2,
-            &l,
-            s,
-            BLACK,
-        );
-    }
-    for v in nice_ticks(t0, t1, 6) {
-        let x = px(v).round() as i64;
-        img.fill_rect(x, top, 1, ph, GREY);
-        img.fill_rect(x, top + ph, 1, 5, BLACK);
-        let l = format_number(v);
-        draw_text(
-            &mut img,
-            x - text_width(&l, s) / 2,
-            top + ph + 8,
-            &l,
-            s,
-            BLACK,
-        );
-    }
+    PlotArea { top, ph, ..area }.grid(&mut img, (t0, t1), (y0, y1));
     // Markers: dashed grey verticals, labels stacked from the top so they do not overlap.
     for (k, m) in markers.iter().enumerate() {
         if !(m.x >= t0 && m.x <= t1) {

@@ -111,12 +111,48 @@ impl PlotArea {
             ph: height as i64 - top - bottom,
         }
     }
+
+    /// Grid lines and tick labels of linear axes `x` and `y` (6 ticks each).
+    pub fn grid(&self, img: &mut Image, x: (f64, f64), y: (f64, f64)) {
+        let Self {
+            s,
+            left,
+            top,
+            pw,
+            ph,
+            ..
+        } = *self;
+        let ((t0, t1), (y0, y1)) = (x, y);
+        let px = |v: f64| left as f64 + (v - t0) / (t1 - t0) * pw as f64;
+        let py = |v: f64| (top + ph) as f64 - (v - y0) / (y1 - y0) * ph as f64;
+        for v in nice_ticks(y0, y1, 6) {
+            let y = py(v).round() as i64;
+            img.fill_rect(left, y, pw, 1, GREY);
+            let l = format_number(v);
+            draw_text(
+                img,
+                left - 8 - text_width(&l, s),
+                y - text_height(s) / 2,
+                &l,
+                s,
+                BLACK,
+            );
+        }
+        for v in nice_ticks(t0, t1, 6) {
+            let x = px(v).round() as i64;
+            img.fill_rect(x, top, 1, ph, GREY);
+            img.fill_rect(x, top + ph, 1, 5, BLACK);
+            let l = format_number(v);
+            draw_text(img, x - text_width(&l, s) / 2, top + ph + 8, &l, s, BLACK);
+        }
+    }
 }
 
 /// Plot the energy terms of `rows` (time in ms on x, J on y).
 pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
     let mut img = Image::new(width, height, WHITE);
     // The legend sits right of the plot so it never hides a curve.
+    let area = PlotArea::new(width, height, SERIES.iter().map(|se| se.name), "-8.88e-88");
     let PlotArea {
         s,
         legend: lw,
@@ -125,7 +161,7 @@ pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
         pw,
         ph,
         ..
-    } = PlotArea::new(width, height, SERIES.iter().map(|se| se.name), "-8.88e-88");
+    } = area;
     let title = "Energy balance";
     draw_text(
         &mut img,
@@ -173,33 +209,7 @@ pub fn energy_plot(rows: &[EnergyRow], width: u32, height: u32) -> Image {
     let px = |v: f64| left as f64 + (v - t0) / (t1 - t0) * pw as f64;
     let py = |v: f64| (top + ph) as f64 - (v - y0) / (y1 - y0) * ph as f64;
 
-    for v in nice_ticks(y0, y1, 6) {
-        let y = py(v).round() as i64;
-        img.fill_rect(left, y, pw, 1, GREY);
-        let l = format_number(v);
-        draw_text(
-            &mut img,
-            left - 8 - text_width(&l, s),
-            y - text_height(s) / 2,
-            &l,
-            s,
-            BLACK,
-        );
-    }
-    for v in nice_ticks(t0, t1, 6) {
-        let x = px(v).round() as i64;
-        img.fill_rect(x, top, 1, ph, GREY);
-        img.fill_rect(x, top + ph, 1, 5, BLACK);
-        let l = format_number(v);
-        draw_text(
-            &mut img,
-            x - text_width(&l, s) / 2,
-            top + ph + 8,
-            &l,
-            s,
-            BLACK,
-        );
-    }
+    area.grid(&mut img, (t0, t1), (y0, y1));
     img.stroke_rect(left, top, pw + 1, ph + 1, BLACK);
     let xl = "time [ms]";
     draw_text(
