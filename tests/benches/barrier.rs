@@ -61,7 +61,7 @@ fn cluster_with(n: usize, make: fn(u32) -> Body) -> Cluster {
                 at: Clock::default(),
                 bodies: vec![BodyLoad::whole(make(i as u32))],
             },
-            Command::Regroup(vec![vec![i as u32]]),
+            Command::regroup(vec![vec![i as u32]]),
             Command::Start,
         ] {
             l.send(cmd).unwrap();
@@ -132,6 +132,7 @@ fn echo(c: &mut Criterion) {
             l.send(Command::Step {
                 at: Clock::default(),
                 dt: 1e-9,
+                kin_nodes: false,
             })
             .unwrap();
             let Reply::Report(_) = l.recv().unwrap() else {
@@ -156,6 +157,7 @@ fn barrier(c: &mut Criterion) {
                         l.send(Command::Step {
                             at: clock,
                             dt: 1e-9,
+                            kin_nodes: false,
                         })
                         .unwrap();
                     }
@@ -189,6 +191,7 @@ fn loaded(c: &mut Criterion) {
             l.send(Command::Step {
                 at: clock,
                 dt: 1e-8,
+                kin_nodes: false,
             })
             .unwrap();
             let Reply::Report(r) = l.recv().unwrap() else {

@@ -110,10 +110,18 @@ impl InstantWorker {
                     .map(|h| h.load)
                     .collect(),
             ),
-            Command::Regroup(groups) => {
+            Command::Regroup { groups, .. } => {
                 self.groups = groups;
                 Reply::Ack
             }
+            // no kinematic bodies here: copies are held by nobody
+            Command::LoadCopies { .. } => Reply::Ack,
+            Command::Lend { ids, .. } => Reply::Unloaded(
+                ids.iter()
+                    .filter_map(|id| self.held.get(id))
+                    .map(|h| h.load.clone())
+                    .collect(),
+            ),
             Command::Reset => {
                 self.held.clear();
                 Reply::Ack

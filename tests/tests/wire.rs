@@ -206,6 +206,18 @@ fn step_report_round_trips_bit_exact() {
             max_penetration_ratio: 0.0075,
             normal_force: 123.456,
             force_on_a: Vec3::new(-1.0, 0.25, 1e-300),
+            kin_a: Default::default(),
+            kin_b: crash_core::contact::KinLoad {
+                power: -3.5e-7,
+                by_program: vec![
+                    (0, Vec3::new(1.0, -2.0, 0.5)),
+                    (3, Vec3::new(0.0, 0.0, -7.25)),
+                ],
+                nodes: vec![
+                    (4, Vec3::new(0.5, 0.0, -1.0)),
+                    (90_000, Vec3::new(0.0, 1e-300, 2.0)),
+                ],
+            },
         }],
     };
     let msg = reply_to_pb(&Reply::Report(rep.clone()));
@@ -238,8 +250,20 @@ fn commands_round_trip() {
             .collect::<Vec<_>>()
     };
     let cmds = [
-        Command::Regroup(vec![vec![0, 3, 9], vec![1], vec![2, 4]]),
-        Command::Step { at, dt: 1.234e-7 },
+        Command::regroup(vec![vec![0, 3, 9], vec![1], vec![2, 4]]),
+        Command::Regroup {
+            groups: vec![vec![0, 3, 9], vec![1], vec![2, 4]],
+            copies: vec![vec![7], vec![], vec![7, 8]],
+        },
+        Command::Lend {
+            ids: vec![7],
+            with_def: vec![],
+        },
+        Command::Step {
+            at,
+            dt: 1.234e-7,
+            kin_nodes: true,
+        },
         Command::Unload {
             ids: vec![5, 2],
             with_def: vec![2],
@@ -328,7 +352,7 @@ fn frames_and_states_round_trip_bit_exact() {
 
 #[test]
 fn regroup_with_inconsistent_sizes_is_refused() {
-    let mut m = command_to_pb(&Command::Regroup(vec![vec![0, 1], vec![2]]), |_| false);
+    let mut m = command_to_pb(&Command::regroup(vec![vec![0, 1], vec![2]]), |_| false);
     if let Some(crash_proto::pb::master_message::Command::Regroup(r)) = m.command.as_mut() {
         r.sizes[1] = 5;
     }

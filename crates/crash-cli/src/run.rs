@@ -116,6 +116,15 @@ impl Sink for CliSink {
         r
     }
 
+    fn groups(
+        &mut self,
+        step: u64,
+        time: f64,
+        rows: &[crash_master::GroupRow],
+    ) -> Result<(), SinkError> {
+        self.files.groups(step, time, rows)
+    }
+
     fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
         // a stop's checkpoint is the first call after the signal
         self.progress.note_stop();

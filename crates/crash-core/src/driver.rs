@@ -2,7 +2,7 @@
 //! energy balance every step, and the run-time guards (runaway, dt collapse).
 
 use crate::clock::Clock;
-use crate::energy::{EnergyLedger, EnergyTotals};
+use crate::energy::{EnergyLedger, EnergyTotals, KinematicWork};
 use crate::error::Fault;
 use crate::group::{BodyReport, Group};
 
@@ -60,6 +60,8 @@ pub struct Run {
     pub dt0: f64,
     pub dt_min: f64,
     pub dt_max: f64,
+    /// Contact work on the kinematic bodies so far (into their reports' energy).
+    pub kinematic: KinematicWork,
 }
 
 /// Smallest stable dt among reports, with the body and element that set it.
@@ -134,7 +136,16 @@ pub fn check_runaway(
 
 impl Run {
     pub fn new(mut group: Group, cfg: RunConfig) -> Result<Self, Fault> {
-        let reports = group.start()?;
+        let mut reports = group.start()?;
+        let mut kinematic = KinematicWork::new(
+            group
+                .bodies
+                .iter()
+                .filter(|b| b.def.kinematic)
+                .map(|b| (b.def.id, b.def.programs.clone())),
+        );
+        kinematic.add(group.contact_stats());
+        kinematic.apply(&mut reports);
         let mut ledger = EnergyLedger::default();
         let energy = ledger.update(EnergyTotals::sum(reports.iter().map(|r| &r.energy)));
         let mut run = Self {
@@ -148,6 +159,7 @@ impl Run {
             dt0: 0.0,
             dt_min: f64::INFINITY,
             dt_max: 0.0,
+            kinematic,
         };
         run.next_dt = run.choose_dt()?;
         run.dt0 = run.next_dt;
@@ -174,6 +186,9 @@ impl Run {
             self.dt_max = self.dt_max.max(h);
         }
         self.reports = self.group.advance(&self.clock, h)?;
+        self.kinematic.settle(&self.clock, h);
+        self.kinematic.add(self.group.contact_stats());
+        self.kinematic.apply(&mut self.reports);
         self.clock = self.clock.after(h);
         self.energy = self.ledger.record(
             EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)),

@@ -1,6 +1,8 @@
 //! Energy balance: E_kin + E_int + E_hg + E_contact + E_damping - W_ext = E_0.
 
-use crate::body::BodyEnergy;
+use crate::body::{BodyEnergy, VelocityProgram};
+use crate::clock::Clock;
+use crate::contact::{KinLoad, PairStats};
 use serde::{Deserialize, Serialize};
 
 /// Energy totals of a whole scene at one time, with the balance error relative to the
@@ -100,6 +102,89 @@ impl EnergyLedger {
             self.max_abs_error / self.scale
         } else {
             0.0
+        }
+    }
+}
+
+/// Work contact has done on each kinematic body so far (a prescribed body's motion never
+/// feels contact; the work is the same figure the body's reaction pays, so it enters
+/// both the contact and the external column). Counted by the integration's rule for
+/// every other body, W += hbar f_n . (v_{n-1/2} + v_{n+1/2}) / 2, from the per-pair loads
+/// of the pass at x_n (`PairStats::kin_a` / `kin_b`), in pair order: every loop (the
+/// single-group driver, the master over any number of workers) performs the same
+/// additions in the same order, whichever groups hold read-only copies of the body.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct KinematicWork {
+    /// (kinematic body id, work so far [J]), sorted by id.
+    work: Vec<(u32, f64)>,
+    /// The velocity programs of each body in `work` (same order).
+    programs: Vec<Vec<VelocityProgram>>,
+    /// The last pass's loads, in pair order: (body id, load).
+    pending: Vec<(u32, KinLoad)>,
+}
+
+impl KinematicWork {
+    /// Tracks the kinematic bodies given with their velocity programs (any order).
+    pub fn new(bodies: impl IntoIterator<Item = (u32, Vec<VelocityProgram>)>) -> Self {
+        let mut b: Vec<(u32, Vec<VelocityProgram>)> = bodies.into_iter().collect();
+        b.sort_by_key(|w| w.0);
+        b.dedup_by_key(|w| w.0);
+        Self {
+            work: b.iter().map(|(id, _)| (*id, 0.0)).collect(),
+            programs: b.into_iter().map(|(_, p)| p).collect(),
+            pending: Vec::new(),
+        }
+    }
+
+    /// The work of the last pass's loads over the step of length `h` from `clock`: the
+    /// velocity after it is the prescribed one at its middle.
+    pub fn settle(&mut self, clock: &Clock, h: f64) {
+        let hbar = 0.5 * (clock.last_dt + h);
+        let t_half = clock.time + 0.5 * h;
+        for (id, load) in &self.pending {
+            let Ok(k) = self.work.binary_search_by_key(id, |w| w.0) else {
+                continue;
+            };
+            let mut p_new = 0.0;
+            for (prog, f) in &load.by_program {
+                if let Some(vp) = self.programs[k].get(*prog as usize) {
+                    p_new += f.dot(&vp.at(t_half).0);
+                }
+            }
+            self.work[k].1 += hbar * (0.5 * (load.power + p_new));
+        }
+    }
+
+    /// Keep one force pass's loads on kinematic bodies (`stats` sorted by pair, as
+    /// every loop has them) for the next `settle`.
+    pub fn add(&mut self, stats: &[PairStats]) {
+        self.pending.clear();
+        for s in stats {
+            if !s.kin_a.is_empty() {
+                self.pending.push((s.a, s.kin_a.clone()));
+            }
+            if s.a != s.b && !s.kin_b.is_empty() {
+                self.pending.push((s.b, s.kin_b.clone()));
+            }
+        }
+    }
+
+    /// The work so far on body `id` (0 for a body not tracked).
+    pub fn of(&self, id: u32) -> f64 {
+        self.work
+            .binary_search_by_key(&id, |w| w.0)
+            .map_or(0.0, |k| self.work[k].1)
+    }
+
+    /// Into the reports' energy records: work W done by contact on a kinematic body
+    /// is absorbed by contact (-W) and paid by its prescribed motion (-W external).
+    pub fn apply(&self, reports: &mut [crate::group::BodyReport]) {
+        for r in reports {
+            if let Ok(k) = self.work.binary_search_by_key(&r.id, |w| w.0) {
+                let w = self.work[k].1;
+                r.energy.contact -= w;
+                r.energy.external -= w;
+            }
         }
     }
 }

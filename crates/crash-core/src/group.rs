@@ -57,6 +57,12 @@ pub struct Group {
     /// rebuilt lazily (results never depend on them).
     #[serde(skip)]
     pub contact_state: ContactState,
+    /// Ids (sorted) of the bodies in `bodies` that are read-only copies of kinematic
+    /// bodies owned elsewhere: advanced by their prescribed law like the owner (the same
+    /// bits: integration of a kinematic body depends only on its state, the clock and
+    /// its definition), in contact with this group's bodies, never reported.
+    #[serde(default)]
+    pub copies: Vec<u32>,
 }
 
 fn report(b: &Body, f: &ForceSums, lo: Vec3, hi: Vec3, max_move: f64) -> BodyReport {
@@ -80,7 +86,43 @@ impl Group {
             gravity,
             contact: ContactConfig::default(),
             contact_state: ContactState::default(),
+            copies: Vec::new(),
         }
+    }
+
+    /// A group of `bodies` plus read-only `copies` of kinematic bodies; the bodies are
+    /// kept in id order.
+    pub fn with_copies(mut bodies: Vec<Body>, copies: Vec<Body>, gravity: Vec3) -> Self {
+        let mut ids: Vec<u32> = copies.iter().map(|b| b.def.id).collect();
+        ids.sort_unstable();
+        bodies.extend(copies);
+        bodies.sort_by_key(|b| b.def.id);
+        let mut g = Self::new(bodies, gravity);
+        g.copies = ids;
+        g
+    }
+
+    /// Whether body `id` is a read-only copy here.
+    pub fn is_copy(&self, id: u32) -> bool {
+        self.copies.binary_search(&id).is_ok()
+    }
+
+    /// The bodies this group owns (not copies), in id order.
+    pub fn owned(&self) -> impl Iterator<Item = &Body> {
+        self.bodies.iter().filter(|b| !self.is_copy(b.def.id))
+    }
+
+    /// Smallest id of an owned body (the group's name in reports and faults).
+    pub fn first(&self) -> u32 {
+        self.owned().next().map_or(0, |b| b.def.id)
+    }
+
+    /// Reports of the owned bodies only.
+    fn owned_reports(&self, mut out: Vec<BodyReport>) -> Vec<BodyReport> {
+        if !self.copies.is_empty() {
+            out.retain(|r| !self.is_copy(r.id));
+        }
+        out
     }
 
     /// Contact forces at the current positions; lowers each report's stable dt where
@@ -120,11 +162,11 @@ impl Group {
             out.push(report(b, &f, lo, hi, 0.0));
         }
         self.contact_pass(&mut out, 0.0, 0)?;
-        Ok(out)
+        Ok(self.owned_reports(out))
     }
 
     /// One step of length h from `clock` (the run's clock, owned by its loop): returns
-    /// one report per body, in the group's body order.
+    /// one report per owned body, in the group's body order.
     pub fn advance(&mut self, clock: &Clock, h: f64) -> Result<Vec<BodyReport>, Fault> {
         let sc = clock.step_of(h);
         let mut sums = Vec::with_capacity(self.bodies.len());
@@ -140,6 +182,6 @@ impl Group {
             out.push(report(b, &f, s.lo, s.hi, s.max_move));
         }
         self.contact_pass(&mut out, h, step)?;
-        Ok(out)
+        Ok(self.owned_reports(out))
     }
 }

@@ -141,7 +141,10 @@ impl Body {
                     }
                     let (fe, me) = (f, mom);
                     let mut fcon = Vec3::zeros();
-                    if !fc.is_empty() {
+                    // a kinematic body's motion never feels contact: the work contact
+                    // does on it is counted per pair (PairStats::work_on_a, KinematicWork)
+                    // so that it does not depend on which group holds which copy
+                    if !fc.is_empty() && !kinematic {
                         fcon = fc[i];
                         f += fcon;
                     }

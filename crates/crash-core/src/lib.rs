@@ -33,7 +33,7 @@ pub use brief::BodyBrief;
 pub use clock::Clock;
 pub use driver::{Run, RunConfig};
 pub use element::Stabilization;
-pub use energy::{EnergyLedger, EnergyTotals};
+pub use energy::{EnergyLedger, EnergyTotals, KinematicWork};
 pub use error::{CoreError, Fault};
 pub use group::{BodyReport, Group};
 pub use material::{Material, Section};

@@ -16,7 +16,7 @@ pub const MAGIC: &[u8; 8] = b"CRASHCKP";
 /// Layout version of the payload. 2: body states apart from definitions, the run's
 /// clock (`crash_core::Clock`). 3: the contact speed rule, the run's energy figure in
 /// every record, the shortened last step apart, warnings raised so far.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 const HEADER: usize = 8 + 4 + 8 + 8;
 
 fn checksum(b: &[u8]) -> u64 {

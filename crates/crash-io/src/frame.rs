@@ -30,6 +30,18 @@ pub struct FrameBody {
     pub m: Vec<[f64; 3]>,
     /// Contact force per node [N] (zeros when the body has none).
     pub f_contact: Vec<Vec3>,
+    /// Where the body was computed when the frame was taken (set by the master, which
+    /// knows the placement; None elsewhere): the worker index and the group (named by
+    /// its smallest body id). Written as the cell fields `worker` and `group`.
+    #[serde(default)]
+    pub placement: Option<Placement>,
+}
+
+/// The worker and group of a body at one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Placement {
+    pub worker: u32,
+    pub group: u32,
 }
 
 impl FrameBody {
@@ -57,6 +69,7 @@ impl FrameBody {
             n: res.iter().map(|r| r.n).collect(),
             m: res.iter().map(|r| r.m).collect(),
             f_contact,
+            placement: None,
         }
     }
 

@@ -33,7 +33,8 @@ enum Job {
         step: u64,
         format: VtuFormat,
     },
-    Body(FrameBody),
+    // boxed: a body is large beside the other jobs
+    Body(Box<FrameBody>),
     End,
 }
 
@@ -136,7 +137,7 @@ impl BackgroundSeries {
             st.queued_elements > 0 && st.queued_elements + n > MAX_QUEUED_ELEMENTS
         })?;
         st.queued_elements += n;
-        st.queue.push_back(Job::Body(body));
+        st.queue.push_back(Job::Body(Box::new(body)));
         drop(st);
         self.shared.changed.notify_all();
         Ok(())

@@ -19,7 +19,7 @@ pub mod vtu_read;
 
 pub use checkpoint::{read_checkpoint, write_checkpoint};
 pub use error::IoError;
-pub use frame::{Frame, FrameBody};
+pub use frame::{Frame, FrameBody, Placement};
 pub use frame_writer::BackgroundSeries;
 pub use history::{
     read_contacts_csv, read_energy_csv, ContactHistory, ContactRow, EnergyHistory, EnergyRow,
@@ -32,7 +32,8 @@ pub use render::{
 pub use run::render_run;
 pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};
 pub use summary::{
-    hash_hex, read_summary, write_summary, Indicators, Summary, Warning, WarningKind, SUMMARY_JSON,
+    hash_hex, read_summary, write_summary, ClusterSummary, GroupSummary, Indicators, Summary,
+    Warning, WarningKind, SUMMARY_JSON,
 };
 pub use vtu::{Precision, VtuFormat};
 pub use vtu_read::read_vtu;

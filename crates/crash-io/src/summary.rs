@@ -262,6 +262,31 @@ pub struct Summary {
     /// process that computed (empty for crash-master: each worker prints its own).
     #[serde(default)]
     pub simd_path: String,
+    /// How the run was spread over its workers.
+    #[serde(default)]
+    pub cluster: ClusterSummary,
+}
+
+/// Workers, groups and migrations of a run (the master's view).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ClusterSummary {
+    pub workers: usize,
+    /// Bodies moved between workers.
+    pub migrations: usize,
+    /// MEIM updates that changed the groups, and the most groups at once.
+    pub group_changes: u64,
+    pub max_groups: usize,
+    /// The groups at the end: smallest body id, member ids, worker.
+    pub final_groups: Vec<GroupSummary>,
+    /// Compute time of each worker summed over the steps [ns] (the balance).
+    pub compute_ns_per_worker: Vec<u64>,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GroupSummary {
+    pub group: u32,
+    pub bodies: Vec<u32>,
+    pub worker: usize,
 }
 
 /// Hex form of a state hash as stored in summary.json.

@@ -187,6 +187,15 @@ pub const ARRAYS: &[ArrayDef] = {
         def(CellData, BODY_ID, 1, |b, _| {
             Values::I64(Box::new(per_element(b, b.id as i64)))
         }),
+        // where the element was computed (-1: not known to the writer)
+        def(CellData, "worker", 1, |b, _| {
+            let w = b.placement.map_or(-1, |p| p.worker as i64);
+            Values::I64(Box::new(per_element(b, w)))
+        }),
+        def(CellData, "group", 1, |b, _| {
+            let g = b.placement.map_or(-1, |p| p.group as i64);
+            Values::I64(Box::new(per_element(b, g)))
+        }),
         def(Points, "Points", 3, |b, _| vec3s(&b.x)),
         def(Cells, "connectivity", 1, |b, base| {
             let tris = b.tris.iter().flatten();

@@ -363,6 +363,7 @@ fn piece_bodies(r: &Reader, piece: Node) -> Result<Vec<FrameBody>, IoError> {
             n: Vec::new(),
             m: Vec::new(),
             f_contact: vecs(&fc, start..end),
+            placement: None,
         };
         let uu = vecs(&u, start..end);
         b.x0 = b.x.iter().zip(&uu).map(|(x, u)| x - u).collect();

@@ -117,6 +117,18 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
         fault: None,
         interrupted: false,
         simd_path: "avx2".into(),
+        cluster: crash_io::summary::ClusterSummary {
+            workers: 2,
+            migrations: 3,
+            group_changes: 4,
+            max_groups: 13,
+            final_groups: vec![crash_io::summary::GroupSummary {
+                group: 0,
+                bodies: vec![0],
+                worker: 1,
+            }],
+            compute_ns_per_worker: vec![10, 12],
+        },
     };
     write_summary(&path, &s).expect("write");
     assert_eq!(read_summary(&path).expect("read"), s);

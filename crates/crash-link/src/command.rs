@@ -62,21 +62,41 @@ pub enum Command {
         at: Clock,
         bodies: Vec<BodyLoad>,
     },
+    /// Read-only copies of kinematic bodies another worker owns, at clock `at`, for the
+    /// groups of the next Regroup (a worker that holds the body or a copy of it already
+    /// makes its copies itself).
+    LoadCopies {
+        at: Clock,
+        bodies: Vec<BodyLoad>,
+    },
     /// Give these bodies back and forget them; include the definition of the ids in
     /// `with_def` (their next worker lacks it).
     Unload {
         ids: Vec<u32>,
         with_def: Vec<u32>,
     },
+    /// Like Unload, but keep the bodies: their state is lent to another worker's groups
+    /// as read-only copies (kinematic bodies only). Answered by `Unloaded`.
+    Lend {
+        ids: Vec<u32>,
+        with_def: Vec<u32>,
+    },
     /// The groups the worker integrates from now on (each sorted by id, the groups by
-    /// their smallest id); every body held appears exactly once.
-    Regroup(Vec<Vec<u32>>),
+    /// their smallest id); every body held appears exactly once. `copies[k]` (sorted; may
+    /// be missing for the last groups): read-only copies of the kinematic bodies group k
+    /// touches, each made from a body or copy the worker holds or a LoadCopies.
+    Regroup {
+        groups: Vec<Vec<u32>>,
+        copies: Vec<Vec<u32>>,
+    },
     /// Forces of the initial configuration.
     Start,
-    /// Take the step of length `dt` that starts at clock `at`.
+    /// Take the step of length `dt` that starts at clock `at`. `kin_nodes`: report the
+    /// pass's per-node forces on kinematic bodies (`KinLoad::nodes`): a frame follows.
     Step {
         at: Clock,
         dt: f64,
+        kin_nodes: bool,
     },
     /// What an output frame shows of these bodies (held by the worker).
     Frame(Vec<u32>),
@@ -87,6 +107,16 @@ pub enum Command {
     /// worker was lost: the checkpoint's states are loaded next).
     Reset,
     Shutdown(String),
+}
+
+impl Command {
+    /// A Regroup without copies.
+    pub fn regroup(groups: Vec<Vec<u32>>) -> Self {
+        Command::Regroup {
+            groups,
+            copies: Vec::new(),
+        }
+    }
 }
 
 /// Compute time of one group in one step.

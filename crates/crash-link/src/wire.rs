@@ -190,7 +190,26 @@ fn frame_body_from_pb(p: &pb::FrameBody) -> Result<FrameBody, ProtoError> {
         n: p.n.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         m: p.m.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         f_contact,
+        placement: None,
     })
+}
+
+/// `flat` cut into runs of `sizes` (which must add up to its length).
+fn split_sizes(flat: &[u32], sizes: &[u32], what: &str) -> Result<Vec<Vec<u32>>, ProtoError> {
+    let total: u64 = sizes.iter().map(|&s| s as u64).sum();
+    if total != flat.len() as u64 {
+        return Err(ProtoError::Invalid(format!(
+            "regroup: group sizes add up to {total}, but {} {what} were sent",
+            flat.len()
+        )));
+    }
+    let mut out = Vec::with_capacity(sizes.len());
+    let mut at = 0;
+    for &s in sizes {
+        out.push(flat[at..at + s as usize].to_vec());
+        at += s as usize;
+    }
+    Ok(out)
 }
 
 fn wrap(c: PbCommand) -> pb::MasterMessage {
@@ -205,25 +224,38 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
             gravity: Some(vec3_to_pb(&s.gravity)),
             contact: Some(contact_to_pb(&s.contact)),
         }),
-        Command::Load { at, bodies } => PbCommand::Load(pb::Load {
-            at: Some(clock_to_pb(at)),
-            bodies: bodies
-                .iter()
-                .map(|b| load_to_pb(b, !has_def(b.id)))
-                .collect(),
-        }),
-        Command::Unload { ids, with_def } => PbCommand::Unload(pb::Unload {
-            ids: ids.clone(),
-            with_def: with_def.clone(),
-        }),
-        Command::Regroup(groups) => PbCommand::Regroup(pb::Regroup {
+        Command::Load { at, bodies } | Command::LoadCopies { at, bodies } => {
+            PbCommand::Load(pb::Load {
+                at: Some(clock_to_pb(at)),
+                bodies: bodies
+                    .iter()
+                    .map(|b| load_to_pb(b, !has_def(b.id)))
+                    .collect(),
+                copies: matches!(cmd, Command::LoadCopies { .. }),
+            })
+        }
+        Command::Unload { ids, with_def } | Command::Lend { ids, with_def } => {
+            PbCommand::Unload(pb::Unload {
+                ids: ids.clone(),
+                with_def: with_def.clone(),
+                keep: matches!(cmd, Command::Lend { .. }),
+            })
+        }
+        Command::Regroup { groups, copies } => PbCommand::Regroup(pb::Regroup {
             members: groups.iter().flatten().copied().collect(),
             sizes: groups.iter().map(|g| g.len() as u32).collect(),
+            copies: copies.iter().flatten().copied().collect(),
+            copy_sizes: if copies.iter().all(Vec::is_empty) {
+                Vec::new()
+            } else {
+                copies.iter().map(|g| g.len() as u32).collect()
+            },
         }),
         Command::Start => PbCommand::Start(pb::Start {}),
-        Command::Step { at, dt } => PbCommand::Step(pb::Step {
+        Command::Step { at, dt, kin_nodes } => PbCommand::Step(pb::Step {
             at: Some(clock_to_pb(at)),
             dt: *dt,
+            kin_nodes: *kin_nodes,
         }),
         Command::Frame(ids) => PbCommand::Frame(pb::FrameRequest { ids: ids.clone() }),
         Command::States(ids) => PbCommand::States(pb::StatesRequest { ids: ids.clone() }),
@@ -266,38 +298,44 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                     contact: contact_from_pb(c)?,
                 })
             }
-            PbCommand::Load(l) => Command::Load {
-                at: clock_from_pb(l.at.as_ref())?,
-                bodies: l
+            PbCommand::Load(l) => {
+                let at = clock_from_pb(l.at.as_ref())?;
+                let bodies = l
                     .bodies
                     .iter()
                     .map(load_from_pb)
-                    .collect::<Result<_, _>>()?,
-            },
-            PbCommand::Unload(u) => Command::Unload {
-                ids: u.ids.clone(),
-                with_def: u.with_def.clone(),
-            },
+                    .collect::<Result<_, _>>()?;
+                if l.copies {
+                    Command::LoadCopies { at, bodies }
+                } else {
+                    Command::Load { at, bodies }
+                }
+            }
+            PbCommand::Unload(u) => {
+                let (ids, with_def) = (u.ids.clone(), u.with_def.clone());
+                if u.keep {
+                    Command::Lend { ids, with_def }
+                } else {
+                    Command::Unload { ids, with_def }
+                }
+            }
             PbCommand::Regroup(r) => {
-                let total: u64 = r.sizes.iter().map(|&s| s as u64).sum();
-                if total != r.members.len() as u64 {
+                let groups = split_sizes(&r.members, &r.sizes, "members")?;
+                if !r.copy_sizes.is_empty() && r.copy_sizes.len() != r.sizes.len() {
                     return Err(ProtoError::Invalid(format!(
-                        "regroup: group sizes add up to {total}, but {} members were sent",
-                        r.members.len()
+                        "regroup: {} groups but copies for {}",
+                        r.sizes.len(),
+                        r.copy_sizes.len()
                     )));
                 }
-                let mut groups = Vec::with_capacity(r.sizes.len());
-                let mut at = 0;
-                for &s in &r.sizes {
-                    groups.push(r.members[at..at + s as usize].to_vec());
-                    at += s as usize;
-                }
-                Command::Regroup(groups)
+                let copies = split_sizes(&r.copies, &r.copy_sizes, "copies")?;
+                Command::Regroup { groups, copies }
             }
             PbCommand::Start(_) => Command::Start,
             PbCommand::Step(s) => Command::Step {
                 at: clock_from_pb(s.at.as_ref())?,
                 dt: s.dt,
+                kin_nodes: s.kin_nodes,
             },
             PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
             PbCommand::States(s) => Command::States(s.ids.clone()),

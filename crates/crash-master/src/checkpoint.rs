@@ -10,7 +10,7 @@
 use crate::error::MasterError;
 use crate::meim::Interaction;
 use crate::stats::RunStats;
-use crash_core::{BodyState, Clock, EnergyLedger};
+use crash_core::{BodyState, Clock, EnergyLedger, KinematicWork};
 use serde::{Deserialize, Serialize};
 
 /// The master loop's state after a step.
@@ -25,6 +25,8 @@ pub struct MasterCheckpoint {
     /// The first step (reference of the dt-collapse floor).
     pub dt0: f64,
     pub ledger: EnergyLedger,
+    /// Contact work on the kinematic bodies so far.
+    pub kinematic_work: KinematicWork,
     /// MEIM edges (a < b) and their timers.
     pub edges: Vec<((u32, u32), Interaction)>,
     /// Output schedule: frames due so far and the step of the last frame.

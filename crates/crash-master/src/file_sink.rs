@@ -4,8 +4,9 @@
 
 use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
+use crate::groups_csv::{GroupsCsv, GROUPS_CSV};
 use crate::input::RunSize;
-use crate::sink::{Sink, SinkError};
+use crate::sink::{GroupRow, Sink, SinkError};
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
@@ -103,6 +104,7 @@ pub struct FileSink {
     dir: PathBuf,
     energy: EnergyHistory,
     contacts: ContactHistory,
+    groups: GroupsCsv,
     series: BackgroundSeries,
     /// Time spent handing frames to the writer thread on the caller's (the step
     /// loop's) thread [ns]; waits when the writer lags and drains at checkpoints
@@ -139,6 +141,7 @@ impl FileSink {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::create(dir.join(ENERGY_CSV))?,
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
+            groups: GroupsCsv::create(&dir.join(GROUPS_CSV))?,
             series: BackgroundSeries::start(SeriesWriter::create(dir)?)?,
             handover_ns: 0,
             drain_ns: 0,
@@ -177,6 +180,7 @@ impl FileSink {
             dir: dir.to_path_buf(),
             energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
+            groups: GroupsCsv::reopen(&dir.join(GROUPS_CSV), t)?,
             series: BackgroundSeries::start(SeriesWriter::reopen(dir, frames_until)?)?,
             handover_ns: 0,
             drain_ns: 0,
@@ -340,6 +344,7 @@ impl Sink for FileSink {
         self.handover_ns += t.elapsed().as_nanos() as u64;
         self.energy.flush()?;
         self.contacts.flush()?;
+        self.groups.flush()?;
         crash_io::write_checkpoint(
             path,
             &RestartRef {
@@ -349,6 +354,10 @@ impl Sink for FileSink {
             },
         )?;
         Ok(())
+    }
+
+    fn groups(&mut self, _step: u64, time: f64, rows: &[GroupRow]) -> Result<(), SinkError> {
+        Ok(self.groups.rows(time, rows)?)
     }
 
     fn remember(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
@@ -366,6 +375,8 @@ impl Sink for FileSink {
         self.contacts.flush()?;
         self.energy = EnergyHistory::reopen(self.dir.join(ENERGY_CSV), t)?;
         self.contacts = ContactHistory::reopen(self.dir.join(CONTACTS_CSV), t)?;
+        self.groups.flush()?;
+        self.groups = GroupsCsv::reopen(&self.dir.join(GROUPS_CSV), t)?;
         // the writer thread first writes what it holds, then starts again from the
         // frames up to the checkpoint
         self.series.finish()?;
@@ -407,6 +418,7 @@ impl Sink for FileSink {
         }
         self.energy.flush()?;
         self.contacts.flush()?;
+        self.groups.flush()?;
         Ok(())
     }
 
@@ -418,6 +430,7 @@ impl Sink for FileSink {
         self.drain_ns += t.elapsed().as_nanos() as u64;
         self.energy.flush()?;
         self.contacts.flush()?;
+        self.groups.flush()?;
         let s = &mut self.summary;
         s.steps = stats.steps;
         s.time_reached_s = stats.time;
@@ -454,6 +467,22 @@ impl Sink for FileSink {
                 s.barrier_us_per_step.insert(k.into(), v);
             }
         }
+        s.cluster = crash_io::ClusterSummary {
+            workers: stats.workers,
+            migrations: stats.migrations.len(),
+            group_changes: stats.group_changes,
+            max_groups: stats.max_groups,
+            final_groups: stats
+                .final_groups
+                .iter()
+                .map(|(ids, w)| crash_io::GroupSummary {
+                    group: ids.first().copied().unwrap_or(0),
+                    bodies: ids.clone(),
+                    worker: *w,
+                })
+                .collect(),
+            compute_ns_per_worker: stats.worker_compute_ns.clone(),
+        };
         s.energy_balance_error = stats.max_energy_error;
         s.energy_limit = self.indicators.energy_limit;
         s.indicators = self.indicators;

@@ -66,6 +66,24 @@ pub struct RunSize {
 }
 
 impl RunInput {
+    /// Body names in the order of `ids` ("body ID" where the scene gave none).
+    pub fn names_by_id(&self, ids: &[u32]) -> Vec<String> {
+        let by_id: std::collections::BTreeMap<u32, &str> = self
+            .briefs
+            .iter()
+            .map(|b| (b.id, b.name.as_str()))
+            .collect();
+        ids.iter()
+            .map(|id| {
+                by_id
+                    .get(id)
+                    .map(|n| n.to_string())
+                    .filter(|n| !n.is_empty())
+                    .unwrap_or_else(|| format!("body {id}"))
+            })
+            .collect()
+    }
+
     /// From bodies built in this process (`crash run`, tests).
     pub fn from_built(b: crash_scene::Built) -> Self {
         let config = b.run_config();

@@ -15,6 +15,7 @@ pub mod assign;
 pub mod checkpoint;
 pub mod error;
 pub mod file_sink;
+pub mod groups_csv;
 pub mod guard;
 pub mod heartbeat;
 pub mod input;
@@ -36,7 +37,7 @@ pub use input::{BodySource, CostModel, RunInput, RunOptions, RunSize};
 pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions};
 pub use session::Session;
-pub use sink::{EnergyRecord, RecordSink, Sink, SinkError};
+pub use sink::{EnergyRecord, GroupRow, RecordSink, Sink, SinkError};
 pub use stats::{BarrierStats, Migration, RunStats, StageTimes};
 
 use crash_link::WorkerLink;

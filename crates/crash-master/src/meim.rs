@@ -7,6 +7,11 @@
 //! updates (groups split only when separation persists: no ping-pong of bodies between
 //! workers when two bodies graze each other).
 //!
+//! Kinematic bodies (every degree of freedom prescribed) keep their edges (the contact
+//! pairs) but never link two bodies into one group: nothing flows back into their
+//! motion. Each is a group of its own, and every group with an edge to one holds a
+//! read-only copy of it (`copies`).
+//!
 //! Order is part of determinism: nodes are added in body-id order (StableGraph keeps
 //! indices), pairs arrive sorted, and groups are sorted by their smallest body id with
 //! members in id order.
@@ -39,6 +44,11 @@ pub struct Meim {
     members: Vec<u32>,
     /// Group of each body (by position in `ids`).
     group_of: Vec<u32>,
+    /// Kinematic flag of each body (by position in `ids`).
+    kinematic: Vec<bool>,
+    /// Read-only copies of each group (kinematic ids with an edge to a member), CSR.
+    copy_start: Vec<u32>,
+    copy_ids: Vec<u32>,
 }
 
 /// Level-i search: candidate pairs (ids, a < b, sorted) among `boxes`. The contact
@@ -66,7 +76,21 @@ impl Meim {
             split_after,
             start: (0..=n as u32).collect(),
             group_of: (0..n as u32).collect(),
+            kinematic: vec![false; n],
+            copy_start: vec![0; n + 1],
+            copy_ids: Vec::new(),
         }
+    }
+
+    /// Mark the kinematic bodies (their edges no longer join groups).
+    pub fn with_kinematic(mut self, kinematic: &[u32]) -> Self {
+        for &id in kinematic {
+            if let Some(i) = self.index(id) {
+                self.kinematic[i] = true;
+            }
+        }
+        self.components();
+        self
     }
 
     /// The graph rebuilt from `edges` (as `edge_states` gives them): the same groups
@@ -185,9 +209,18 @@ impl Meim {
     fn components(&mut self) {
         let n = self.ids.len();
         let mut uf = UnionFind::<usize>::new(n);
+        let mut touch: Vec<(usize, u32)> = Vec::new();
         for e in self.graph.edge_indices() {
             if let Some((a, b)) = self.graph.edge_endpoints(e) {
-                uf.union(a.index(), b.index());
+                let (a, b) = (a.index(), b.index());
+                match (self.kinematic[a], self.kinematic[b]) {
+                    (false, false) => {
+                        uf.union(a, b);
+                    }
+                    (true, false) => touch.push((b, self.ids[a])),
+                    (false, true) => touch.push((a, self.ids[b])),
+                    (true, true) => {} // two prescribed motions: nothing to share
+                }
             }
         }
         // Nodes were added in id order with no removals: node index k is ids[k].
@@ -217,6 +250,30 @@ impl Meim {
             self.members[fill[g] as usize] = self.ids[k];
             fill[g] += 1;
         }
+        // copies: (group, kinematic id), sorted and unique
+        let mut copies: Vec<(u32, u32)> = touch
+            .into_iter()
+            .map(|(k, id)| (self.group_of[k], id))
+            .collect();
+        copies.sort_unstable();
+        copies.dedup();
+        self.copy_start.clear();
+        self.copy_start.push(0);
+        self.copy_ids.clear();
+        let mut it = copies.iter().peekable();
+        for g in 0..sizes.len() as u32 {
+            while let Some(&&(_, id)) = it.peek().filter(|(cg, _)| *cg == g) {
+                self.copy_ids.push(id);
+                it.next();
+            }
+            self.copy_start.push(self.copy_ids.len() as u32);
+        }
+    }
+
+    /// Read-only copies group `k` holds: the kinematic bodies with an edge to one of its
+    /// members (ascending ids).
+    pub fn copies(&self, k: usize) -> &[u32] {
+        &self.copy_ids[self.copy_start[k] as usize..self.copy_start[k + 1] as usize]
     }
 
     pub fn group_count(&self) -> usize {
@@ -278,6 +335,26 @@ mod tests {
         assert_eq!(m.pairs(), vec![(1, 5), (5, 7)]);
         // unknown ids are ignored
         assert!(!m.update(6, &[(1, 5), (2, 9), (5, 7)]));
+    }
+
+    #[test]
+    fn a_kinematic_body_never_links_two_deformable_bodies_into_one_group() {
+        // 0 is kinematic; 1 and 2 both touch it, 3 touches 2
+        let mut m = Meim::new(&[0, 1, 2, 3], 2).with_kinematic(&[0]);
+        assert!(m.update(1, &[(0, 1), (0, 2), (2, 3)]));
+        assert_eq!(m.groups(), [&[0][..], &[1], &[2, 3]]);
+        // the kinematic body is its own group and has no copies; the others copy it
+        assert_eq!(m.copies(0), &[] as &[u32]);
+        assert_eq!(m.copies(1), &[0]);
+        assert_eq!(m.copies(2), &[0]);
+        // the edges are kept (contact pairs are still searched)
+        assert_eq!(m.pairs(), vec![(0, 1), (0, 2), (2, 3)]);
+        // two kinematic bodies touching: no group, no copy
+        let mut k = Meim::new(&[4, 5, 6], 2).with_kinematic(&[4, 5]);
+        k.update(1, &[(4, 5), (5, 6)]);
+        assert_eq!(k.groups(), [&[4][..], &[5], &[6]]);
+        assert_eq!(k.copies(2), &[5]);
+        assert_eq!(k.copies(0), &[] as &[u32]);
     }
 
     #[test]

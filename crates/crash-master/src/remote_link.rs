@@ -117,7 +117,7 @@ impl WorkerLink for RemoteWorker {
         let t = Instant::now();
         let msg = command_to_pb(&cmd, |id| self.sent.contains(&id));
         self.codec_ns += t.elapsed().as_nanos() as u64;
-        if let Command::Load { bodies, .. } = &cmd {
+        if let Command::Load { bodies, .. } | Command::LoadCopies { bodies, .. } = &cmd {
             self.sent
                 .extend(bodies.iter().filter(|b| b.def.is_some()).map(|b| b.id));
         }

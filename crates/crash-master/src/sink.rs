@@ -29,6 +29,10 @@ pub trait Sink {
     ) -> Result<(), SinkError> {
         Ok(())
     }
+    /// The groups (who computes what) at a time they changed, and at every output time.
+    fn groups(&mut self, _step: u64, _time: f64, _rows: &[GroupRow]) -> Result<(), SinkError> {
+        Ok(())
+    }
     /// The loop's state after a step, every `RunOptions::checkpoint_every` steps
     /// (after that step's rows and frame). Keep it to continue the run later.
     fn checkpoint(&mut self, _state: &MasterCheckpoint) -> Result<(), SinkError> {
@@ -59,6 +63,19 @@ pub trait Sink {
     fn finish(&mut self, stats: &RunStats, error: Option<&MasterError>) -> Result<(), SinkError>;
 }
 
+/// One group at one time (a row of groups.csv).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GroupRow {
+    /// The group's name: its smallest body id.
+    pub group: u32,
+    /// Its bodies' names, in id order (read-only copies of kinematic bodies not listed).
+    pub bodies: Vec<String>,
+    pub worker: usize,
+    pub elements: usize,
+    /// The group's compute time in the last step [ns] (0 before the first step).
+    pub step_ns: u64,
+}
+
 /// One energy row.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EnergyRecord {
@@ -75,6 +92,8 @@ pub struct RecordSink {
     pub contacts: Vec<(u64, Vec<(u32, u32)>)>,
     /// Steps (and times) with at least one pushed node, and the pairs' statistics.
     pub contact_stats: Vec<(u64, f64, Vec<PairStats>)>,
+    /// Group rows handed over: (step, time, rows).
+    pub groups: Vec<(u64, f64, Vec<GroupRow>)>,
     /// Hash of the last frame (the final state after a normal end).
     pub last_hash: Option<u64>,
     /// Every checkpoint handed over.
@@ -85,6 +104,11 @@ pub struct RecordSink {
 }
 
 impl Sink for RecordSink {
+    fn groups(&mut self, step: u64, time: f64, rows: &[GroupRow]) -> Result<(), SinkError> {
+        self.groups.push((step, time, rows.to_vec()));
+        Ok(())
+    }
+
     fn energy(&mut self, step: u64, time: f64, totals: &EnergyTotals) -> Result<(), SinkError> {
         self.energy.push(EnergyRecord {
             step,

@@ -109,6 +109,9 @@ pub struct RunStats {
     /// `crash_core::hash::state_hash` of the final state (0 if the run failed).
     pub final_hash: u64,
     pub frames: u64,
+    /// Compute time of each worker summed over the steps [ns].
+    #[serde(default)]
+    pub worker_compute_ns: Vec<u64>,
     #[serde(default)]
     pub barrier: BarrierStats,
 }

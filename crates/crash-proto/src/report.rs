@@ -4,7 +4,7 @@ use crate::body::vec3;
 use crate::error::ProtoError;
 use crate::pb;
 use crate::pb::fault::Kind;
-use crash_core::contact::PairStats;
+use crash_core::contact::{KinLoad, PairStats};
 use crash_core::{BodyEnergy, BodyReport, Fault};
 
 const VALUES: usize = 15;
@@ -85,7 +85,10 @@ pub fn reports_from_pb(p: &pb::BodyReports) -> Result<Vec<BodyReport>, ProtoErro
     Ok(out)
 }
 
-const CONTACT_VALUES: usize = 6;
+const CONTACT_VALUES: usize = 8;
+/// Stride of `ContactStats::kin_programs` (pair index, side, program, force[3]) and of
+/// `kin_nodes` (pair index, side, node, force[3]).
+const KIN_VALUES: usize = 6;
 
 /// Column-pack contact statistics.
 pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
@@ -93,8 +96,10 @@ pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
         pairs: Vec::with_capacity(2 * stats.len()),
         active_nodes: Vec::with_capacity(stats.len()),
         values: Vec::with_capacity(CONTACT_VALUES * stats.len()),
+        kin_programs: Vec::new(),
+        kin_nodes: Vec::new(),
     };
-    for s in stats {
+    for (k, s) in stats.iter().enumerate() {
         out.pairs.extend_from_slice(&[s.a, s.b]);
         out.active_nodes.push(s.active_nodes as u64);
         out.values.extend_from_slice(&[
@@ -104,7 +109,19 @@ pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
             s.force_on_a.x,
             s.force_on_a.y,
             s.force_on_a.z,
+            s.kin_a.power,
+            s.kin_b.power,
         ]);
+        for (side, l) in [(0.0, &s.kin_a), (1.0, &s.kin_b)] {
+            for (p, f) in &l.by_program {
+                out.kin_programs
+                    .extend_from_slice(&[k as f64, side, f64::from(*p), f.x, f.y, f.z]);
+            }
+            for (n, f) in &l.nodes {
+                out.kin_nodes
+                    .extend_from_slice(&[k as f64, side, f64::from(*n), f.x, f.y, f.z]);
+            }
+        }
     }
     out
 }
@@ -133,7 +150,51 @@ pub fn contacts_from_pb(p: &pb::ContactStats) -> Result<Vec<PairStats>, ProtoErr
             max_penetration_ratio: v[1],
             normal_force: v[2],
             force_on_a: vec3(&v[3..6]),
+            kin_a: KinLoad {
+                power: v[6],
+                ..KinLoad::default()
+            },
+            kin_b: KinLoad {
+                power: v[7],
+                ..KinLoad::default()
+            },
         });
+    }
+    for (what, values) in [("program", &p.kin_programs), ("node", &p.kin_nodes)] {
+        if values.len() % KIN_VALUES != 0 {
+            return Err(ProtoError::Invalid(format!(
+                "kinematic loads per {what} hold {} values, not a multiple of {KIN_VALUES}",
+                values.len()
+            )));
+        }
+        for v in values.chunks_exact(KIN_VALUES) {
+            let (k, side, id) = (v[0], v[1], v[2]);
+            let max = if what == "program" {
+                f64::from(u16::MAX)
+            } else {
+                f64::from(u32::MAX)
+            };
+            if !(k >= 0.0 && k < n as f64 && k.fract() == 0.0)
+                || !(side == 0.0 || side == 1.0)
+                || !(id >= 0.0 && id <= max && id.fract() == 0.0)
+            {
+                return Err(ProtoError::Invalid(format!(
+                    "kinematic load per {what} {v:?} names no pair, side or {what}"
+                )));
+            }
+            let s = &mut out[k as usize];
+            let l = if side == 0.0 {
+                &mut s.kin_a
+            } else {
+                &mut s.kin_b
+            };
+            // kept in the sender's order (sorted)
+            if what == "program" {
+                l.by_program.push((id as u16, vec3(&v[3..6])));
+            } else {
+                l.nodes.push((id as u32, vec3(&v[3..6])));
+            }
+        }
     }
     Ok(out)
 }

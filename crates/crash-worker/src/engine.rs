@@ -10,6 +10,12 @@
 //! The engine is plain synchronous code: local mode calls `handle` directly, the
 //! worker process calls it on its compute pool, off the communication runtime.
 //!
+//! Kinematic bodies (every degree of freedom prescribed) never join groups: a group
+//! that touches one holds a read-only copy of it, advanced by the same prescribed law
+//! (so bit-identical to the owner), in contact with the group's bodies, never reported.
+//! Copies are made from the owner or another copy on this worker, or arrive by
+//! LoadCopies; between a Regroup's dissolving and rebuilding they wait in `spare`.
+//!
 //! Time: the engine keeps no clock of its own. Every Step and Load carries the run's
 //! clock; the engine only remembers the clock its bodies are at, to refuse a command
 //! meant for another moment (so a resumed run continues on any set of workers).
@@ -32,6 +38,9 @@ pub struct Engine {
     groups: Vec<Group>,
     /// Loaded (or left over after an unload) but not yet placed by a Regroup.
     loose: Vec<Body>,
+    /// Read-only copies of kinematic bodies not in a group (loaded by LoadCopies or
+    /// left over from dissolved groups), by id; the next Regroup uses or drops them.
+    spare: BTreeMap<u32, Body>,
     /// Every definition received, kept after a body leaves (it may come back: then only
     /// its state travels).
     defs: BTreeMap<u32, Arc<BodyDef>>,
@@ -57,16 +66,33 @@ impl Engine {
         self.at
     }
 
-    /// Number of bodies held.
+    /// Number of bodies held (copies not counted).
     pub fn body_count(&self) -> usize {
-        self.loose.len() + self.groups.iter().map(|g| g.bodies.len()).sum::<usize>()
+        self.loose.len() + self.groups.iter().map(|g| g.owned().count()).sum::<usize>()
     }
 
-    /// Current group layout (body ids).
+    /// Current group layout (owned body ids).
     pub fn layout(&self) -> Vec<Vec<u32>> {
         self.groups
             .iter()
-            .map(|g| g.bodies.iter().map(|b| b.def.id).collect())
+            .map(|g| g.owned().map(|b| b.def.id).collect())
+            .collect()
+    }
+
+    /// The read-only copies each group holds (ids), in group order.
+    pub fn copies(&self) -> Vec<Vec<u32>> {
+        self.groups.iter().map(|g| g.copies.clone()).collect()
+    }
+
+    /// Every instance (owned body or copy) of body `id` held, for checks: copies must
+    /// stay bit-identical to their owner.
+    pub fn instances(&self, id: u32) -> Vec<&Body> {
+        self.groups
+            .iter()
+            .flat_map(|g| g.bodies.iter())
+            .chain(&self.loose)
+            .chain(self.spare.values())
+            .filter(|b| b.def.id == id)
             .collect()
     }
 
@@ -82,22 +108,24 @@ impl Engine {
                 Ok(Reply::Ack)
             }
             Command::Load { at, bodies } => self.load(at, bodies),
+            Command::LoadCopies { at, bodies } => self.load_copies(at, bodies),
             Command::Unload { ids, with_def } => self.unload(&ids, &with_def),
-            Command::Regroup(layout) => self.regroup(layout),
+            Command::Lend { ids, with_def } => self.lend(&ids, &with_def),
+            Command::Regroup { groups, copies } => self.regroup(groups, copies),
             Command::Start => {
                 if let Err(e) = self.check_clock(&Clock::default()) {
                     return Reply::Error(e.to_string());
                 }
                 self.at = Some(Clock::default());
-                return self.run(|g| g.start());
+                return self.run(|g| g.start(), true);
             }
-            Command::Step { at, dt } => {
+            Command::Step { at, dt, kin_nodes } => {
                 if let Err(e) = self.check_clock(&at) {
                     Err(e)
                 } else if !(dt.is_finite() && dt > 0.0) {
                     Err(EngineError::Step { step: at.step, dt })
                 } else {
-                    let reply = self.run(|g| g.advance(&at, dt));
+                    let reply = self.run(|g| g.advance(&at, dt), kin_nodes);
                     self.at = Some(at.after(dt));
                     return reply;
                 }
@@ -131,19 +159,56 @@ impl Engine {
         }
     }
 
-    fn new_group(&self, bodies: Vec<Body>) -> Result<Group, EngineError> {
+    fn new_group(&self, bodies: Vec<Body>, copies: Vec<Body>) -> Result<Group, EngineError> {
         let setup = self.setup.ok_or(EngineError::NoSetup)?;
-        let mut g = Group::new(bodies, setup.gravity);
+        let mut g = Group::with_copies(bodies, copies, setup.gravity);
         g.contact = setup.contact;
         Ok(g)
     }
 
+    /// Ids of the owned bodies (copies not included).
     fn ids(&self) -> impl Iterator<Item = u32> + '_ {
         self.groups
             .iter()
-            .flat_map(|g| g.bodies.iter())
+            .flat_map(|g| g.owned())
             .chain(&self.loose)
             .map(|b| b.def.id)
+    }
+
+    fn load_copies(&mut self, at: Clock, bodies: Vec<BodyLoad>) -> Result<Reply, EngineError> {
+        self.check_clock(&at)?;
+        for b in bodies {
+            let known = self.defs.get(&b.id).cloned();
+            let body = b.into_body(known.as_ref())?;
+            if !body.def.kinematic {
+                return Err(EngineError::NotKinematic(body.def.id));
+            }
+            self.defs.insert(body.def.id, body.def.clone());
+            self.spare.insert(body.def.id, body);
+        }
+        self.at = Some(at);
+        Ok(Reply::Ack)
+    }
+
+    /// The state of owned kinematic bodies, kept here, for another worker's copies.
+    fn lend(&mut self, ids: &[u32], with_def: &[u32]) -> Result<Reply, EngineError> {
+        let held: BTreeMap<u32, &Body> = self.held().into_iter().map(|b| (b.def.id, b)).collect();
+        let mut out = Vec::with_capacity(ids.len());
+        for id in ids {
+            let b = held.get(id).ok_or(EngineError::NotHeld {
+                id: *id,
+                what: "a copy",
+            })?;
+            if !b.def.kinematic {
+                return Err(EngineError::NotKinematic(*id));
+            }
+            out.push(BodyLoad {
+                id: *id,
+                def: with_def.contains(id).then(|| b.def.clone()),
+                state: b.state.clone(),
+            });
+        }
+        Ok(Reply::Unloaded(out))
     }
 
     fn load(&mut self, at: Clock, bodies: Vec<BodyLoad>) -> Result<Reply, EngineError> {
@@ -166,13 +231,24 @@ impl Engine {
         Ok(Reply::Ack)
     }
 
-    /// Take every body out of the groups into an id-ordered map.
+    /// Split a dissolved group: owned bodies to `owned`, copies to `spare`.
+    fn dissolve(spare: &mut BTreeMap<u32, Body>, g: Group, mut owned: impl FnMut(Body)) {
+        for b in g.bodies {
+            if g.copies.binary_search(&b.def.id).is_ok() {
+                spare.entry(b.def.id).or_insert(b);
+            } else {
+                owned(b);
+            }
+        }
+    }
+
+    /// Take every body out of the groups into an id-ordered map (copies to `spare`).
     fn pool(&mut self) -> BTreeMap<u32, Body> {
         let mut all = BTreeMap::new();
-        for g in self.groups.drain(..) {
-            for b in g.bodies {
+        for g in std::mem::take(&mut self.groups) {
+            Self::dissolve(&mut self.spare, g, |b| {
                 all.insert(b.def.id, b);
-            }
+            });
         }
         for b in self.loose.drain(..) {
             all.insert(b.def.id, b);
@@ -192,15 +268,16 @@ impl Engine {
         let mut out = Vec::with_capacity(ids.len());
         let take: BTreeSet<u32> = ids.iter().copied().collect();
         let mut kept = Vec::new();
-        for g in self.groups.drain(..) {
-            if g.bodies.iter().any(|b| take.contains(&b.def.id)) {
-                for b in g.bodies {
+        for g in std::mem::take(&mut self.groups) {
+            if g.owned().any(|b| take.contains(&b.def.id)) {
+                let (loose, spare) = (&mut self.loose, &mut self.spare);
+                Self::dissolve(spare, g, |b| {
                     if take.contains(&b.def.id) {
                         out.push(b);
                     } else {
-                        self.loose.push(b);
+                        loose.push(b);
                     }
-                }
+                });
             } else {
                 kept.push(g);
             }
@@ -223,7 +300,11 @@ impl Engine {
         ))
     }
 
-    fn regroup(&mut self, layout: Vec<Vec<u32>>) -> Result<Reply, EngineError> {
+    fn regroup(
+        &mut self,
+        layout: Vec<Vec<u32>>,
+        copies: Vec<Vec<u32>>,
+    ) -> Result<Reply, EngineError> {
         let mut listed = BTreeSet::new();
         for id in layout.iter().flatten() {
             if !listed.insert(*id) {
@@ -236,37 +317,84 @@ impl Engine {
             let extra: Vec<u32> = held.difference(&listed).copied().collect();
             return Err(EngineError::Layout { missing, extra });
         }
-        let mut layout = layout;
-        for g in &mut layout {
-            g.sort_unstable();
-        }
-        layout.retain(|g| !g.is_empty());
-        layout.sort_by_key(|g| g.first().copied());
-        // Groups whose membership is unchanged are kept as they are (with their
-        // contact search caches); the others are rebuilt from their bodies.
-        let wanted: BTreeSet<&[u32]> = layout.iter().map(Vec::as_slice).collect();
-        let mut keep: BTreeMap<Vec<u32>, Group> = BTreeMap::new();
+        // (members, copies) of each group, sorted; groups by smallest member
+        let mut wanted: Vec<(Vec<u32>, Vec<u32>)> = layout
+            .into_iter()
+            .enumerate()
+            .map(|(k, mut g)| {
+                g.sort_unstable();
+                let mut c = copies.get(k).cloned().unwrap_or_default();
+                c.sort_unstable();
+                c.dedup();
+                c.retain(|id| g.binary_search(id).is_err());
+                (g, c)
+            })
+            .filter(|(g, _)| !g.is_empty())
+            .collect();
+        wanted.sort_by_key(|(g, _)| g.first().copied());
+        // Groups whose membership (copies included) is unchanged are kept as they are
+        // (with their contact search caches); the others are rebuilt from their bodies.
+        let keys: BTreeSet<(&[u32], &[u32])> = wanted
+            .iter()
+            .map(|(g, c)| (g.as_slice(), c.as_slice()))
+            .collect();
+        let mut keep: BTreeMap<(Vec<u32>, Vec<u32>), Group> = BTreeMap::new();
         let mut rest = Vec::new();
         for g in self.groups.drain(..) {
-            let ids: Vec<u32> = g.bodies.iter().map(|b| b.def.id).collect();
-            if wanted.contains(ids.as_slice()) {
-                keep.insert(ids, g);
+            let ids: Vec<u32> = g.owned().map(|b| b.def.id).collect();
+            if keys.contains(&(ids.as_slice(), g.copies.as_slice())) {
+                keep.insert((ids, g.copies.clone()), g);
             } else {
                 rest.push(g);
             }
         }
         self.groups = rest;
         let mut pool = self.pool();
-        let mut groups = Vec::with_capacity(layout.len());
-        for ids in layout {
-            if let Some(g) = keep.remove(&ids) {
+        // a copy is made from any instance held: all are at the same clock, with the
+        // same motion bits (contact forces and energy records are the copy's own)
+        let source = |id: u32,
+                      pool: &BTreeMap<u32, Body>,
+                      spare: &BTreeMap<u32, Body>,
+                      keep: &BTreeMap<(Vec<u32>, Vec<u32>), Group>|
+         -> Result<Body, EngineError> {
+            let b = pool
+                .get(&id)
+                .or_else(|| spare.get(&id))
+                .or_else(|| {
+                    keep.values()
+                        .flat_map(|g| g.bodies.iter())
+                        .find(|b| b.def.id == id)
+                })
+                .ok_or(EngineError::NoCopySource(id))?;
+            if !b.def.kinematic {
+                return Err(EngineError::NotKinematic(id));
+            }
+            Ok(read_only_copy(b))
+        };
+        let mut made: Vec<Vec<Body>> = Vec::with_capacity(wanted.len());
+        for (g, c) in &wanted {
+            if keep.contains_key(&(g.clone(), c.clone())) {
+                made.push(Vec::new());
+                continue;
+            }
+            let copies = c
+                .iter()
+                .map(|&id| source(id, &pool, &self.spare, &keep))
+                .collect::<Result<Vec<Body>, _>>()?;
+            made.push(copies);
+        }
+        let mut groups = Vec::with_capacity(wanted.len());
+        for ((ids, c), copies) in wanted.into_iter().zip(made) {
+            if let Some(g) = keep.remove(&(ids.clone(), c)) {
                 groups.push(g);
                 continue;
             }
             let bodies = ids.iter().filter_map(|id| pool.remove(id)).collect();
-            groups.push(self.new_group(bodies)?);
+            groups.push(self.new_group(bodies, copies)?);
         }
         self.groups = groups;
+        // copies no group asked for are dropped
+        self.spare.clear();
         Ok(Reply::Ack)
     }
 
@@ -275,6 +403,7 @@ impl Engine {
     fn run(
         &mut self,
         f: impl Fn(&mut Group) -> Result<Vec<BodyReport>, Fault> + Sync + Send,
+        kin_nodes: bool,
     ) -> Reply {
         if self.broken {
             return Reply::Error(EngineError::Broken.to_string());
@@ -300,11 +429,19 @@ impl Engine {
             codec_ns: 0,
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
-            let first = g.bodies.first().map_or(0, |b| b.def.id);
+            let first = g.first();
             match r {
                 Ok(reports) => {
                     rep.bodies.extend(reports);
+                    let at = rep.contacts.len();
                     rep.contacts.extend_from_slice(g.contact_stats());
+                    if !kin_nodes {
+                        // per-node forces on kinematic bodies travel only before a frame
+                        for s in &mut rep.contacts[at..] {
+                            s.kin_a.nodes.clear();
+                            s.kin_b.nodes.clear();
+                        }
+                    }
                 }
                 Err(fault) => {
                     self.broken = true;
@@ -329,15 +466,16 @@ impl Engine {
     pub fn contact_stats(&self) -> Vec<PairStats> {
         self.groups
             .iter()
-            .flat_map(|g| g.contact_stats().iter().copied())
+            .flat_map(|g| g.contact_stats().iter().cloned())
             .collect()
     }
 
+    /// The owned bodies (not copies).
     fn held(&self) -> Vec<&Body> {
         let mut out: Vec<&Body> = self
             .groups
             .iter()
-            .flat_map(|g| g.bodies.iter())
+            .flat_map(|g| g.owned())
             .chain(&self.loose)
             .collect();
         out.sort_by_key(|b| b.def.id);
@@ -380,5 +518,19 @@ impl Engine {
             .into_iter()
             .map(|b| (b.def.id, b.state.clone()))
             .collect()
+    }
+}
+
+/// A read-only copy of a kinematic body: its definition and motion, no contact forces of
+/// its own yet, a blank energy record (a copy's energy is never reported).
+fn read_only_copy(b: &Body) -> Body {
+    let mut state = b.state.clone();
+    for f in &mut state.f_contact {
+        *f = crash_core::Vec3::zeros();
+    }
+    state.energy = Default::default();
+    Body {
+        def: b.def.clone(),
+        state,
     }
 }

@@ -30,4 +30,8 @@ pub enum EngineError {
     Broken,
     #[error("{0} bodies were loaded but not placed in a group")]
     Unplaced(usize),
+    #[error("a read-only copy of body {0} was asked for, but it is not kinematic (every degree of freedom prescribed)")]
+    NotKinematic(u32),
+    #[error("regroup asks for a copy of body {0}, but neither the body nor a copy of it is on this worker")]
+    NoCopySource(u32),
 }

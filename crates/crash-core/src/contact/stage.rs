@@ -14,14 +14,67 @@ use super::segment::Segment;
 use super::smooth::nodal_normals;
 use super::surface::Surface;
 use super::sweep::{closing_speed, first_crossing};
-use crate::body::Body;
+use crate::body::{Body, NO_PROGRAM};
 use crate::error::Fault;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::mem::take;
+
+/// What a pair's forces from one pass do to a kinematic body over the next step, kept
+/// so that its work can be counted by the integration's own rule once that step's
+/// length is known: W = hbar f_n . (v_{n-1/2} + v_{n+1/2}) / 2 summed over the nodes,
+/// where v_{n+1/2} is the prescribed velocity (every DOF of a kinematic body is).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct KinLoad {
+    /// Sum over the pushes of f . v, v the node's velocity at the pass [W].
+    pub power: f64,
+    /// Force summed per velocity program of the pushed nodes, sorted by program; nodes
+    /// held at rest (no program) are left out [N].
+    pub by_program: Vec<(u16, Vec3)>,
+    /// The force per node, sorted by node, each summed in hit order [N]: what an output
+    /// frame shows on the kinematic body (the master sums the pairs in pair order);
+    /// workers send it only before a frame (empty otherwise).
+    #[serde(default)]
+    pub nodes: Vec<(u32, Vec3)>,
+}
+
+impl KinLoad {
+    fn push(&mut self, node: u32, f: Vec3, v: Vec3, program: u16) {
+        self.nodes.push((node, f));
+        self.power += f.dot(&v);
+        if program == NO_PROGRAM {
+            return;
+        }
+        match self.by_program.binary_search_by_key(&program, |p| p.0) {
+            Ok(k) => self.by_program[k].1 += f,
+            Err(k) => self.by_program.insert(k, (program, f)),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.power == 0.0 && self.by_program.is_empty() && self.nodes.is_empty()
+    }
+
+    /// Sum the pushes per node (kept in hit order by the stable sort).
+    fn settle_nodes(&mut self) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        self.nodes.sort_by_key(|n| n.0);
+        let mut out: Vec<(u32, Vec3)> = Vec::with_capacity(self.nodes.len());
+        for &(n, f) in &self.nodes {
+            match out.last_mut() {
+                Some(last) if last.0 == n => last.1 += f,
+                _ => out.push((n, f)),
+            }
+        }
+        self.nodes = out;
+    }
+}
 
 /// Contact statistics of one candidate body pair after a force pass.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PairStats {
     /// Body ids, a <= b (a == b: self-contact).
     pub a: u32,
@@ -35,6 +88,13 @@ pub struct PairStats {
     pub normal_force: f64,
     /// Resultant contact force on body a from body b [N].
     pub force_on_a: Vec3,
+    /// This pass's forces on body a (on body b) when it is kinematic (empty otherwise),
+    /// whose own motion never feels contact: per pair, so that the energy ledger
+    /// (`KinematicWork`) counts their work in pair order whatever the grouping.
+    #[serde(default)]
+    pub kin_a: KinLoad,
+    #[serde(default)]
+    pub kin_b: KinLoad,
 }
 
 /// Search caches of a group (R-trees, Verlet reference positions) and the last pass's
@@ -58,7 +118,9 @@ impl ContactState {
 }
 
 /// Candidate pairs among the contact bodies (indices into `bodies`), sorted by ids,
-/// with self pairs for bodies that have self-contact on.
+/// with self pairs for bodies that have self-contact on. Pairs of two kinematic bodies
+/// are left out: contact cannot move either (and such a pair may meet in several
+/// groups as read-only copies: it must not be counted twice).
 fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
     let index: BTreeMap<u32, usize> = bodies
         .iter()
@@ -78,6 +140,7 @@ fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
     pairs
         .into_iter()
         .filter_map(|(a, b)| Some((*index.get(&a)?, *index.get(&b)?)))
+        .filter(|&(a, b)| !(bodies[a].def.kinematic && bodies[b].def.kinematic))
         .collect()
 }
 
@@ -239,6 +302,8 @@ pub fn contact_forces(
             max_penetration_ratio: 0.0,
             normal_force: 0.0,
             force_on_a: Vec3::zeros(),
+            kin_a: KinLoad::default(),
+            kin_b: KinLoad::default(),
         };
         let thin = a.def.section.thickness.min(b.def.section.thickness);
         let segs_b: Vec<Segment> = first
@@ -251,6 +316,8 @@ pub fn contact_forces(
             .collect();
         apply(bodies, ia, ib, &first, &segs_b, &mut st, true);
         apply(bodies, ib, ia, &second, &segs_a, &mut st, false);
+        st.kin_a.settle_nodes();
+        st.kin_b.settle_nodes();
         st.max_penetration_ratio = st.max_penetration / thin;
         state.stats.push(st);
     }
@@ -258,7 +325,8 @@ pub fn contact_forces(
 }
 
 /// Add the pushes of one pass: +f on the node of body `inode`, -w_k f on the segment
-/// nodes of body `iseg`, sequentially in hit order.
+/// nodes of body `iseg`, sequentially in hit order; what lands on a kinematic body goes
+/// into the pair's `KinLoad` too.
 fn apply(
     bodies: &mut [Body],
     inode: usize,
@@ -268,17 +336,39 @@ fn apply(
     st: &mut PairStats,
     node_body_is_a: bool,
 ) {
+    let (kin_node, kin_seg) = (bodies[inode].def.kinematic, bodies[iseg].def.kinematic);
+    // the pair's loads so far (the first pass's), continued by this pass in hit order
+    let (mut l_node, mut l_seg) = if node_body_is_a {
+        (take(&mut st.kin_a), take(&mut st.kin_b))
+    } else {
+        (take(&mut st.kin_b), take(&mut st.kin_a))
+    };
     for (p, seg) in pushes.iter().zip(segs) {
-        bodies[inode].state.f_contact[p.hit.node as usize] += p.force;
-        let fc = &mut bodies[iseg].state.f_contact;
+        let node = p.hit.node as usize;
+        let bn = &mut bodies[inode];
+        bn.state.f_contact[node] += p.force;
+        if kin_node {
+            l_node.push(p.hit.node, p.force, bn.state.v[node], bn.def.program[node]);
+        }
+        let b = &mut bodies[iseg];
         for (q, &n) in seg.nodes().iter().enumerate() {
-            fc[n as usize] -= p.force * p.weights[q];
+            let f = p.force * p.weights[q];
+            b.state.f_contact[n as usize] -= f;
+            if kin_seg {
+                l_seg.push(n, -f, b.state.v[n as usize], b.def.program[n as usize]);
+            }
         }
         st.max_penetration = st.max_penetration.max(p.hit.depth);
         st.normal_force += p.normal_force;
         if inode != iseg {
             st.force_on_a += if node_body_is_a { p.force } else { -p.force };
         }
+    }
+    // (a kinematic body has no self pair: the seg side is the node side only there)
+    if node_body_is_a {
+        (st.kin_a, st.kin_b) = (l_node, l_seg);
+    } else {
+        (st.kin_b, st.kin_a) = (l_node, l_seg);
     }
 }
 

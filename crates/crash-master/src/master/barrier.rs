@@ -4,7 +4,7 @@
 use super::Master;
 use crate::error::MasterError;
 use crate::input::CostModel;
-use crash_core::{BodyReport, Fault};
+use crash_core::{BodyReport, Clock, Fault};
 use crash_link::{Command, GroupTime, LinkError, Reply, StepReport, WorkerLink};
 
 impl<L: WorkerLink> Master<'_, L> {
@@ -129,11 +129,18 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     /// Reports of all workers into one list in body-id order.
-    pub(super) fn gather(&mut self, reps: Vec<StepReport>) -> Result<(), MasterError> {
+    /// Take the reports of the start (`step` None) or of the step of length h from clock
+    /// `step = Some((clock, h))`.
+    pub(super) fn gather(
+        &mut self,
+        reps: Vec<StepReport>,
+        step: Option<(Clock, f64)>,
+    ) -> Result<(), MasterError> {
         // In place, without allocating per step: each report lands in its body's slot;
         // `seen` (kept between steps) marks the slots filled by this step.
         let n = self.info.len();
         self.contacts.clear();
+        self.group_ns.clear();
         if self.reports.len() != n {
             self.reports.clear();
             self.reports
@@ -170,11 +177,20 @@ impl<L: WorkerLink> Master<'_, L> {
             });
         }
         self.contacts.sort_by_key(|c| (c.a, c.b));
+        // the contact work on kinematic bodies, in pair order as the driver adds it
+        if let Some((at, h)) = step {
+            self.kinematic.settle(&at, h);
+        }
+        self.kinematic.add(&self.contacts);
+        self.kinematic.apply(&mut self.reports);
         Ok(())
     }
 
     /// Measured group times shared among members by their estimated cost (EMA).
     fn account(&mut self, groups: &[GroupTime]) {
+        for g in groups {
+            self.group_ns.insert(g.first, g.nanos);
+        }
         if self.opts.cost != CostModel::Measured {
             return;
         }

@@ -17,10 +17,11 @@ use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::stats::RunStats;
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, RunConfig, Vec3};
+use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, KinematicWork, RunConfig, Vec3};
 use crash_link::{LinkError, WorkerLink};
 
 mod barrier;
+mod groups;
 mod output;
 mod placement;
 mod recover;
@@ -40,7 +41,12 @@ struct BodyInfo {
     allowed: f64,
     estimate: f64,
     elements: usize,
+    /// Every DOF prescribed: never joins a group, lends read-only copies.
+    kinematic: bool,
 }
+
+/// One group as a worker holds it: its members and its read-only copies (ids, sorted).
+pub(crate) type GroupLayout = (Vec<u32>, Vec<u32>);
 
 /// Relative tolerance of the end-time and output-time comparisons (as the driver).
 const TIME_EPS: f64 = 1e-12;
@@ -66,8 +72,16 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     cost: Vec<f64>,
     measured: Vec<Option<f64>>,
     worker_of: Vec<Option<usize>>,
-    layout: Vec<Vec<Vec<u32>>>,
+    layout: Vec<Vec<GroupLayout>>,
     meim: Meim,
+    /// Contact work on the kinematic bodies so far (summed in pair order).
+    kinematic: KinematicWork,
+    /// Body names (index = position in the sorted id list), for messages.
+    names: Vec<String>,
+    /// Compute time of each group (by its smallest id) in the last step [ns].
+    group_ns: std::collections::BTreeMap<u32, u64>,
+    /// Step of the last group rows handed to the sink.
+    groups_step: Option<u64>,
     search: PairSearch,
     scene_hash: u64,
     /// The run's one clock.
@@ -79,6 +93,8 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     /// Which reports the current gather has filled (kept to avoid allocating per step).
     seen: Vec<bool>,
     contacts: Vec<PairStats>,
+    /// `contacts` carry the per-node forces on kinematic bodies (the step asked).
+    kin_nodes: bool,
     frames: u64,
     last_frame_step: Option<u64>,
     pub(crate) stats: RunStats,
@@ -127,10 +143,12 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                         + if b.kinematic { 0.0 } else { b.elements as f64 }
                         + if meshes { b.nodes as f64 } else { 0.0 },
                     elements: b.elements,
+                    kinematic: b.kinematic,
                 }
             })
             .collect();
         let n = info.len();
+        let kinematic: Vec<u32> = info.iter().filter(|i| i.kinematic).map(|i| i.id).collect();
         // Verlet skin of the level-i search: the MEIM margin of the widest body
         let skin = sorted
             .iter()
@@ -153,7 +171,16 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             measured: vec![None; n],
             worker_of: vec![None; n],
             layout: Vec::new(),
-            meim: Meim::new(&ids, opts.split_after),
+            meim: Meim::new(&ids, opts.split_after).with_kinematic(&kinematic),
+            kinematic: KinematicWork::new(
+                sorted
+                    .iter()
+                    .filter(|b| b.kinematic)
+                    .map(|b| (b.id, b.programs.clone())),
+            ),
+            names: input.names_by_id(&ids),
+            group_ns: Default::default(),
+            groups_step: None,
             search: PairSearch::new(c.margin, skin),
             info,
             scene_hash: input.scene_hash,
@@ -164,6 +191,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             reports: Vec::with_capacity(n),
             seen: Vec::with_capacity(n),
             contacts: Vec::new(),
+            kin_nodes: false,
             frames: 0,
             last_frame_step: None,
             stats: RunStats::default(),
@@ -176,6 +204,24 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             return Some(i);
         }
         self.info.binary_search_by_key(&id, |b| b.id).ok()
+    }
+
+    fn is_kinematic(&self, id: u32) -> bool {
+        self.index(id).is_some_and(|i| self.info[i].kinematic)
+    }
+
+    fn kinematic_ids(&self) -> Vec<u32> {
+        self.info
+            .iter()
+            .filter(|i| i.kinematic)
+            .map(|i| i.id)
+            .collect()
+    }
+
+    /// A body's name for messages (escaped where it came from a peer: names come from
+    /// the scene the master read itself).
+    fn name(&self, id: u32) -> &str {
+        self.index(id).map_or("?", |i| self.names[i].as_str())
     }
 
     pub(crate) fn links(&self) -> &[L] {

@@ -51,8 +51,18 @@ impl<L: WorkerLink> Master<'_, L> {
                 ));
             }
             // the state hash comes from the bodies as received, whatever the file format
-            for b in bodies {
+            for mut b in bodies {
                 hash.add(b.id, &b.x, &b.v, &b.w);
+                b.placement = self.placement_of(b.id);
+                if self.is_kinematic(b.id) {
+                    match self.kinematic_contact(b.id, b.x.len()) {
+                        Some(f) => b.f_contact = f,
+                        None => tracing::debug!(
+                            "frame at step {step}: no per-node contact forces on kinematic body {}",
+                            b.id
+                        ),
+                    }
+                }
                 sink.frame_body(b).map_err(MasterError::sink)?;
             }
         }
@@ -60,17 +70,50 @@ impl<L: WorkerLink> Master<'_, L> {
         Ok(hash.finish())
     }
 
+    /// Whether an output time is reached at `time` (one rule for the frame and for the
+    /// step before it, which asks for the forces on kinematic bodies).
+    pub(super) fn frame_due(&self, time: f64) -> bool {
+        self.output_interval > 0.0
+            && time >= (self.frames as f64) * self.output_interval * (1.0 - TIME_EPS)
+    }
+
+    /// The contact force on each node of kinematic body `id` from the last pass: the
+    /// pairs' per-node forces summed in pair order (the copies that felt them may sit in
+    /// several groups on several workers). None when the last report did not carry them.
+    fn kinematic_contact(&self, id: u32, nodes: usize) -> Option<Vec<crash_core::Vec3>> {
+        if !self.kin_nodes {
+            return None;
+        }
+        let mut f = vec![crash_core::Vec3::zeros(); nodes];
+        for s in &self.contacts {
+            let sides = [(s.a, &s.kin_a), (s.b, &s.kin_b)];
+            // a self pair has one side (a kinematic body has none at all)
+            for (_, l) in sides
+                .iter()
+                .take(if s.a == s.b { 1 } else { 2 })
+                .filter(|x| x.0 == id)
+            {
+                for &(n, fn_) in &l.nodes {
+                    if let Some(slot) = f.get_mut(n as usize) {
+                        *slot += fn_;
+                    }
+                }
+            }
+        }
+        Some(f)
+    }
+
     /// Frame at the start, whenever an output time is reached, and at the end.
     pub(super) fn output(&mut self, sink: &mut dyn Sink, force: bool) -> Result<(), MasterError> {
         let time = self.clock.time;
-        let due = self.output_interval > 0.0
-            && time >= (self.frames as f64) * self.output_interval * (1.0 - TIME_EPS);
+        let due = self.frame_due(time);
         if !(force || due) || self.last_frame_step == Some(self.clock.step) {
             return Ok(());
         }
         let t = Instant::now();
         let _s = tracing::debug_span!("output").entered();
         self.stats.final_hash = self.stream_frame(sink)?;
+        self.write_groups(sink)?;
         self.last_frame_step = Some(self.clock.step);
         if self.output_interval > 0.0 {
             // the next frame is the first whose time lies beyond now: in closed form, so

@@ -2,7 +2,7 @@
 //! sticky), and migration of the bodies whose group changed worker. A moving body
 //! travels as its state; its definition goes along only to a worker that lacks it.
 
-use super::Master;
+use super::{GroupLayout, Master};
 use crate::assign::assign;
 use crate::error::MasterError;
 use crate::input::CostModel;
@@ -49,8 +49,11 @@ impl<L: WorkerLink> Master<'_, L> {
         changed
     }
 
-    fn owned_groups(&self) -> Vec<Vec<u32>> {
-        self.meim.groups().iter().map(|g| g.to_vec()).collect()
+    /// The MEIM groups with the read-only copies each holds.
+    fn owned_groups(&self) -> Vec<GroupLayout> {
+        (0..self.meim.group_count())
+            .map(|k| (self.meim.group(k).to_vec(), self.meim.copies(k).to_vec()))
+            .collect()
     }
 
     /// Cost per body index under the chosen model.
@@ -76,11 +79,12 @@ impl<L: WorkerLink> Master<'_, L> {
         }
     }
 
-    /// Worker per body index for `groups` (ids).
-    fn place(&self, groups: &[Vec<u32>]) -> Vec<usize> {
+    /// Worker per body index for `groups` (ids; copies cost their owner's worker
+    /// nothing and are not counted: measured costs include them in the group's time).
+    fn place(&self, groups: &[GroupLayout]) -> Vec<usize> {
         let idx: Vec<Vec<usize>> = groups
             .iter()
-            .map(|g| g.iter().filter_map(|&id| self.index(id)).collect())
+            .map(|(g, _)| g.iter().filter_map(|&id| self.index(id)).collect())
             .collect();
         // onto the workers still in the run: assignment sees them as 0..live
         let live: Vec<usize> = (0..self.links.len()).filter(|&w| self.live[w]).collect();
@@ -106,14 +110,49 @@ impl<L: WorkerLink> Master<'_, L> {
         out
     }
 
-    fn layouts(&self, groups: &[Vec<u32>], placement: &[usize]) -> Vec<Vec<Vec<u32>>> {
-        let mut lay: Vec<Vec<Vec<u32>>> = vec![Vec::new(); self.links.len()];
+    fn layouts(&self, groups: &[GroupLayout], placement: &[usize]) -> Vec<Vec<GroupLayout>> {
+        let mut lay: Vec<Vec<GroupLayout>> = vec![Vec::new(); self.links.len()];
         for g in groups {
-            if let Some(i) = g.first().and_then(|&id| self.index(id)) {
+            if let Some(i) = g.0.first().and_then(|&id| self.index(id)) {
                 lay[placement[i]].push(g.clone());
             }
         }
         lay
+    }
+
+    /// The Regroup command of one worker's layout.
+    fn regroup_cmd(layout: &[GroupLayout]) -> Command {
+        Command::Regroup {
+            groups: layout.iter().map(|g| g.0.clone()).collect(),
+            copies: layout.iter().map(|g| g.1.clone()).collect(),
+        }
+    }
+
+    /// Per worker: the kinematic bodies its groups copy that it holds in no form after
+    /// the bodies are on `placement` (neither the body nor a copy in `before`).
+    fn copies_to_send(
+        &self,
+        layout: &[Vec<GroupLayout>],
+        before: &[Vec<GroupLayout>],
+        placement: &[usize],
+    ) -> Vec<Vec<u32>> {
+        layout
+            .iter()
+            .enumerate()
+            .map(|(w, groups)| {
+                let mut need: Vec<u32> = groups.iter().flat_map(|g| g.1.iter().copied()).collect();
+                need.sort_unstable();
+                need.dedup();
+                need.retain(|&id| {
+                    let owned_here = self.index(id).is_some_and(|i| placement[i] == w);
+                    let copied_here = before
+                        .get(w)
+                        .is_some_and(|gs| gs.iter().any(|g| g.1.contains(&id)));
+                    !owned_here && !copied_here
+                });
+                need
+            })
+            .collect()
     }
 
     /// Place the current MEIM groups on workers from scratch (start, resume): the
@@ -144,9 +183,20 @@ impl<L: WorkerLink> Master<'_, L> {
             "Setup",
         )?;
         let at = self.clock;
+        let copies = self.copies_to_send(&self.layout, &[], placement);
         for i in 0..self.info.len() {
-            let load = body(self.info[i].id)?;
+            let id = self.info[i].id;
+            let load = body(id)?;
             let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+            // read-only copies for the other workers' groups that touch it
+            for (w, need) in copies.iter().enumerate() {
+                if need.contains(&id) {
+                    cmds[w].push(Command::LoadCopies {
+                        at,
+                        bodies: vec![load.clone()],
+                    });
+                }
+            }
             cmds[placement[i]].push(Command::Load {
                 at,
                 bodies: vec![load],
@@ -156,7 +206,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let cmds = self
             .layout
             .iter()
-            .map(|l| vec![Command::Regroup(l.clone())])
+            .map(|l| vec![Self::regroup_cmd(l)])
             .collect();
         self.expect_acks(cmds, "Regroup")
     }
@@ -205,30 +255,63 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
+        // kinematic bodies lent (their state copied, before any unload) to workers whose
+        // new groups touch them and that hold them in no form: (lender, id, borrower)
+        let mut lends: Vec<(usize, u32, usize)> = Vec::new();
+        for (w, need) in self
+            .copies_to_send(&layout, &self.layout, &placement)
+            .into_iter()
+            .enumerate()
+        {
+            for id in need {
+                if let Some(from) = self.index(id).and_then(|i| self.worker_of[i]) {
+                    lends.push((from, id, w));
+                }
+            }
+        }
         let mut load: Vec<Vec<BodyLoad>> = (0..nw).map(|_| Vec::new()).collect();
-        if !moves.is_empty() {
-            let cmds = unload
-                .iter()
-                .zip(with_def)
-                // one body per message: each reply stays under MAX_MESSAGE
-                .map(|(ids, with_def)| {
-                    ids.iter()
-                        .map(|&id| Command::Unload {
-                            ids: vec![id],
-                            with_def: if with_def.contains(&id) {
-                                vec![id]
-                            } else {
-                                Vec::new()
-                            },
-                        })
-                        .collect()
-                })
-                .collect();
+        let mut lent: Vec<Vec<BodyLoad>> = (0..nw).map(|_| Vec::new()).collect();
+        if !moves.is_empty() || !lends.is_empty() {
+            let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+            // one body per message: each reply stays under MAX_MESSAGE
+            for &(from, id, to) in &lends {
+                let with_def = if self.links[to].has_definition(id) {
+                    Vec::new()
+                } else {
+                    vec![id]
+                };
+                cmds[from].push(Command::Lend {
+                    ids: vec![id],
+                    with_def,
+                });
+            }
+            for (w, (ids, with_def)) in unload.iter().zip(&with_def).enumerate() {
+                for &id in ids {
+                    cmds[w].push(Command::Unload {
+                        ids: vec![id],
+                        with_def: if with_def.contains(&id) {
+                            vec![id]
+                        } else {
+                            Vec::new()
+                        },
+                    });
+                }
+            }
+            let mut lend_of: Vec<std::collections::VecDeque<usize>> =
+                (0..nw).map(|_| Default::default()).collect();
+            for &(from, _, to) in &lends {
+                lend_of[from].push_back(to);
+            }
             for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
                 for reply in r {
                     let Reply::Unloaded(bodies) = reply else {
                         return Err(self.bad_reply(w, "Unload"));
                     };
+                    // the lends were sent first: their replies come first
+                    if let Some(to) = lend_of[w].pop_front() {
+                        lent[to].extend(bodies);
+                        continue;
+                    }
                     for b in bodies {
                         let Some(i) = self.index(b.id) else {
                             return Err(self.bad_reply(w, "Unload"));
@@ -240,15 +323,21 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let at = self.clock;
         let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
-        for (w, bodies) in load.into_iter().enumerate() {
+        for (w, (bodies, copies)) in load.into_iter().zip(lent).enumerate() {
             for b in bodies {
                 cmds[w].push(Command::Load {
                     at,
                     bodies: vec![b],
                 });
             }
+            for b in copies {
+                cmds[w].push(Command::LoadCopies {
+                    at,
+                    bodies: vec![b],
+                });
+            }
             if layout[w] != self.layout[w] || !cmds[w].is_empty() || !unload[w].is_empty() {
-                cmds[w].push(Command::Regroup(layout[w].clone()));
+                cmds[w].push(Self::regroup_cmd(&layout[w]));
             }
         }
         for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
@@ -263,6 +352,7 @@ impl<L: WorkerLink> Master<'_, L> {
             tracing::debug!("step {}: {} bodies migrated", self.clock.step, moves.len());
         }
         self.stats.migrations.extend(moves);
+        self.log_group_changes(&self.layout, &layout);
         self.layout = layout;
         Ok(())
     }

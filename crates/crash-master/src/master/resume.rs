@@ -48,6 +48,7 @@ impl<L: WorkerLink> Master<'_, L> {
             next_dt: self.next_dt,
             dt0: self.dt0,
             ledger: self.ledger.clone(),
+            kinematic_work: self.kinematic.clone(),
             edges: self.meim.edge_states(),
             frames: self.frames,
             last_frame_step: self.last_frame_step,
@@ -65,7 +66,9 @@ impl<L: WorkerLink> Master<'_, L> {
         self.next_dt = ck.next_dt;
         self.dt0 = ck.dt0;
         self.ledger = ck.ledger.clone();
-        self.meim = Meim::restore(&ids, self.opts.split_after, &ck.edges);
+        self.kinematic = ck.kinematic_work.clone();
+        self.meim = Meim::restore(&ids, self.opts.split_after, &ck.edges)
+            .with_kinematic(&self.kinematic_ids());
         self.search = PairSearch::new(self.contact.margin, self.skin);
         self.frames = ck.frames;
         self.last_frame_step = ck.last_frame_step;

@@ -49,7 +49,8 @@ impl<L: WorkerLink> Master<'_, L> {
         loaded?;
         let reports = self.reports_of(|| Command::Start, "Start")?;
         self.stats.stages.migration_ns += ns(t1);
-        self.gather(reports)?;
+        self.kin_nodes = true; // the start always carries them
+        self.gather(reports, None)?;
         let energy = self
             .ledger
             .update(EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)));
@@ -89,9 +90,20 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let t0 = Instant::now();
         let at = self.clock;
+        // a frame follows this step: the forces on kinematic bodies come with the reports
+        let after = at.after(h).time;
+        let kin_nodes = self.frame_due(after) || after >= self.cfg.end_time * (1.0 - TIME_EPS);
+        self.kin_nodes = kin_nodes;
         let reps = {
             let _s = tracing::debug_span!("barrier").entered();
-            self.reports_of(|| Command::Step { at, dt: h }, "Step")?
+            self.reports_of(
+                || Command::Step {
+                    at,
+                    dt: h,
+                    kin_nodes,
+                },
+                "Step",
+            )?
         };
         let wall = ns(t0);
         let slowest = reps
@@ -101,6 +113,11 @@ impl<L: WorkerLink> Master<'_, L> {
             .unwrap_or(0)
             .min(wall);
         self.stats.stages.compute_ns += slowest;
+        let per = &mut self.stats.worker_compute_ns;
+        per.resize(per.len().max(reps.len()), 0);
+        for (t, r) in per.iter_mut().zip(&reps) {
+            *t += r.compute_ns;
+        }
         self.stats.stages.barrier_ns += wall - slowest;
         let master_codec: u64 = self.links.iter_mut().map(|l| l.take_codec_ns()).sum();
         let worker_codec = reps.iter().map(|r| r.codec_ns).max().unwrap_or(0);
@@ -111,7 +128,7 @@ impl<L: WorkerLink> Master<'_, L> {
 
         let t1 = Instant::now();
         let _s = tracing::debug_span!("meim").entered();
-        self.gather(reps)?;
+        self.gather(reps, Some((at, h)))?;
         let energy = self.ledger.record(
             EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)),
             !short,
@@ -141,6 +158,9 @@ impl<L: WorkerLink> Master<'_, L> {
             let t2 = Instant::now();
             self.migrate(changed)?;
             self.stats.stages.migration_ns += ns(t2);
+        }
+        if changed {
+            self.write_groups(sink)?;
         }
         self.output(sink, false)
     }

@@ -1,0 +1,122 @@
+//! Groups shown to users: rows for groups.csv (who computes what, how long it took),
+//! the worker and group of every body in the frames, and log lines when groups merge,
+//! split or move, naming bodies by name.
+
+use super::{GroupLayout, Master};
+use crate::error::MasterError;
+use crate::sink::{GroupRow, Sink};
+use crash_io::Placement;
+use crash_link::{escape_peer, WorkerLink};
+use std::collections::BTreeMap;
+
+impl<L: WorkerLink> Master<'_, L> {
+    /// The current MEIM groups as rows.
+    pub(super) fn group_rows(&self) -> Vec<GroupRow> {
+        self.meim
+            .groups()
+            .iter()
+            .map(|g| {
+                let idx: Vec<usize> = g.iter().filter_map(|&id| self.index(id)).collect();
+                let first = g.first().copied().unwrap_or(0);
+                GroupRow {
+                    group: first,
+                    bodies: g.iter().map(|&id| self.name(id).to_string()).collect(),
+                    worker: idx.first().and_then(|&i| self.worker_of[i]).unwrap_or(0),
+                    elements: idx.iter().map(|&i| self.info[i].elements).sum(),
+                    step_ns: self.group_ns.get(&first).copied().unwrap_or(0),
+                }
+            })
+            .collect()
+    }
+
+    /// Hand the group rows to the sink (once per step).
+    pub(super) fn write_groups(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        if self.groups_step == Some(self.clock.step) {
+            return Ok(());
+        }
+        self.groups_step = Some(self.clock.step);
+        let rows = self.group_rows();
+        sink.groups(self.clock.step, self.clock.time, &rows)
+            .map_err(MasterError::sink)
+    }
+
+    /// The worker and group of body `id` now, for its frame.
+    pub(super) fn placement_of(&self, id: u32) -> Option<Placement> {
+        let i = self.index(id)?;
+        let k = self.meim.group_of(id)?;
+        Some(Placement {
+            worker: self.worker_of[i]? as u32,
+            group: self.meim.group(k).first().copied()?,
+        })
+    }
+
+    fn names_of(&self, ids: &[u32]) -> String {
+        let names: Vec<String> = ids.iter().map(|&id| escape_peer(self.name(id))).collect();
+        format!("[{}]", names.join(", "))
+    }
+
+    /// Log (tracing info) the merges, splits and moves from the layout `old` to `new`.
+    pub(super) fn log_group_changes(&self, old: &[Vec<GroupLayout>], new: &[Vec<GroupLayout>]) {
+        let groups = |lay: &[Vec<GroupLayout>]| -> Vec<(Vec<u32>, usize)> {
+            let mut out: Vec<(Vec<u32>, usize)> = lay
+                .iter()
+                .enumerate()
+                .flat_map(|(w, gs)| gs.iter().map(move |g| (g.0.clone(), w)))
+                .collect();
+            out.sort();
+            out
+        };
+        let (old, new) = (groups(old), groups(new));
+        let of = |gs: &[(Vec<u32>, usize)]| -> BTreeMap<u32, usize> {
+            gs.iter()
+                .enumerate()
+                .flat_map(|(k, g)| g.0.iter().map(move |&id| (id, k)))
+                .collect()
+        };
+        let (old_of, new_of) = (of(&old), of(&new));
+        let step = self.clock.step;
+        for (members, w) in &new {
+            let mut from: Vec<usize> = members
+                .iter()
+                .filter_map(|id| old_of.get(id).copied())
+                .collect();
+            from.sort_unstable();
+            from.dedup();
+            if from.len() > 1 {
+                let parts: Vec<String> = from.iter().map(|&k| self.names_of(&old[k].0)).collect();
+                tracing::info!(
+                    "step {step}: groups {} merged into {} on worker {w}",
+                    parts.join(" + "),
+                    self.names_of(members)
+                );
+            } else if let Some(&k) = from.first() {
+                if old[k].0 == *members && old[k].1 != *w {
+                    tracing::info!(
+                        "step {step}: group {} moved from worker {} to worker {w}",
+                        self.names_of(members),
+                        old[k].1
+                    );
+                }
+            }
+        }
+        for (members, _) in &old {
+            let mut to: Vec<usize> = members
+                .iter()
+                .filter_map(|id| new_of.get(id).copied())
+                .collect();
+            to.sort_unstable();
+            to.dedup();
+            if to.len() > 1 {
+                let parts: Vec<String> = to
+                    .iter()
+                    .map(|&k| format!("{} (worker {})", self.names_of(&new[k].0), new[k].1))
+                    .collect();
+                tracing::info!(
+                    "step {step}: group {} split into {}",
+                    self.names_of(members),
+                    parts.join(" + ")
+                );
+            }
+        }
+    }
+}
