@@ -41,6 +41,9 @@ pub struct WorkerOptions {
     pub host: String,
     /// Sleep this long before computing each step (tests of a slow but alive worker).
     pub step_delay: Duration,
+    /// Change each reply before it is sent (tests of the master's plausibility checks:
+    /// a worker holding the secret that lies; tests/tests/hardening.rs).
+    pub tamper: Option<fn(&mut Reply)>,
 }
 
 impl WorkerOptions {
@@ -53,6 +56,7 @@ impl WorkerOptions {
             secret: None,
             host: std::env::var("HOSTNAME").unwrap_or_default(),
             step_delay: Duration::ZERO,
+            tamper: None,
         }
     }
 }
@@ -404,6 +408,9 @@ fn serve(
         };
         if let Reply::Report(rep) = &mut reply {
             rep.codec_ns = decode_ns + last_encode_ns;
+        }
+        if let Some(tamper) = opts.tamper {
+            tamper(&mut reply);
         }
         let t1 = Instant::now();
         let reply = reply_to_pb(&reply);
