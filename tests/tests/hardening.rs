@@ -104,3 +104,63 @@ fn a_worker_reporting_negative_kinetic_energy_is_dropped_and_the_run_ends_with_t
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_file(&secret_file);
 }
+
+/// `crash run` with these arguments and environment; (success, stderr).
+fn crash_run(args: &[&str], env: &[(&str, &str)]) -> (bool, String) {
+    let mut p =
+        crash_tests::procs::Proc::spawn_env("crash", &crash_tests::procs::bin("crash"), args, env);
+    let ok = p.wait(TIMEOUT).success();
+    (ok, p.log())
+}
+
+#[test]
+fn an_edited_keyed_restart_file_is_refused_naming_it_and_a_keyed_one_needs_the_secret() {
+    let out = out_dir("hardening-keyed");
+    let scene = test_scene("two-spheres-tiny.toml");
+    let (scene, dir) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let key = [("CRASH_SECRET", SECRET)];
+    let base = ["run", scene, "--out", dir, "--quiet", "--no-pictures"];
+    let mut first = base.to_vec();
+    first.extend(["--end-time", "0.0004", "--checkpoint-every", "50"]);
+    let (ok, log) = crash_run(&first, &key);
+    assert!(ok, "{log}");
+    let ckp = out.join(crash_master::RESTART_FILE);
+    let good = std::fs::read(&ckp).unwrap();
+    assert_eq!(
+        &good[..8],
+        b"CRASHCKM",
+        "a secret is set: the restart file is keyed"
+    );
+    let ckp_s = ckp.to_str().unwrap();
+    let mut again = base.to_vec();
+    again.extend(["--end-time", "0.0006", "--restart", ckp_s]);
+
+    // without the secret: refused, saying it is keyed
+    let (ok, log) = crash_run(&again, &[]);
+    assert!(
+        !ok && log.contains("restart.ckp") && log.contains("is keyed"),
+        "{log}"
+    );
+
+    // one byte of the payload edited, its plain checksum recomputed: refused by the MAC
+    let header = 8 + 4 + 8 + 8 + 32;
+    let mut bad = good.clone();
+    let k = header + (bad.len() - header) / 3;
+    bad[k] ^= 0x10;
+    let mut h = crash_core::hash::Fnv::default();
+    h.bytes(&bad[header..]);
+    bad[20..28].copy_from_slice(&h.finish().to_le_bytes());
+    std::fs::write(&ckp, &bad).unwrap();
+    let (ok, log) = crash_run(&again, &key);
+    assert!(
+        !ok && log.contains(ckp_s)
+            && log.contains("was edited or written under another shared secret"),
+        "{log}"
+    );
+
+    // the file as written continues with the secret
+    std::fs::write(&ckp, &good).unwrap();
+    let (ok, log) = crash_run(&again, &key);
+    assert!(ok, "{log}");
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -31,7 +31,7 @@ pub mod stop;
 pub use checkpoint::MasterCheckpoint;
 pub use error::MasterError;
 pub use file_sink::FileSink;
-pub use file_sink::{frame_format, read_restart, RestartFile, RESTART_FILE};
+pub use file_sink::{frame_format, read_restart, read_restart_keyed, RestartFile, RESTART_FILE};
 pub use input::{BodySource, CostModel, RunInput, RunOptions, RunSize};
 pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions};

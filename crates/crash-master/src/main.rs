@@ -4,7 +4,7 @@ use anyhow::Context;
 use clap::Parser;
 use crash_link::{Secret, SECRET_ENV};
 use crash_master::{
-    read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, MasterError,
+    read_restart_keyed, resume_remote, run_remote, Cluster, CostModel, FileSink, MasterError,
     RemoteOptions, RunInput, RunOptions, RESTART_FILE,
 };
 use std::net::SocketAddr;
@@ -130,9 +130,12 @@ fn run(args: Args) -> anyhow::Result<()> {
         .map(|(i, b)| (i as u32, b.name.clone()))
         .collect();
     let input = RunInput::from_plan(scene, plan);
+    let secret = Secret::configured(args.secret_file.as_deref())?;
+    // restart files carry a MAC under a key from the secret (docs/reliability.md)
+    let key = secret.as_ref().map(Secret::checkpoint_key);
     let restart = match &args.resume {
         Some(path) => {
-            let r = read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let r = read_restart_keyed(path, key.as_ref()).map_err(|e| anyhow::anyhow!("{e}"))?;
             // before the run directory is reopened (that drops rows after the checkpoint)
             r.master
                 .check_continues(input.scene_hash, input.config.end_time)
@@ -149,11 +152,11 @@ fn run(args: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
         .with_checkpoints(args.out.join(RESTART_FILE))
+        .with_checkpoint_key(key)
         .with_energy_limit(energy_limit)
         .with_frame_format(frame_format)
         .with_body_names(names)
         .with_echo(true);
-    let secret = Secret::configured(args.secret_file.as_deref())?;
     if let Some(p) = args.secret_file.as_deref() {
         if crash_link::auth::readable_by_others(p) {
             eprintln!(
