@@ -61,17 +61,12 @@ fn edit() -> impl Strategy<Value = Edit> {
     prop_oneof![
         (pos, 0u8..8).prop_map(|(at, bit)| Edit::Flip { at, bit }),
         (pos, any::<u8>()).prop_map(|(at, byte)| Edit::Set { at, byte }),
-        (pos, proptest::sample::select(SPECIAL))
-            .prop_map(|(at, byte)| Edit::Set { at, byte }),
+        (pos, proptest::sample::select(SPECIAL)).prop_map(|(at, byte)| Edit::Set { at, byte }),
         (pos, proptest::collection::vec(any::<u8>(), 1..16))
             .prop_map(|(at, bytes)| Edit::Insert { at, bytes }),
         (pos, 1usize..64).prop_map(|(at, len)| Edit::Delete { at, len }),
         pos.prop_map(|at| Edit::Truncate { at }),
-        (pos, 1usize..200, pos).prop_map(|(from, len, to)| Edit::Duplicate {
-            from,
-            len,
-            to
-        }),
+        (pos, 1usize..200, pos).prop_map(|(from, len, to)| Edit::Duplicate { from, len, to }),
     ]
 }
 

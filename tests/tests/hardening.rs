@@ -164,3 +164,71 @@ fn an_edited_keyed_restart_file_is_refused_naming_it_and_a_keyed_one_needs_the_s
     assert!(ok, "{log}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `crash-master cert --out DIR --host 127.0.0.1 --host localhost`; the pair's paths.
+fn make_cert(dir: &Path) -> (String, String) {
+    let mut p = crash_tests::procs::Proc::spawn(
+        "crash-master cert",
+        &crash_tests::procs::master_bin(),
+        &[
+            "cert",
+            "--out",
+            dir.to_str().unwrap(),
+            "--host",
+            "127.0.0.1",
+            "--host",
+            "localhost",
+        ],
+    );
+    assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    let s = |f: &str| dir.join(f).to_str().unwrap().to_string();
+    (s("cert.pem"), s("key.pem"))
+}
+
+#[test]
+fn a_tls_run_gives_the_plain_hash_and_a_worker_trusting_another_ca_is_refused() {
+    let scene = test_scene("two-spheres-tiny.toml");
+    // plain
+    let plain = out_dir("hardening-plain");
+    let (mut m, url) = master(&scene, 1, &plain, &["--estimated-costs"]);
+    let mut w = worker(&url, 1, &[]);
+    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
+    assert!(w.wait(Duration::from_secs(30)).success(), "{}", w.log());
+    let expected = final_hash(&plain);
+
+    let out = out_dir("hardening-tls");
+    let (cert, key) = make_cert(&out.join("pki"));
+    let (other, _) = make_cert(&out.join("other-pki"));
+    let (mut m, url) = master(
+        &scene,
+        1,
+        &out.join("run"),
+        &["--estimated-costs", "--tls-cert", &cert, "--tls-key", &key],
+    );
+    let url = url.replacen("http://", "https://", 1);
+    // trusts another certificate: refused at the TLS handshake, at once, saying why
+    let mut wrong = worker(&url, 1, &["--tls-ca", &other]);
+    assert!(!wrong.wait(Duration::from_secs(30)).success());
+    assert!(
+        wrong.log().contains("TLS with the master at")
+            && wrong
+                .log()
+                .contains("must be signed by the --tls-ca certificate"),
+        "{}",
+        wrong.log()
+    );
+    // plain text to a TLS master: no session either
+    let mut clear = worker(
+        &url.replacen("https://", "http://", 1),
+        1,
+        &["--connect-timeout", "2"],
+    );
+    assert!(!clear.wait(Duration::from_secs(30)).success());
+    // the right CA: the run, to the plain run's hash
+    let mut w = worker(&url, 1, &["--tls-ca", &cert]);
+    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
+    assert!(w.wait(Duration::from_secs(30)).success(), "{}", w.log());
+    assert_eq!(final_hash(&out.join("run")), expected);
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&plain);
+}
