@@ -13,5 +13,6 @@
 #![allow(clippy::unwrap_used)]
 
 pub mod fixtures;
+pub mod mutate;
 pub mod procs;
 pub mod runs;

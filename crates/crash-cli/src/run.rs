@@ -9,7 +9,7 @@ use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
 use crash_io::FrameBody;
 use crash_master::{
-    read_restart, resume_with, run_with, FileSink, MasterCheckpoint, MasterError, RunInput,
+    read_restart_keyed, resume_with, run_with, FileSink, MasterCheckpoint, MasterError, RunInput,
     RunOptions, RunStats, Sink, SinkError, RESTART_FILE,
 };
 use crash_worker::LocalWorker;
@@ -50,6 +50,10 @@ pub struct RunArgs {
     /// checkpoint are replaced).
     #[arg(long, value_name = "FILE")]
     pub restart: Option<PathBuf>,
+    /// Key restart files with the shared secret in this file (else CRASH_SECRET, if
+    /// set): they are written with a MAC, and read only when it holds.
+    #[arg(long, value_name = "PATH")]
+    pub secret_file: Option<PathBuf>,
     /// Keyword decks: run contacts that have friction frictionless (a note says so)
     /// instead of refusing them.
     #[arg(long)]
@@ -181,9 +185,10 @@ fn load_restart(
     scene_hash: u64,
     end_time: f64,
     args: &RunArgs,
+    key: Option<&crash_io::CheckpointKey>,
 ) -> anyhow::Result<crash_master::RestartFile> {
-    let r =
-        read_restart(path).with_context(|| format!("cannot restart from {}", path.display()))?;
+    let r = read_restart_keyed(path, key)
+        .with_context(|| format!("cannot restart from {}", path.display()))?;
     if r.master.scene_hash != scene_hash {
         anyhow::bail!(
             "cannot restart from {}: it was written by a run of another scene (scene hash {:016x}; {} has {:016x}); restart with the scene file of the original run",
@@ -220,10 +225,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     }
     let energy_limit = built.energy_limit;
     let frame_format = crash_master::frame_format(&built.outputs);
+    let secret = crash_link::Secret::configured(args.secret_file.as_deref())?;
+    let key = secret.as_ref().map(crash_link::Secret::checkpoint_key);
     let restart = match &args.restart {
         Some(path) => Some((
             path,
-            load_restart(path, built.scene_hash, built.end_time, args)?,
+            load_restart(path, built.scene_hash, built.end_time, args, key.as_ref())?,
         )),
         None => None,
     };
@@ -257,6 +264,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let simd = crash_core::element::simd::path_name();
     let files = files
         .with_checkpoints(out.join(RESTART_FILE))
+        .with_checkpoint_key(key)
         .with_simd_path(simd)
         .with_energy_limit(energy_limit)
         .with_frame_format(frame_format)

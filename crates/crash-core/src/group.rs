@@ -65,6 +65,35 @@ pub struct Group {
     pub copies: Vec<u32>,
 }
 
+/// An energy or a stable time step that overflowed is a blow-up of this body, reported
+/// here as a fault: a master then takes any non-finite number in a report for a
+/// worker's lie (crash-master `plausible.rs`), never for physics.
+fn finite_reports(out: &[BodyReport], step: u64) -> Result<(), Fault> {
+    for r in out {
+        let e = &r.energy;
+        let bad = [
+            ("kinetic energy", e.kinetic),
+            ("internal energy", e.internal),
+            ("hourglass energy", e.hourglass),
+            ("contact energy", e.contact),
+            ("damping energy", e.damping),
+            ("external work", e.external),
+            ("stable time step", r.stable_dt),
+        ]
+        .into_iter()
+        .find(|(what, v)| v.is_nan() || (v.is_infinite() && *what != "stable time step"));
+        if let Some((what, _)) = bad {
+            return Err(Fault::NonFinite {
+                step,
+                body: r.id,
+                place: format!("element {}", r.hot_element),
+                what,
+            });
+        }
+    }
+    Ok(())
+}
+
 fn report(b: &Body, f: &ForceSums, lo: Vec3, hi: Vec3, max_move: f64) -> BodyReport {
     BodyReport {
         id: b.def.id,
@@ -162,6 +191,7 @@ impl Group {
             out.push(report(b, &f, lo, hi, 0.0));
         }
         self.contact_pass(&mut out, 0.0, 0)?;
+        finite_reports(&out, 0)?;
         Ok(self.owned_reports(out))
     }
 
@@ -182,6 +212,7 @@ impl Group {
             out.push(report(b, &f, s.lo, s.hi, s.max_move));
         }
         self.contact_pass(&mut out, h, step)?;
+        finite_reports(&out, step)?;
         Ok(self.owned_reports(out))
     }
 }

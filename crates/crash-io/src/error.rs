@@ -29,6 +29,13 @@ pub enum IoError {
     },
     #[error("{path}: checkpoint is corrupt (checksum mismatch)")]
     Checksum { path: PathBuf },
+    /// The keyed MAC does not hold: edited, or written under another secret.
+    #[error("{path}: checkpoint was edited or written under another shared secret (its keyed MAC does not match this secret); refusing to use it")]
+    Mac { path: PathBuf },
+    #[error("{path}: checkpoint is keyed (written with a shared secret): give the same secret (--secret-file or CRASH_SECRET) to read it")]
+    Keyed { path: PathBuf },
+    #[error("{path}: checkpoint carries no keyed MAC but a shared secret is set: it cannot be told from an edited one; read it without the secret if you trust the file")]
+    Unkeyed { path: PathBuf },
     #[error("{path}: {source}")]
     Encode {
         path: PathBuf,

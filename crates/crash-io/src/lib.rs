@@ -17,7 +17,10 @@ pub mod vtu;
 pub mod vtu_encode;
 pub mod vtu_read;
 
-pub use checkpoint::{read_checkpoint, write_checkpoint};
+pub use checkpoint::{
+    decode_checkpoint, read_checkpoint, read_checkpoint_keyed, write_checkpoint,
+    write_checkpoint_keyed, CheckpointKey,
+};
 pub use error::IoError;
 pub use frame::{Frame, FrameBody, Placement};
 pub use frame_writer::BackgroundSeries;

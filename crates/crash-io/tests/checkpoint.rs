@@ -98,3 +98,59 @@ fn damaged_checkpoints_are_refused_with_the_file_named() {
     std::fs::write(&path, &good).expect("restore");
     assert!(read_checkpoint::<(Clock, Group)>(&path).is_ok());
 }
+
+/// FNV-1a 64 as the checkpoint header holds it (what an editor would recompute).
+fn fnv(b: &[u8]) -> u64 {
+    let mut h = crash_core::hash::Fnv::default();
+    h.bytes(b);
+    h.finish()
+}
+
+#[test]
+fn an_edited_keyed_checkpoint_with_its_checksum_recomputed_is_refused_by_its_mac() {
+    use crash_io::{read_checkpoint_keyed, write_checkpoint_keyed, CheckpointKey};
+    let dir = test_dir("checkpoint_keyed");
+    let path = dir.join("keyed.ckp");
+    let key = CheckpointKey([7; 32]);
+    let value = stepped_group(2);
+    write_checkpoint_keyed(&path, &value, Some(&key)).expect("write");
+    let good = std::fs::read(&path).expect("bytes");
+    let back: (Clock, Group) = read_checkpoint_keyed(&path, Some(&key)).expect("read");
+    assert_eq!(
+        checkpoint_payload(&back).expect("payload"),
+        checkpoint_payload(&value).expect("payload")
+    );
+    let named = |e: &IoError| e.to_string().contains("keyed.ckp");
+
+    // one payload byte changed and the plain checksum made to fit again
+    let header = 8 + 4 + 8 + 8 + 32;
+    let mut bad = good.clone();
+    let k = header + (bad.len() - header) / 2;
+    bad[k] ^= 0x01;
+    let sum = fnv(&bad[header..]);
+    bad[20..28].copy_from_slice(&sum.to_le_bytes());
+    std::fs::write(&path, &bad).expect("edit");
+    let e = read_checkpoint_keyed::<(Clock, Group)>(&path, Some(&key)).expect_err("edited");
+    assert!(matches!(e, IoError::Mac { .. }) && named(&e), "{e}");
+
+    // the right file under another secret's key: refused the same way
+    std::fs::write(&path, &good).expect("restore");
+    let other = CheckpointKey([8; 32]);
+    let e = read_checkpoint_keyed::<(Clock, Group)>(&path, Some(&other)).expect_err("other");
+    assert!(matches!(e, IoError::Mac { .. }), "{e}");
+
+    // keyed, read without the secret: refused, saying what to give
+    let e = read_checkpoint::<(Clock, Group)>(&path).expect_err("no key");
+    assert!(
+        matches!(e, IoError::Keyed { .. }) && named(&e) && e.to_string().contains("CRASH_SECRET"),
+        "{e}"
+    );
+
+    // an unkeyed file while a secret is set: refused (else a stripped MAC would pass)
+    let plain = dir.join("plain.ckp");
+    write_checkpoint(&plain, &value).expect("write plain");
+    let e = read_checkpoint_keyed::<(Clock, Group)>(&plain, Some(&key)).expect_err("unkeyed");
+    assert!(matches!(e, IoError::Unkeyed { .. }), "{e}");
+    // and it still reads without a secret
+    assert!(read_checkpoint::<(Clock, Group)>(&plain).is_ok());
+}

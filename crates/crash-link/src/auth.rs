@@ -19,6 +19,8 @@ pub const PROOF_LEN: usize = 32;
 pub const MIN_SECRET_LEN: usize = 16;
 /// Separates this use of the secret from any other.
 const DOMAIN: &[u8] = b"crash-hello-v3\0";
+/// Separates the checkpoint key from the handshake's use of the secret.
+const CHECKPOINT_DOMAIN: &[u8] = b"crash-checkpoint-key-v1\0";
 
 type HmacSha256 = Hmac<Sha256>;
 
@@ -88,6 +90,17 @@ impl Secret {
             }
             _ => Ok(None),
         }
+    }
+
+    /// The key of checkpoint MACs: HMAC-SHA256(secret, CHECKPOINT_DOMAIN), so a
+    /// checkpoint's MAC and a Hello proof are never computed under the same key.
+    pub fn checkpoint_key(&self) -> crash_io::CheckpointKey {
+        let mut m = match HmacSha256::new_from_slice(&self.0) {
+            Ok(m) => m,
+            Err(_) => unreachable!("HMAC accepts any key length"),
+        };
+        m.update(CHECKPOINT_DOMAIN);
+        crash_io::CheckpointKey(m.finalize().into_bytes().into())
     }
 
     fn mac(&self, nonce: &[u8], h: &HelloFields<'_>) -> HmacSha256 {

@@ -24,6 +24,11 @@ pub enum LinkError {
     /// The worker could not carry out a command (its own words).
     #[error("refused a command: {0}")]
     Refused(String),
+    /// The worker reported what cannot be true (a non-finite value, a body it does not
+    /// hold, a box inside out, ...): it is dropped as a lost one would be, since
+    /// nothing it says can be trusted any more.
+    #[error("reported what cannot be true: {0}")]
+    Implausible(String),
 }
 
 pub trait WorkerLink {
@@ -53,12 +58,15 @@ pub trait WorkerLink {
 }
 
 impl LinkError {
-    /// The worker is gone or frozen (as opposed to a worker that answered wrongly):
-    /// the run can continue without it.
+    /// The worker is gone, frozen or caught reporting the impossible (as opposed to a
+    /// worker that answered a command wrongly): the run can continue without it.
     pub fn is_loss(&self) -> bool {
         matches!(
             self,
-            LinkError::Lost(_) | LinkError::Timeout { .. } | LinkError::Silent { .. }
+            LinkError::Lost(_)
+                | LinkError::Timeout { .. }
+                | LinkError::Silent { .. }
+                | LinkError::Implausible(_)
         )
     }
 }

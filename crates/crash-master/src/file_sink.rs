@@ -12,9 +12,9 @@ use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
 use crash_io::summary::{penetration_message, PENETRATION_LIMIT};
 use crash_io::{
-    hash_hex, write_summary, BackgroundSeries, ContactHistory, ContactRow, EnergyHistory,
-    FrameBody, Indicators, SeriesWriter, Summary, VtuFormat, Warning, WarningKind, CONTACTS_CSV,
-    ENERGY_CSV, SUMMARY_JSON,
+    hash_hex, write_summary, BackgroundSeries, CheckpointKey, ContactHistory, ContactRow,
+    EnergyHistory, FrameBody, Indicators, SeriesWriter, Summary, VtuFormat, Warning, WarningKind,
+    CONTACTS_CSV, ENERGY_CSV, SUMMARY_JSON,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -94,9 +94,18 @@ pub fn frame_format(o: &crash_scene::outputs::Outputs) -> VtuFormat {
 }
 
 /// Read a restart file (errors name the file: missing, not a checkpoint, truncated,
-/// corrupt, other version).
+/// corrupt, other version, keyed).
 pub fn read_restart(path: &Path) -> Result<RestartFile, crash_io::IoError> {
     crash_io::read_checkpoint(path)
+}
+
+/// Read a restart file; with `key` (a shared secret is set), only a keyed one whose
+/// MAC holds (an edited file is refused, naming it).
+pub fn read_restart_keyed(
+    path: &Path,
+    key: Option<&CheckpointKey>,
+) -> Result<RestartFile, crash_io::IoError> {
+    crash_io::read_checkpoint_keyed(path, key)
 }
 
 #[derive(Debug)]
@@ -123,6 +132,8 @@ pub struct FileSink {
     summary: Summary,
     /// Where checkpoints go (None: they are ignored).
     restart: Option<PathBuf>,
+    /// Their MAC key (a shared secret is set).
+    key: Option<CheckpointKey>,
     /// What a rollback returns to: the indicators and warnings at the last checkpoint
     /// kept in memory.
     mark: Option<(Indicators, Vec<Warning>)>,
@@ -152,6 +163,7 @@ impl FileSink {
             names: BTreeMap::new(),
             summary: Self::summary(scene, scene_hash, size),
             restart: None,
+            key: None,
             mark: None,
         })
     }
@@ -191,6 +203,7 @@ impl FileSink {
             names: BTreeMap::new(),
             summary: Self::summary(scene, scene_hash, size),
             restart: None,
+            key: None,
             mark: None,
         })
     }
@@ -210,6 +223,12 @@ impl FileSink {
     /// Record the element kernels' instruction-set path in summary.json.
     pub fn with_simd_path(mut self, path: &str) -> Self {
         self.summary.simd_path = path.to_string();
+        self
+    }
+
+    /// Key every checkpoint with this MAC key (from the shared secret).
+    pub fn with_checkpoint_key(mut self, key: Option<CheckpointKey>) -> Self {
+        self.key = key;
         self
     }
 
@@ -345,13 +364,14 @@ impl Sink for FileSink {
         self.energy.flush()?;
         self.contacts.flush()?;
         self.groups.flush()?;
-        crash_io::write_checkpoint(
+        crash_io::write_checkpoint_keyed(
             path,
             &RestartRef {
                 master: state,
                 indicators: &self.indicators,
                 warnings: &self.warnings,
             },
+            self.key.as_ref(),
         )?;
         Ok(())
     }

@@ -281,9 +281,17 @@ impl http_body::Body for LimitBody {
     }
 }
 
+/// The connection of a request, over plain TCP or TLS (whose info wraps it).
+pub fn conn_info(ext: &http::Extensions) -> Option<ConnInfo> {
+    ext.get::<ConnInfo>().cloned().or_else(|| {
+        ext.get::<tonic::transport::server::TlsConnectInfo<ConnInfo>>()
+            .map(|t| t.get_ref().clone())
+    })
+}
+
 /// Wrap a request's body with the limit of its connection.
 pub fn limit_request(req: http::Request<tonic::body::Body>) -> http::Request<tonic::body::Body> {
-    let info = req.extensions().get::<ConnInfo>().cloned();
+    let info = conn_info(req.extensions());
     req.map(|b| tonic::body::Body::new(LimitBody::new(b, info)))
 }
 

@@ -12,6 +12,7 @@
 //! crash-link, never on crash-worker. Architecture: docs/architecture.md.
 
 pub mod assign;
+pub mod cert;
 pub mod checkpoint;
 pub mod error;
 pub mod file_sink;
@@ -32,10 +33,10 @@ pub mod stop;
 pub use checkpoint::MasterCheckpoint;
 pub use error::MasterError;
 pub use file_sink::FileSink;
-pub use file_sink::{frame_format, read_restart, RestartFile, RESTART_FILE};
+pub use file_sink::{frame_format, read_restart, read_restart_keyed, RestartFile, RESTART_FILE};
 pub use input::{BodySource, CostModel, RunInput, RunOptions, RunSize};
 pub use remote_link::RemoteWorker;
-pub use server::{Cluster, RemoteOptions};
+pub use server::{Cluster, RemoteOptions, TlsIdentity};
 pub use session::Session;
 pub use sink::{EnergyRecord, GroupRow, RecordSink, Sink, SinkError};
 pub use stats::{BarrierStats, Migration, RunStats, StageTimes};

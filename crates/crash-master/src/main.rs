@@ -4,7 +4,7 @@ use anyhow::Context;
 use clap::Parser;
 use crash_link::{Secret, SECRET_ENV};
 use crash_master::{
-    read_restart, resume_remote, run_remote, Cluster, CostModel, FileSink, MasterError,
+    read_restart_keyed, resume_remote, run_remote, Cluster, CostModel, FileSink, MasterError,
     RemoteOptions, RunInput, RunOptions, RESTART_FILE,
 };
 use std::net::SocketAddr;
@@ -80,6 +80,46 @@ struct Args {
     /// --out: rows and frames after the checkpoint are replaced.
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
+    /// Serve workers over TLS with this certificate (chain, PEM); workers then dial
+    /// https://HOST:PORT with --tls-ca. `crash-master cert` makes a self-signed pair.
+    #[arg(long, value_name = "PEM", requires = "tls_key")]
+    tls_cert: Option<PathBuf>,
+    /// The private key of --tls-cert (PEM).
+    #[arg(long, value_name = "PEM", requires = "tls_cert")]
+    tls_key: Option<PathBuf>,
+}
+
+/// `crash-master cert --out DIR --host NAME...`: a self-signed certificate and key.
+#[derive(Parser, Debug)]
+#[command(
+    name = "crash-master cert",
+    about = "Make a self-signed TLS certificate (DIR/cert.pem) and key (DIR/key.pem) for crash-master --tls-cert/--tls-key and crash-worker --tls-ca"
+)]
+struct CertArgs {
+    /// Directory for cert.pem and key.pem.
+    #[arg(long)]
+    out: PathBuf,
+    /// A host name or IP address the workers dial (repeat for several).
+    #[arg(long = "host", required = true)]
+    hosts: Vec<String>,
+}
+
+fn cert(args: CertArgs) -> ExitCode {
+    match crash_master::cert::write_pair(&args.out, &args.hosts) {
+        Ok((c, k)) => {
+            eprintln!(
+                "crash-master: wrote {} and {} (for {})",
+                c.display(),
+                k.display(),
+                args.hosts.join(", ")
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("crash-master: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -96,6 +136,9 @@ fn main() -> ExitCode {
     // a second signal ends the process at once (exit 130)
     if let Err(e) = crash_master::stop::install_handlers() {
         eprintln!("crash-master: warning: cannot handle SIGTERM/SIGINT: {e}");
+    }
+    if std::env::args_os().nth(1).is_some_and(|a| a == "cert") {
+        return cert(CertArgs::parse_from(std::env::args_os().skip(1)));
     }
     let args = Args::parse();
     let out = args.out.clone();
@@ -130,9 +173,12 @@ fn run(args: Args) -> anyhow::Result<()> {
         .map(|(i, b)| (i as u32, b.name.clone()))
         .collect();
     let input = RunInput::from_plan(scene, plan);
+    let secret = Secret::configured(args.secret_file.as_deref())?;
+    // restart files carry a MAC under a key from the secret (docs/reliability.md)
+    let key = secret.as_ref().map(Secret::checkpoint_key);
     let restart = match &args.resume {
         Some(path) => {
-            let r = read_restart(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let r = read_restart_keyed(path, key.as_ref()).map_err(|e| anyhow::anyhow!("{e}"))?;
             // before the run directory is reopened (that drops rows after the checkpoint)
             r.master
                 .check_continues(input.scene_hash, input.config.end_time)
@@ -149,11 +195,11 @@ fn run(args: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("cannot open the run directory {}", args.out.display()))?
         .with_checkpoints(args.out.join(RESTART_FILE))
+        .with_checkpoint_key(key)
         .with_energy_limit(energy_limit)
         .with_frame_format(frame_format)
         .with_body_names(names)
         .with_echo(true);
-    let secret = Secret::configured(args.secret_file.as_deref())?;
     if let Some(p) = args.secret_file.as_deref() {
         if crash_link::auth::readable_by_others(p) {
             eprintln!(
@@ -162,6 +208,16 @@ fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     }
+    let tls = match (&args.tls_cert, &args.tls_key) {
+        (Some(c), Some(k)) => Some(crash_master::TlsIdentity {
+            cert_pem: std::fs::read(c)
+                .with_context(|| format!("cannot read the TLS certificate {}", c.display()))?,
+            key_pem: std::fs::read(k)
+                .with_context(|| format!("cannot read the TLS key {}", k.display()))?,
+        }),
+        _ => None,
+    };
+    let tls_on = tls.is_some();
     let mut cluster = Cluster::bind(
         args.listen,
         args.workers,
@@ -175,9 +231,13 @@ fn run(args: Args) -> anyhow::Result<()> {
             max_message: crash_link::message_limit(
                 input.briefs.iter().map(|b| b.elements).max().unwrap_or(0),
             ),
+            tls,
         },
     )?;
     // Tests and scripts read this line to learn the port (the address ends it).
+    if tls_on {
+        eprintln!("crash-master: TLS on: workers dial https://HOST:PORT with --tls-ca");
+    }
     eprintln!("crash-master: listening on {}", cluster.local_addr());
     if cluster.secret_required() {
         eprintln!("crash-master: workers must prove the shared secret");

@@ -21,7 +21,7 @@
 //! the session token of its Welcome; a valid beat admits that connection too.
 
 use crate::error::MasterError;
-use crate::guard::{limit_request, ConnInfo, Gate};
+use crate::guard::{conn_info, limit_request, ConnInfo, Gate};
 use crate::heartbeat::{interval_for, Beats, DEFAULT_TIMEOUT};
 use crate::remote_link::{Outbound, RemoteWorker};
 use crash_link::{
@@ -59,6 +59,26 @@ pub struct RemoteOptions {
     /// Largest message decoded from an admitted worker (`crash_link::message_limit`);
     /// before admission only `HELLO_LIMIT`.
     pub max_message: usize,
+    /// TLS: the master's certificate chain and private key (PEM); None: plain TCP.
+    pub tls: Option<TlsIdentity>,
+}
+
+/// The master's TLS certificate chain and key, PEM (from `--tls-cert`, `--tls-key`).
+#[derive(Clone)]
+pub struct TlsIdentity {
+    pub cert_pem: Vec<u8>,
+    pub key_pem: Vec<u8>,
+}
+
+impl std::fmt::Debug for TlsIdentity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // never the key
+        write!(
+            f,
+            "TlsIdentity({} bytes of certificate)",
+            self.cert_pem.len()
+        )
+    }
 }
 
 impl Default for RemoteOptions {
@@ -70,6 +90,7 @@ impl Default for RemoteOptions {
             handshake_timeout: Duration::from_secs(5),
             secret: None,
             max_message: MAX_MESSAGE,
+            tls: None,
         }
     }
 }
@@ -207,7 +228,7 @@ impl Coordinator for Service {
         &self,
         req: Request<Streaming<pb::WorkerMessage>>,
     ) -> Result<Response<Self::AttachStream>, Status> {
-        let conn = req.extensions().get::<ConnInfo>().cloned();
+        let conn = conn_info(req.extensions());
         let peer = conn
             .as_ref()
             .and_then(|c| c.remote)
@@ -239,7 +260,7 @@ impl Coordinator for Service {
     }
 
     async fn heartbeat(&self, req: Request<pb::Beat>) -> Result<Response<pb::BeatAck>, Status> {
-        let conn = req.extensions().get::<ConnInfo>().cloned();
+        let conn = conn_info(req.extensions());
         let b = req.into_inner();
         self.beats.beat(b.worker_index, &b.session_token)?;
         // the beating connection belongs to an admitted worker: no handshake deadline
@@ -317,8 +338,15 @@ impl Cluster {
                 None
             }
         });
+        let mut builder = tonic::transport::Server::builder();
+        if let Some(id) = &opts.tls {
+            let identity = tonic::transport::Identity::from_pem(&id.cert_pem, &id.key_pem);
+            builder = builder
+                .tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))
+                .map_err(|e| MasterError::Network(format!("TLS configuration: {e}")))?;
+        }
         rt.spawn(async move {
-            let r = tonic::transport::Server::builder()
+            let r = builder
                 // one Attach (and a health check) per connection
                 .concurrency_limit_per_connection(4)
                 .max_concurrent_streams(4)

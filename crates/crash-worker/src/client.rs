@@ -41,6 +41,12 @@ pub struct WorkerOptions {
     pub host: String,
     /// Sleep this long before computing each step (tests of a slow but alive worker).
     pub step_delay: Duration,
+    /// Change each reply before it is sent (tests of the master's plausibility checks:
+    /// a worker holding the secret that lies; tests/tests/hardening.rs).
+    pub tamper: Option<fn(&mut Reply)>,
+    /// TLS: the certificate (PEM) that signed the master's (`--tls-ca`); the master's
+    /// URL is then https://. None: plain TCP (http://).
+    pub tls_ca: Option<Vec<u8>>,
 }
 
 impl WorkerOptions {
@@ -53,6 +59,8 @@ impl WorkerOptions {
             secret: None,
             host: std::env::var("HOSTNAME").unwrap_or_default(),
             step_delay: Duration::ZERO,
+            tamper: None,
+            tls_ca: None,
         }
     }
 }
@@ -75,6 +83,9 @@ pub enum WorkerError {
     Protocol { url: String, reason: String },
     #[error("cannot start the worker: {0}")]
     Start(String),
+    /// The TLS handshake failed: the master's certificate is not trusted.
+    #[error("TLS with the master at {url} failed: {reason}; the master's certificate must be signed by the --tls-ca certificate and name the host in the URL")]
+    Tls { url: String, reason: String },
 }
 
 /// Run one worker session to its end. Returns the master's shutdown reason.
@@ -110,7 +121,7 @@ fn heartbeat(
     alive: Arc<AtomicBool>,
 ) -> Result<(), WorkerError> {
     let url = opts.master.clone();
-    let ep = endpoint(&url)?;
+    let ep = endpoint(&url, opts.tls_ca.as_deref())?;
     let beat = pb::Beat {
         worker_index: welcome.worker_index,
         session_token: welcome.session_token.clone(),
@@ -151,13 +162,32 @@ fn heartbeat(
     Ok(())
 }
 
-fn endpoint(url: &str) -> Result<Endpoint, WorkerError> {
+fn endpoint(url: &str, tls_ca: Option<&[u8]>) -> Result<Endpoint, WorkerError> {
     let bad = |reason: String| WorkerError::Url {
         url: url.into(),
         reason,
     };
-    Ok(Endpoint::from_shared(url.to_string())
-        .map_err(|e| bad(e.to_string()))?
+    let https = url.starts_with("https://");
+    let mut ep = Endpoint::from_shared(url.to_string()).map_err(|e| bad(e.to_string()))?;
+    match (https, tls_ca) {
+        (true, Some(ca)) => {
+            let tls = tonic::transport::ClientTlsConfig::new()
+                .ca_certificate(tonic::transport::Certificate::from_pem(ca));
+            ep = ep.tls_config(tls).map_err(|e| bad(format!("TLS: {e}")))?;
+        }
+        (true, None) => {
+            return Err(bad(
+                "an https:// master needs the certificate that signed its own (--tls-ca)".into(),
+            ))
+        }
+        (false, Some(_)) => {
+            return Err(bad(
+                "--tls-ca is given: dial the master as https://HOST:PORT".into(),
+            ))
+        }
+        (false, None) => {}
+    }
+    Ok(ep
         .connect_timeout(Duration::from_secs(5))
         .tcp_nodelay(true)
         // Kernel keepalive notices a vanished master host even while the master
@@ -170,14 +200,26 @@ fn endpoint(url: &str) -> Result<Endpoint, WorkerError> {
 }
 
 /// Connect, retrying with exponential backoff (0.1 s doubling to 2 s).
-async fn connect(url: &str, timeout: Duration) -> Result<Channel, WorkerError> {
-    let ep = endpoint(url)?;
+async fn connect(
+    url: &str,
+    timeout: Duration,
+    tls_ca: Option<&[u8]>,
+) -> Result<Channel, WorkerError> {
+    let ep = endpoint(url, tls_ca)?;
     let t0 = Instant::now();
     let mut wait = Duration::from_millis(100);
     loop {
         match ep.connect().await {
             Ok(ch) => return Ok(ch),
             Err(e) => {
+                let chain = error_chain(&e);
+                // a certificate refused now is refused at every retry
+                if tls_ca.is_some() && chain.contains("certificate") {
+                    return Err(WorkerError::Tls {
+                        url: url.into(),
+                        reason: chain,
+                    });
+                }
                 if t0.elapsed() + wait > timeout {
                     return Err(WorkerError::Connect {
                         url: url.into(),
@@ -277,7 +319,7 @@ async fn attach(
     let mut wait = Duration::from_millis(100);
     let (tx, mut inbound) = loop {
         let left = opts.connect_timeout.saturating_sub(t0.elapsed());
-        let channel = connect(url, left).await?;
+        let channel = connect(url, left, opts.tls_ca.as_deref()).await?;
         // The worker trusts the master it was pointed at: it accepts what the master's
         // run needs (the master bounds what it accepts from workers, docs/reliability.md).
         let mut client = CoordinatorClient::new(channel)
@@ -404,6 +446,9 @@ fn serve(
         };
         if let Reply::Report(rep) = &mut reply {
             rep.codec_ns = decode_ns + last_encode_ns;
+        }
+        if let Some(tamper) = opts.tamper {
+            tamper(&mut reply);
         }
         let t1 = Instant::now();
         let reply = reply_to_pb(&reply);

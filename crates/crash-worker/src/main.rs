@@ -31,6 +31,10 @@ struct Args {
     /// variable), proved to the master in Hello; never give it on the command line.
     #[arg(long, value_name = "PATH")]
     secret_file: Option<std::path::PathBuf>,
+    /// TLS: the certificate (PEM) that signed the master's (for a self-signed master
+    /// certificate, that certificate itself); the master's URL is then https://.
+    #[arg(long, value_name = "PEM")]
+    tls_ca: Option<std::path::PathBuf>,
     /// Announce this host name in Hello instead of $HOSTNAME (tests of escaping).
     #[arg(long, hide = true)]
     host: Option<String>,
@@ -99,6 +103,18 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    if let Some(p) = &args.tls_ca {
+        match std::fs::read(p) {
+            Ok(pem) => opts.tls_ca = Some(pem),
+            Err(e) => {
+                eprintln!(
+                    "crash-worker: error: cannot read the TLS CA certificate {}: {e}",
+                    p.display()
+                );
+                return ExitCode::FAILURE;
+            }
+        }
+    }
     if let Some(h) = args.host {
         opts.host = h;
     }

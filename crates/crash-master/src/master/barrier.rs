@@ -150,19 +150,14 @@ impl<L: WorkerLink> Master<'_, L> {
         self.seen.resize(n, false);
         let mut count = 0;
         for (w, rep) in reps.into_iter().enumerate() {
+            // marks `seen` for the worker's bodies (plausible.rs)
+            if let Err(what) = self.check_report(w, &rep) {
+                return Err(self.implausible(w, &what));
+            }
             for r in rep.bodies {
-                match self.index(r.id) {
-                    Some(i) if !self.seen[i] && self.worker_of[i] == Some(w) => {
-                        self.reports[i] = r;
-                        self.seen[i] = true;
-                        count += 1;
-                    }
-                    _ => {
-                        return Err(self.worker_error(
-                            w,
-                            LinkError::Protocol(format!("unexpected report of body {}", r.id)),
-                        ))
-                    }
+                if let Some(i) = self.index(r.id) {
+                    self.reports[i] = r;
+                    count += 1;
                 }
             }
             self.account(&rep.groups);

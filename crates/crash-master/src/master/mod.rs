@@ -5,6 +5,7 @@
 //! - `placement`: MEIM update, groups onto workers, migration of bodies;
 //! - `output`: frames gathered from the workers when one is due;
 //! - `resume`: the loop's state into a checkpoint and back;
+//! - `plausible`: what workers send checked against what can be true;
 //! - `recover`: a lost worker dropped, the run rolled back to the last checkpoint on
 //!   the survivors.
 //!
@@ -24,6 +25,7 @@ mod barrier;
 mod groups;
 mod output;
 mod placement;
+mod plausible;
 mod recover;
 mod resume;
 mod time_loop;
@@ -40,6 +42,7 @@ struct BodyInfo {
     /// Largest move per step the margin argument allows.
     allowed: f64,
     estimate: f64,
+    nodes: usize,
     elements: usize,
     /// Every DOF prescribed: never joins a group, lends read-only copies.
     kinematic: bool,
@@ -142,6 +145,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                     estimate: 1.0
                         + if b.kinematic { 0.0 } else { b.elements as f64 }
                         + if meshes { b.nodes as f64 } else { 0.0 },
+                    nodes: b.nodes,
                     elements: b.elements,
                     kinematic: b.kinematic,
                 }

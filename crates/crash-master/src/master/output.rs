@@ -50,6 +50,9 @@ impl<L: WorkerLink> Master<'_, L> {
                     LinkError::Protocol("a frame piece holds other bodies than asked".into()),
                 ));
             }
+            if let Err(what) = self.check_frame(&bodies) {
+                return Err(self.implausible(w, &what));
+            }
             // the state hash comes from the bodies as received, whatever the file format
             for mut b in bodies {
                 hash.add(b.id, &b.x, &b.v, &b.w);

@@ -24,7 +24,12 @@ impl<L: WorkerLink> Master<'_, L> {
         for (w, r) in replies.into_iter().enumerate() {
             for reply in r {
                 match reply {
-                    Reply::States(s) => states.extend(s),
+                    Reply::States(s) => {
+                        if let Err(what) = self.check_states(w, &s) {
+                            return Err(self.implausible(w, &what));
+                        }
+                        states.extend(s)
+                    }
                     _ => return Err(self.bad_reply(w, "States")),
                 }
             }

@@ -150,8 +150,11 @@ pub fn parse_real(s: &str) -> Option<f64> {
     let mut t: String = s.replace(['d', 'D'], "e");
     if !t.contains(['e', 'E']) {
         // Fortran: 1.5-3 is 1.5e-3 (a sign after the first character)
-        if let Some(p) = t[1.min(t.len())..].rfind(['+', '-']) {
-            let p = p + 1;
+        // after the first character, which may take several bytes (fuzzing found
+        // a panic at `t[1..]` for a field starting with a non-ASCII character)
+        let first = t.chars().next().map_or(0, char::len_utf8);
+        if let Some(p) = t[first..].rfind(['+', '-']) {
+            let p = p + first;
             t.insert(p, 'e');
         }
     }
@@ -274,6 +277,15 @@ mod tests {
             assert_eq!(parse_real(s), Some(v), "{s}");
         }
         for s in ["inf", "nan", "1.0x", "1e400", "--1"] {
+            assert_eq!(parse_real(s), None, "{s}");
+        }
+    }
+
+    /// Regression (fuzz_inputs.rs, deck reader): a field starting with a multi-byte
+    /// character panicked on a byte slice inside it; now it is simply not a real.
+    #[test]
+    fn a_real_field_starting_with_a_non_ascii_character_is_refused_not_a_panic() {
+        for s in ["\u{e9}-3", "\u{fffd}1.5", "\u{1f600}", "\u{e9}"] {
             assert_eq!(parse_real(s), None, "{s}");
         }
     }
