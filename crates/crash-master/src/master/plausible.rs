@@ -10,7 +10,7 @@
 
 use super::Master;
 use crate::error::MasterError;
-use crash_core::{BodyEnergy, BodyReport, BodyState, Vec3};
+use crash_core::{BodyEnergy, BodyReport, BodyState, Fault, Vec3};
 use crash_io::FrameBody;
 use crash_link::{escape_peer, LinkError, StepReport, WorkerLink};
 
@@ -153,6 +153,27 @@ impl<L: WorkerLink> Master<'_, L> {
                 && finite3(&c.force_on_a);
             if !(own(c.a) && own(c.b) && c.a <= c.b && finite) {
                 return Err(format!("contact statistics of the pair ({}, {})", c.a, c.b));
+            }
+        }
+        Ok(())
+    }
+
+    /// A fault from worker `w`: its group and the bodies it names are the worker's own
+    /// (a made-up fault about bodies it holds cannot be told from a real one).
+    pub(super) fn check_fault(&self, w: usize, group_first: u32, f: &Fault) -> Result<(), String> {
+        let (body, other) = match f {
+            Fault::NonFinite { body, .. }
+            | Fault::Collapsed { body, .. }
+            | Fault::Inverted { body, .. }
+            | Fault::EnergyRunaway { body, .. }
+            | Fault::DtCollapse { body, .. }
+            | Fault::Tunnelling { body, .. } => (*body, None),
+            Fault::PassThrough { body, other, .. } => (*body, Some(*other)),
+        };
+        let own = |id: u32| self.index(id).is_some_and(|i| self.worker_of[i] == Some(w));
+        for id in [Some(group_first), Some(body), other].into_iter().flatten() {
+            if !own(id) {
+                return Err(format!("a fault naming body {id}, which it does not hold"));
             }
         }
         Ok(())
