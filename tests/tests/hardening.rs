@@ -265,6 +265,17 @@ fn a_tls_run_gives_the_plain_hash_and_a_worker_trusting_another_ca_is_refused() 
         &["--connect-timeout", "2"],
     );
     assert!(!clear.wait(Duration::from_secs(30)).success());
+    // the health probe over TLS
+    let mut probe = crash_tests::procs::Proc::spawn(
+        "crash-worker --probe",
+        &crash_tests::procs::worker_bin(),
+        &["--probe", &url, "--tls-ca", &cert],
+    );
+    assert!(
+        probe.wait(Duration::from_secs(30)).success(),
+        "{}",
+        probe.log()
+    );
     // the right CA: the run, to the plain run's hash
     let mut w = worker(&url, 1, &["--tls-ca", &cert]);
     assert!(m.wait(TIMEOUT).success(), "{}", m.log());
