@@ -230,13 +230,13 @@ fn command(e: &Engine, op: Op) -> Option<Command> {
         }),
         Op::Load(at, list) => Command::Load {
             at: at.unwrap_or(now),
-            bodies: loads(&bodies, list),
+            bodies: loads(bodies, list),
         },
         Op::Unload(ids, with_def) => Command::Unload { ids, with_def },
         Op::Lend(ids, with_def) => Command::Lend { ids, with_def },
         Op::LoadCopies(at, list) => Command::LoadCopies {
             at: at.unwrap_or(now),
-            bodies: loads(&bodies, list),
+            bodies: loads(bodies, list),
         },
         Op::Regroup(groups, copies) => Command::Regroup { groups, copies },
         Op::Start => Command::Start,

@@ -1,7 +1,9 @@
 //! Issue 14, hardening (docs/reliability.md), on loopback processes: a worker that
-//! holds the secret but reports what cannot be true is dropped and the run ends on the
-//! honest worker with the fault-free hash. Every wait is bounded; children are killed on
-//! drop.
+//! holds the secret but reports what cannot be true (a negative kinetic energy, a fault
+//! of a body it does not hold) is dropped and the run ends on the honest worker with the
+//! fault-free hash; TLS gives the plain run's hash and refuses a worker that trusts
+//! another certificate; an edited keyed restart file is refused naming it. Every wait is
+//! bounded; children are killed on drop.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_link::{Reply, Secret};
@@ -22,15 +24,19 @@ fn final_hash(dir: &Path) -> String {
     s.final_state_hash
 }
 
-/// The run without fault on two workers.
+/// The run without fault on two workers (once per test binary).
 fn reference_hash() -> String {
-    let out = out_dir("hardening-reference");
-    let (mut m, url) = master(&test_scene(SCENE), 2, &out, &["--end-time", END_TIME]);
-    let _w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
-    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
-    let h = final_hash(&out);
-    let _ = std::fs::remove_dir_all(&out);
-    h
+    static H: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    H.get_or_init(|| {
+        let out = out_dir("hardening-reference");
+        let (mut m, url) = master(&test_scene(SCENE), 2, &out, &["--end-time", END_TIME]);
+        let _w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+        assert!(m.wait(TIMEOUT).success(), "{}", m.log());
+        let h = final_hash(&out);
+        let _ = std::fs::remove_dir_all(&out);
+        h
+    })
+    .clone()
 }
 
 /// Step reports seen by the lying worker.
@@ -47,11 +53,29 @@ fn lie(reply: &mut Reply) {
     }
 }
 
-#[test]
-fn a_worker_reporting_negative_kinetic_energy_is_dropped_and_the_run_ends_with_the_fault_free_hash()
-{
+/// Step reports seen by the worker that makes up a fault.
+static FAULT_REPORTS: AtomicU64 = AtomicU64::new(0);
+
+/// Honest for 300 reports, then a fault of a body that is not in the run.
+fn made_up_fault(reply: &mut Reply) {
+    if matches!(reply, Reply::Report(_)) && FAULT_REPORTS.fetch_add(1, Ordering::Relaxed) == 300 {
+        *reply = Reply::Fault {
+            group_first: 9999,
+            fault: crash_core::Fault::NonFinite {
+                step: 1,
+                body: 9999,
+                place: "node 0".into(),
+                what: "velocity or position",
+            },
+        };
+    }
+}
+
+/// A run of the scene on an honest worker process and a lying one in this process
+/// (both with the secret); the master's log once it succeeded.
+fn run_with_a_liar(tag: &str, tamper: fn(&mut Reply)) -> String {
     let expected = reference_hash();
-    let out = out_dir("hardening-liar");
+    let out = out_dir(tag);
     let secret_file = out.with_extension("secret");
     std::fs::write(&secret_file, SECRET).unwrap();
     let (mut m, url) = master_env(
@@ -75,20 +99,11 @@ fn a_worker_reporting_negative_kinetic_energy_is_dropped_and_the_run_ends_with_t
     let mut opts = crash_worker::WorkerOptions::new(&url, 1);
     opts.connect_timeout = Duration::from_secs(30);
     opts.secret = Some(Secret::new(SECRET.as_bytes(), "test").unwrap());
-    opts.tamper = Some(lie);
+    opts.tamper = Some(tamper);
     let liar = std::thread::spawn(move || crash_worker::run(&opts));
     assert!(m.wait(TIMEOUT).success(), "{}", m.log());
     let log = m.log();
-    assert!(
-        log.contains("reported what cannot be true: body")
-            && log.contains("negative kinetic energy -1e0"),
-        "{log}"
-    );
     assert!(log.contains("continuing from step"), "{log}");
-    assert!(
-        REPORTS.load(Ordering::Relaxed) > 300,
-        "the lie was never told"
-    );
     assert_eq!(final_hash(&out), expected);
     // told why: by the Shutdown it reads, or on a closed stream
     let told = match liar.join().unwrap() {
@@ -103,6 +118,32 @@ fn a_worker_reporting_negative_kinetic_energy_is_dropped_and_the_run_ends_with_t
     );
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_file(&secret_file);
+    log
+}
+
+#[test]
+fn a_worker_reporting_negative_kinetic_energy_is_dropped_and_the_run_ends_with_the_fault_free_hash()
+{
+    let log = run_with_a_liar("hardening-liar", lie);
+    assert!(
+        log.contains("reported what cannot be true: body")
+            && log.contains("negative kinetic energy -1e0"),
+        "{log}"
+    );
+    assert!(
+        REPORTS.load(Ordering::Relaxed) > 300,
+        "the lie was never told"
+    );
+}
+
+#[test]
+fn a_worker_making_up_a_fault_of_a_body_it_does_not_hold_is_dropped_not_believed() {
+    let log = run_with_a_liar("hardening-fault", made_up_fault);
+    assert!(
+        log.contains("reported what cannot be true: a fault naming body 9999"),
+        "{log}"
+    );
+    assert!(FAULT_REPORTS.load(Ordering::Relaxed) > 300);
 }
 
 /// `crash run` with these arguments and environment; (success, stderr).
@@ -224,6 +265,17 @@ fn a_tls_run_gives_the_plain_hash_and_a_worker_trusting_another_ca_is_refused() 
         &["--connect-timeout", "2"],
     );
     assert!(!clear.wait(Duration::from_secs(30)).success());
+    // the health probe over TLS
+    let mut probe = crash_tests::procs::Proc::spawn(
+        "crash-worker --probe",
+        &crash_tests::procs::worker_bin(),
+        &["--probe", &url, "--tls-ca", &cert],
+    );
+    assert!(
+        probe.wait(Duration::from_secs(30)).success(),
+        "{}",
+        probe.log()
+    );
     // the right CA: the run, to the plain run's hash
     let mut w = worker(&url, 1, &["--tls-ca", &cert]);
     assert!(m.wait(TIMEOUT).success(), "{}", m.log());

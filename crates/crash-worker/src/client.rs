@@ -162,7 +162,8 @@ fn heartbeat(
     Ok(())
 }
 
-fn endpoint(url: &str, tls_ca: Option<&[u8]>) -> Result<Endpoint, WorkerError> {
+/// The master's endpoint, with TLS for an https URL (`tls_ca`: the trusted certificate).
+pub(crate) fn endpoint(url: &str, tls_ca: Option<&[u8]>) -> Result<Endpoint, WorkerError> {
     let bad = |reason: String| WorkerError::Url {
         url: url.into(),
         reason,

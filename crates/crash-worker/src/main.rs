@@ -57,6 +57,19 @@ fn main() -> ExitCode {
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let args = Args::parse();
+    let tls_ca = match &args.tls_ca {
+        Some(p) => match std::fs::read(p) {
+            Ok(pem) => Some(pem),
+            Err(e) => {
+                eprintln!(
+                    "crash-worker: error: cannot read the TLS CA certificate {}: {e}",
+                    p.display()
+                );
+                return ExitCode::FAILURE;
+            }
+        },
+        None => None,
+    };
     if let Some(url) = &args.probe {
         let secs = if args.probe_timeout.is_finite() {
             args.probe_timeout.clamp(0.0, 3600.0)
@@ -64,7 +77,7 @@ fn main() -> ExitCode {
             5.0
         };
         let timeout = Duration::from_secs_f64(secs);
-        return match crash_worker::probe::probe(url, timeout) {
+        return match crash_worker::probe::probe_tls(url, timeout, tls_ca.as_deref()) {
             Ok(()) => {
                 eprintln!("crash-worker: the master at {url} is serving");
                 ExitCode::SUCCESS
@@ -103,18 +116,7 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    if let Some(p) = &args.tls_ca {
-        match std::fs::read(p) {
-            Ok(pem) => opts.tls_ca = Some(pem),
-            Err(e) => {
-                eprintln!(
-                    "crash-worker: error: cannot read the TLS CA certificate {}: {e}",
-                    p.display()
-                );
-                return ExitCode::FAILURE;
-            }
-        }
-    }
+    opts.tls_ca = tls_ca;
     if let Some(h) = args.host {
         opts.host = h;
     }

@@ -19,13 +19,18 @@ pub const SERVICE: &str = crash_link::HEALTH_SERVICE;
 /// answers SERVING within `timeout`; otherwise the reason (unreachable, no answer,
 /// another status).
 pub fn probe(url: &str, timeout: Duration) -> Result<(), String> {
+    probe_tls(url, timeout, None)
+}
+
+/// As `probe`, for a master that serves TLS (`tls_ca`: the certificate that signed
+/// its own; the URL is then https://).
+pub fn probe_tls(url: &str, timeout: Duration, tls_ca: Option<&[u8]>) -> Result<(), String> {
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
         .map_err(|e| format!("tokio runtime: {e}"))?;
     let check = async {
-        let endpoint = tonic::transport::Endpoint::from_shared(url.to_string())
-            .map_err(|e| format!("invalid master URL '{url}': {e}"))?;
+        let endpoint = crate::client::endpoint(url, tls_ca).map_err(|e| e.to_string())?;
         let channel = endpoint
             .connect()
             .await

@@ -5,7 +5,7 @@ use super::Master;
 use crate::error::MasterError;
 use crate::input::CostModel;
 use crash_core::{BodyReport, Clock, Fault};
-use crash_link::{Command, GroupTime, LinkError, Reply, StepReport, WorkerLink};
+use crash_link::{escape_peer, Command, GroupTime, LinkError, Reply, StepReport, WorkerLink};
 
 impl<L: WorkerLink> Master<'_, L> {
     pub(super) fn worker_error(&self, w: usize, e: LinkError) -> MasterError {
@@ -67,6 +67,11 @@ impl<L: WorkerLink> Master<'_, L> {
                             group_first,
                             fault: f,
                         }) => {
+                            // plausible.rs: a lie drops the worker (as a loss)
+                            if let Err(what) = self.check_fault(w, group_first, &f) {
+                                failed[w] = Some(LinkError::Implausible(escape_peer(&what)));
+                                break;
+                            }
                             if fault.as_ref().is_none_or(|(g, _)| group_first < *g) {
                                 fault = Some((group_first, f));
                             }

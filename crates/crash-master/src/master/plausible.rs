@@ -11,7 +11,7 @@
 use super::Master;
 use crate::error::MasterError;
 use crash_core::contact::KinLoad;
-use crash_core::{BodyEnergy, BodyReport, BodyState, Vec3};
+use crash_core::{BodyEnergy, BodyReport, BodyState, Fault, Vec3};
 use crash_io::FrameBody;
 use crash_link::{escape_peer, LinkError, StepReport, WorkerLink};
 
@@ -190,6 +190,34 @@ impl<L: WorkerLink> Master<'_, L> {
             Some((n, _)) => Err(format!("node {n} (of {nodes}) or its force")),
             None => Ok(()),
         }
+    }
+
+    /// A fault from worker `w`: its group and the bodies it names are the worker's own
+    /// (a made-up fault about bodies it holds cannot be told from a real one).
+    pub(super) fn check_fault(&self, w: usize, group_first: u32, f: &Fault) -> Result<(), String> {
+        let (body, other) = match f {
+            Fault::NonFinite { body, .. }
+            | Fault::Collapsed { body, .. }
+            | Fault::Inverted { body, .. }
+            | Fault::EnergyRunaway { body, .. }
+            | Fault::DtCollapse { body, .. }
+            | Fault::Tunnelling { body, .. } => (*body, None),
+            Fault::PassThrough { body, other, .. } => (*body, Some(*other)),
+        };
+        let own = |id: u32| self.index(id).is_some_and(|i| self.worker_of[i] == Some(w));
+        // the bodies a fault names may include a read-only copy of a kinematic body
+        let near = |id: u32| own(id) || self.is_kinematic(id);
+        if !own(group_first) {
+            return Err(format!(
+                "a fault of group {group_first}, which it does not hold"
+            ));
+        }
+        for id in [Some(body), other].into_iter().flatten() {
+            if !near(id) {
+                return Err(format!("a fault naming body {id}, which it does not hold"));
+            }
+        }
+        Ok(())
     }
 
     /// Checkpoint states from worker `w`: bodies it holds, counts of their definitions.
