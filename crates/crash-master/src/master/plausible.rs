@@ -209,7 +209,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let near = |id: u32| own(id) || self.is_kinematic(id);
         if !own(group_first) {
             return Err(format!(
-                "a fault of group {group_first}, which it does not hold"
+                "a fault naming body {group_first}, which it does not hold"
             ));
         }
         for id in [Some(body), other].into_iter().flatten() {
