@@ -197,6 +197,7 @@ fn input(n: usize, steps: u64) -> RunInput {
         },
         output_interval: 1.0,
         scene_hash: 0,
+        results: Default::default(),
     }
 }
 

@@ -40,6 +40,7 @@ fn evolved_bodies() -> Vec<Body> {
             velocity: Vec3::new(0.0, 0.0, 1.5),
             angular: Vec3::new(0.1, 0.0, 0.0),
             ramp: 1e-5,
+            curve: crash_core::NO_CURVE,
         },
     );
     p.add_load(NodalLoad {
@@ -48,6 +49,7 @@ fn evolved_bodies() -> Vec<Body> {
         moment: Vec3::new(0.0, 0.01, 0.0),
         t0: 0.0,
         t1: 2e-5,
+        curve: crash_core::NO_CURVE,
     });
     p.def_mut().mass_damping = 3.0;
     p.def_mut().contact = true;

@@ -9,7 +9,9 @@ use thiserror::Error;
 /// the worker's Hello carries a proof of the shared secret. v4: the contact settings
 /// carry the closing-speed rule, faults include a pass-through. v5: heartbeats on a
 /// connection of their own (Welcome carries the session token), Reset for a rollback.
-pub const PROTOCOL_VERSION: u32 = 5;
+/// v6: load curves in body definitions, support reactions and history nodes (Setup asks,
+/// reports carry them) for spcforc.csv and nodout.csv.
+pub const PROTOCOL_VERSION: u32 = 6;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

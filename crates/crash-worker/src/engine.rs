@@ -77,6 +77,8 @@ impl Engine {
                 for g in &mut self.groups {
                     g.gravity = s.gravity;
                     g.contact = s.contact;
+                    g.reactions = s.reactions;
+                    g.probes = s.probes.to_vec();
                 }
                 self.setup = Some(s);
                 Ok(Reply::Ack)
@@ -132,9 +134,21 @@ impl Engine {
     }
 
     fn new_group(&self, bodies: Vec<Body>) -> Result<Group, EngineError> {
-        let setup = self.setup.ok_or(EngineError::NoSetup)?;
+        let setup = self.setup.as_ref().ok_or(EngineError::NoSetup)?;
         let mut g = Group::new(bodies, setup.gravity);
         g.contact = setup.contact;
+        g.reactions = setup.reactions;
+        if !setup.probes.is_empty() {
+            // only this group's bodies: the lookup per step stays short
+            let mut ids: Vec<u32> = g.bodies.iter().map(|b| b.def.id).collect();
+            ids.sort_unstable();
+            g.probes = setup
+                .probes
+                .iter()
+                .filter(|p| ids.binary_search(&p.0).is_ok())
+                .copied()
+                .collect();
+        }
         Ok(g)
     }
 
@@ -298,6 +312,7 @@ impl Engine {
             compute_ns: 0,
             contacts: Vec::new(),
             codec_ns: 0,
+            probes: Vec::new(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.bodies.first().map_or(0, |b| b.def.id);
@@ -305,6 +320,7 @@ impl Engine {
                 Ok(reports) => {
                     rep.bodies.extend(reports);
                     rep.contacts.extend_from_slice(g.contact_stats());
+                    rep.probes.extend_from_slice(g.probed());
                 }
                 Err(fault) => {
                     self.broken = true;

@@ -134,6 +134,7 @@ impl<L: WorkerLink> Master<'_, L> {
         // `seen` (kept between steps) marks the slots filled by this step.
         let n = self.info.len();
         self.contacts.clear();
+        self.probed.clear();
         if self.reports.len() != n {
             self.reports.clear();
             self.reports
@@ -160,6 +161,22 @@ impl<L: WorkerLink> Master<'_, L> {
             }
             self.account(&rep.groups);
             self.contacts.extend_from_slice(&rep.contacts);
+            for p in rep.probes {
+                let key = (p.body, p.node);
+                let h = &self.results.history;
+                match h.binary_search_by_key(&key, |h| (h.0, h.1)) {
+                    Ok(k) => self.probed.push((h[k].2, p)),
+                    Err(_) => {
+                        return Err(self.worker_error(
+                            w,
+                            LinkError::Protocol(format!(
+                                "unexpected history node {} of body {}",
+                                p.node, p.body
+                            )),
+                        ))
+                    }
+                }
+            }
         }
         if count != n {
             return Err(MasterError::Incomplete {
@@ -170,6 +187,7 @@ impl<L: WorkerLink> Master<'_, L> {
             });
         }
         self.contacts.sort_by_key(|c| (c.a, c.b));
+        self.probed.sort_by_key(|p| (p.1.body, p.1.node));
         Ok(())
     }
 

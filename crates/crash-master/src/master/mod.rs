@@ -12,18 +12,19 @@
 //! step; it holds no nodal data between output times.
 
 use crate::error::MasterError;
-use crate::input::{BodySource, RunInput, RunOptions};
+use crate::input::{BodySource, ResultRequest, RunInput, RunOptions};
 use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::stats::RunStats;
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, RunConfig, Vec3};
+use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, NodeProbe, RunConfig, Vec3};
 use crash_link::{LinkError, WorkerLink};
 
 mod barrier;
 mod output;
 mod placement;
 mod recover;
+mod results;
 mod resume;
 mod time_loop;
 
@@ -79,6 +80,10 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     /// Which reports the current gather has filled (kept to avoid allocating per step).
     seen: Vec<bool>,
     contacts: Vec<PairStats>,
+    /// The result files' requests, and the history nodes of the last step (with their
+    /// mesh-file node ids, sorted by body and node).
+    results: ResultRequest,
+    probed: Vec<(u64, NodeProbe)>,
     frames: u64,
     last_frame_step: Option<u64>,
     pub(crate) stats: RunStats,
@@ -164,6 +169,8 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             reports: Vec::with_capacity(n),
             seen: Vec::with_capacity(n),
             contacts: Vec::new(),
+            results: input.results.clone(),
+            probed: Vec::new(),
             frames: 0,
             last_frame_step: None,
             stats: RunStats::default(),
