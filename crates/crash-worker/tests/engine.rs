@@ -41,6 +41,8 @@ fn setup() -> Setup {
     Setup {
         gravity: Vec3::new(0.0, 0.0, -9.81),
         contact: Default::default(),
+        reactions: false,
+        probes: Default::default(),
     }
 }
 
