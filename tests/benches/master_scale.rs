@@ -61,6 +61,7 @@ impl InstantWorker {
                 max_move: d.norm(),
                 hot_element: 0,
                 hot_density: 0.0,
+                reaction: None,
             });
         }
         let groups = self
@@ -75,6 +76,7 @@ impl InstantWorker {
             compute_ns: 0,
             contacts: Vec::new(),
             codec_ns: 0,
+            probes: Vec::new(),
         }
     }
 

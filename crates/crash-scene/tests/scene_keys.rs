@@ -188,7 +188,7 @@ fn output_requests_are_checked_and_carried() {
 
 #[test]
 fn frame_precision_and_compression_are_checked_and_carried() {
-    let b = build(&BASE.to_string());
+    let b = build(BASE);
     assert_eq!(
         (b.outputs.frames_f32, b.outputs.frames_uncompressed),
         (false, false)
