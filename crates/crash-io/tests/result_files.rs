@@ -2,6 +2,7 @@
 //! round trip through the matsum reader, and a reopen (restart, rollback) keeps the
 //! complete rows up to its time, drops later and torn ones, and counts the columns of
 //! quoted names right.
+#![allow(clippy::unwrap_used)] // a test panics on failure
 
 mod common;
 
