@@ -53,10 +53,12 @@ fn cluster_with(n: usize, make: fn(u32) -> Body) -> Cluster {
     let setup = Setup {
         gravity: Vec3::zeros(),
         contact: Default::default(),
+        reactions: false,
+        probes: Default::default(),
     };
     for (i, l) in c.links_mut().iter_mut().enumerate() {
         for cmd in [
-            Command::Setup(setup),
+            Command::Setup(setup.clone()),
             Command::Load {
                 at: Clock::default(),
                 bodies: vec![BodyLoad::whole(make(i as u32))],

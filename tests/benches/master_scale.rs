@@ -61,6 +61,7 @@ impl InstantWorker {
                 max_move: d.norm(),
                 hot_element: 0,
                 hot_density: 0.0,
+                reaction: None,
             });
         }
         let groups = self
@@ -75,6 +76,7 @@ impl InstantWorker {
             compute_ns: 0,
             contacts: Vec::new(),
             codec_ns: 0,
+            probes: Vec::new(),
         }
     }
 
@@ -205,6 +207,7 @@ fn input(n: usize, steps: u64) -> RunInput {
         },
         output_interval: 1.0,
         scene_hash: 0,
+        results: Default::default(),
     }
 }
 

@@ -22,6 +22,10 @@ const TIMEOUT: Duration = Duration::from_secs(240);
 struct Files {
     energy: String,
     contacts: String,
+    /// matsum.csv and rcforc.csv (written at the output interval by default): a
+    /// rollback neither repeats nor tears their rows.
+    matsum: String,
+    rcforc: String,
     frames: Vec<(u64, String)>,
     hash: String,
 }
@@ -52,6 +56,8 @@ fn files(dir: &Path) -> Files {
     Files {
         energy: text(crash_io::ENERGY_CSV),
         contacts: text(crash_io::CONTACTS_CSV),
+        matsum: text(crash_io::matsum_read::MATSUM_CSV),
+        rcforc: text(crash_io::RCFORC_CSV),
         frames: pvd
             .iter()
             .map(|e| (e.time.to_bits(), e.file.clone()))

@@ -27,9 +27,12 @@ fn scene() -> &'static (Vec<Body>, Setup) {
             .unwrap()
             .build()
             .unwrap();
+        // reactions and a history node on: their code runs in the sequences too
         let setup = Setup {
             gravity: b.gravity,
             contact: b.contact,
+            reactions: true,
+            probes: std::sync::Arc::new(vec![(0, 1), (1, 2)]),
         };
         (b.bodies, setup)
     })
@@ -39,7 +42,7 @@ fn scene() -> &'static (Vec<Body>, Setup) {
 fn started() -> Engine {
     let (bodies, setup) = scene();
     let mut e = Engine::new();
-    e.handle(Command::Setup(*setup));
+    e.handle(Command::Setup(setup.clone()));
     e.handle(Command::Load {
         at: Clock::default(),
         bodies: bodies.iter().cloned().map(BodyLoad::whole).collect(),
@@ -57,7 +60,7 @@ fn valid_commands() -> Vec<Vec<u8>> {
     let (bodies, setup) = scene();
     let at = Clock::default();
     let cmds = [
-        Command::Setup(*setup),
+        Command::Setup(setup.clone()),
         Command::Load {
             at,
             bodies: vec![BodyLoad::whole(bodies[0].clone())],
@@ -226,7 +229,7 @@ fn command(e: &Engine, op: Op) -> Option<Command> {
     Some(match op {
         Op::Setup(g) => Command::Setup(Setup {
             gravity: g.unwrap_or(setup.gravity),
-            contact: setup.contact,
+            ..setup.clone()
         }),
         Op::Load(at, list) => Command::Load {
             at: at.unwrap_or(now),

@@ -40,6 +40,7 @@ fn evolved_bodies() -> Vec<Body> {
             velocity: Vec3::new(0.0, 0.0, 1.5),
             angular: Vec3::new(0.1, 0.0, 0.0),
             ramp: 1e-5,
+            curve: crash_core::NO_CURVE,
         },
     );
     p.add_load(NodalLoad {
@@ -48,7 +49,31 @@ fn evolved_bodies() -> Vec<Body> {
         moment: Vec3::new(0.0, 0.01, 0.0),
         t0: 0.0,
         t1: 2e-5,
+        curve: crash_core::NO_CURVE,
     });
+    // a load curve (a table, not a ramp) on a load and a program
+    let c = p
+        .add_curve(crash_core::TimeCurve {
+            points: vec![(0.0, 0.0), (1e-5, 2.0), (3e-5, -1.0)],
+        })
+        .unwrap();
+    p.add_load(NodalLoad {
+        node: 9,
+        force: Vec3::new(0.0, 0.0, -4.0),
+        moment: Vec3::zeros(),
+        t0: 0.0,
+        t1: 0.0,
+        curve: c,
+    });
+    p.prescribe(
+        &[17],
+        VelocityProgram {
+            velocity: Vec3::new(0.5, 0.0, 0.0),
+            angular: Vec3::zeros(),
+            ramp: 0.0,
+            curve: c,
+        },
+    );
     p.def_mut().mass_damping = 3.0;
     p.def_mut().contact = true;
     p.def_mut().self_contact = true;
@@ -189,8 +214,15 @@ fn every_fault_variant_round_trips() {
 #[test]
 fn step_report_round_trips_bit_exact() {
     let mut g = Group::new(evolved_bodies(), Vec3::zeros());
-    let bodies: Vec<BodyReport> = g.advance(&Clock::default(), 1e-7).unwrap();
+    g.reactions = true;
+    g.probes = vec![(0, 1), (0, 3)];
+    let mut bodies: Vec<BodyReport> = g.advance(&Clock::default(), 1e-7).unwrap();
+    // a reaction on one body (the wire carries them for some bodies only)
+    bodies[0].reaction = Some((Vec3::new(1.5, -2.0, 1e-300), Vec3::new(0.0, 3.0, -0.5)));
+    let probes = g.probed().to_vec();
+    assert_eq!(probes.len(), 2);
     let rep = StepReport {
+        probes,
         bodies,
         groups: vec![GroupTime {
             first: 0,
@@ -250,6 +282,12 @@ fn commands_round_trip() {
             .collect::<Vec<_>>()
     };
     let cmds = [
+        Command::Setup(crash_link::Setup {
+            gravity: Vec3::new(0.0, 0.0, -9.81),
+            contact: Default::default(),
+            reactions: true,
+            probes: std::sync::Arc::new(vec![(0, 4), (1, 2)]),
+        }),
         Command::regroup(vec![vec![0, 3, 9], vec![1], vec![2, 4]]),
         Command::Regroup {
             groups: vec![vec![0, 3, 9], vec![1], vec![2, 4]],

@@ -129,6 +129,15 @@ impl Sink for CliSink {
         self.files.groups(step, time, rows)
     }
 
+    fn results(
+        &mut self,
+        step: u64,
+        time: f64,
+        rows: &crash_master::ResultRows<'_>,
+    ) -> Result<(), SinkError> {
+        self.files.results(step, time, rows)
+    }
+
     fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
         // a stop's checkpoint is the first call after the signal
         self.progress.note_stop();
@@ -268,7 +277,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         .with_simd_path(simd)
         .with_energy_limit(energy_limit)
         .with_frame_format(frame_format)
-        .with_body_names(names);
+        .with_body_names(names)
+        .with_results(&input.results)
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("cannot create the result files in {}", out.display()))?;
     let start_time = restart.as_ref().map_or(0.0, |(_, r)| r.master.clock.time);
     let mut sink = CliSink {
         files,

@@ -1,5 +1,6 @@
 //! A shell body: one mesh, one section, its nodal state, constraints and loads.
 
+use crate::curve::{TimeCurve, NO_CURVE};
 use crate::element::{HourglassState, QuadElem, ShellState, Slot, Stabilization, TriElem};
 use crate::error::CoreError;
 use crate::material::Section;
@@ -25,18 +26,41 @@ pub mod dof {
 pub const NO_PROGRAM: u16 = u16::MAX;
 
 /// Prescribed (kinematic) nodal velocity, ramped linearly from zero over `ramp` seconds
-/// (ramp = 0: applied from the start, including the initial velocity).
+/// (ramp = 0: applied from the start, including the initial velocity), or scaled by
+/// the body's load curve `curve` (then `ramp` is not used).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct VelocityProgram {
     pub velocity: Vec3,
     pub angular: Vec3,
     pub ramp: f64,
+    /// Index into `BodyDef::curves`, or `NO_CURVE`.
+    pub curve: u32,
 }
 
 impl VelocityProgram {
-    pub fn at(&self, t: f64) -> (Vec3, Vec3) {
-        let s = ramp_factor(t, 0.0, self.ramp);
+    /// A program ramped from zero over `ramp` seconds.
+    pub fn ramped(velocity: Vec3, angular: Vec3, ramp: f64) -> Self {
+        Self {
+            velocity,
+            angular,
+            ramp,
+            curve: NO_CURVE,
+        }
+    }
+
+    /// Velocity and angular velocity at t (`curves`: the body's).
+    pub fn at(&self, t: f64, curves: &[TimeCurve]) -> (Vec3, Vec3) {
+        let s = scale(t, 0.0, self.ramp, self.curve, curves);
         (self.velocity * s, self.angular * s)
+    }
+}
+
+/// The factor of a program or load at t: its curve's value, else its ramp.
+#[inline]
+pub fn scale(t: f64, t0: f64, t1: f64, curve: u32, curves: &[TimeCurve]) -> f64 {
+    match curves.get(curve as usize) {
+        Some(c) if curve != NO_CURVE => c.value(t),
+        _ => ramp_factor(t, t0, t1),
     }
 }
 
@@ -53,7 +77,8 @@ pub fn ramp_factor(t: f64, t0: f64, t1: f64) -> f64 {
     }
 }
 
-/// A nodal force and moment (global axes), scaled by a ramp from `t0` to `t1`.
+/// A nodal force and moment (global axes), scaled by a ramp from `t0` to `t1`, or by
+/// the body's load curve `curve` (then t0 and t1 are not used).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct NodalLoad {
     pub node: u32,
@@ -61,6 +86,16 @@ pub struct NodalLoad {
     pub moment: Vec3,
     pub t0: f64,
     pub t1: f64,
+    /// Index into `BodyDef::curves`, or `NO_CURVE`.
+    pub curve: u32,
+}
+
+impl NodalLoad {
+    /// The factor of this load at t.
+    #[inline]
+    pub fn scale(&self, t: f64, curves: &[TimeCurve]) -> f64 {
+        scale(t, self.t0, self.t1, self.curve, curves)
+    }
 }
 
 /// Energy record of one body. After a step from t_n to t_{n+1} it holds the values at
@@ -109,6 +144,8 @@ pub struct BodyDef {
     /// Index of the first load of each node in `loads` (sorted by node; u32::MAX: none).
     /// A node may carry several loads, each with its own ramp.
     pub load_of: Vec<u32>,
+    /// Load curves of the programs and loads (`curve` indices).
+    pub curves: Vec<TimeCurve>,
     /// Mass-proportional (global) damping coefficient c [1/s]: f = -c m v.
     pub mass_damping: f64,
     pub tris: Vec<TriElem>,
@@ -256,6 +293,7 @@ impl Body {
                 programs: Vec::new(),
                 loads: Vec::new(),
                 load_of: vec![u32::MAX; nn],
+                curves: Vec::new(),
                 mass_damping: 0.0,
                 gather_start: count,
                 gather_slot,
@@ -341,6 +379,20 @@ impl Body {
         d.refresh_kinematic();
     }
 
+    /// Add a load curve; returns its index for `VelocityProgram::curve` and
+    /// `NodalLoad::curve` (an invalid table is refused).
+    pub fn add_curve(&mut self, c: TimeCurve) -> Result<u32, CoreError> {
+        if !c.is_valid() {
+            return Err(CoreError::Other {
+                body: self.def.name.clone(),
+                what: "a load curve needs finite points with increasing times".into(),
+            });
+        }
+        let d = self.def_mut();
+        d.curves.push(c);
+        Ok(d.curves.len() as u32 - 1)
+    }
+
     /// Prescribe the velocity of the given nodes (all six DOFs follow the program).
     pub fn prescribe(&mut self, nodes: &[usize], program: VelocityProgram) {
         let d = self.def_mut();
@@ -351,7 +403,7 @@ impl Body {
             d.program[n] = id;
         }
         d.refresh_kinematic();
-        let (v, w) = program.at(0.0);
+        let (v, w) = program.at(0.0, &self.def.curves);
         for &n in nodes {
             self.state.v[n] = v;
             self.state.w[n] = w;
@@ -379,7 +431,7 @@ impl Body {
             }
             let (pv, pw) = match d.program[i] {
                 NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
-                p => d.programs[p as usize].at(t),
+                p => d.programs[p as usize].at(t, &d.curves),
             };
             for k in 0..3 {
                 if f & (1 << k) != 0 {
@@ -459,6 +511,7 @@ mod tests {
             moment: Vec3::zeros(),
             t0: 0.0,
             t1: 0.0,
+            curve: NO_CURVE,
         };
         b.add_load(load(2, 1.0));
         b.add_load(load(0, 5.0));

@@ -2,6 +2,7 @@
 
 use crate::body::{Body, VelocityProgram};
 use crate::contact::BodyBox;
+use crate::curve::TimeCurve;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -20,6 +21,9 @@ pub struct BodyBrief {
     /// counts the work contact does on it (`KinematicWork`).
     #[serde(default)]
     pub programs: Vec<VelocityProgram>,
+    /// The load curves its programs use (kinematic bodies only).
+    #[serde(default)]
+    pub curves: Vec<TimeCurve>,
     pub nodes: usize,
     pub elements: usize,
     /// Bounding box of the nodes.
@@ -38,6 +42,11 @@ impl BodyBrief {
             kinematic: b.def.kinematic,
             programs: if b.def.kinematic {
                 b.def.programs.clone()
+            } else {
+                Vec::new()
+            },
+            curves: if b.def.kinematic {
+                b.def.curves.clone()
             } else {
                 Vec::new()
             },

@@ -142,7 +142,7 @@ impl Run {
                 .bodies
                 .iter()
                 .filter(|b| b.def.kinematic)
-                .map(|b| (b.def.id, b.def.programs.clone())),
+                .map(|b| (b.def.id, b.def.programs.clone(), b.def.curves.clone())),
         );
         kinematic.add(group.contact_stats());
         kinematic.apply(&mut reports);

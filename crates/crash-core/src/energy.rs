@@ -3,6 +3,7 @@
 use crate::body::{BodyEnergy, VelocityProgram};
 use crate::clock::Clock;
 use crate::contact::{KinLoad, PairStats};
+use crate::curve::TimeCurve;
 use serde::{Deserialize, Serialize};
 
 /// Energy totals of a whole scene at one time, with the balance error relative to the
@@ -117,21 +118,29 @@ impl EnergyLedger {
 pub struct KinematicWork {
     /// (kinematic body id, work so far [J]), sorted by id.
     work: Vec<(u32, f64)>,
-    /// The velocity programs of each body in `work` (same order).
+    /// The velocity programs and load curves of each body in `work` (same order).
     programs: Vec<Vec<VelocityProgram>>,
+    #[serde(default)]
+    curves: Vec<Vec<TimeCurve>>,
     /// The last pass's loads, in pair order: (body id, load).
     pending: Vec<(u32, KinLoad)>,
 }
 
 impl KinematicWork {
-    /// Tracks the kinematic bodies given with their velocity programs (any order).
-    pub fn new(bodies: impl IntoIterator<Item = (u32, Vec<VelocityProgram>)>) -> Self {
-        let mut b: Vec<(u32, Vec<VelocityProgram>)> = bodies.into_iter().collect();
+    /// Tracks the kinematic bodies given with their velocity programs and load curves
+    /// (any order).
+    pub fn new(
+        bodies: impl IntoIterator<Item = (u32, Vec<VelocityProgram>, Vec<TimeCurve>)>,
+    ) -> Self {
+        let mut b: Vec<_> = bodies.into_iter().collect();
         b.sort_by_key(|w| w.0);
         b.dedup_by_key(|w| w.0);
+        let work = b.iter().map(|(id, _, _)| (*id, 0.0)).collect();
+        let (programs, curves) = b.into_iter().map(|(_, p, c)| (p, c)).unzip();
         Self {
-            work: b.iter().map(|(id, _)| (*id, 0.0)).collect(),
-            programs: b.into_iter().map(|(_, p)| p).collect(),
+            work,
+            programs,
+            curves,
             pending: Vec::new(),
         }
     }
@@ -148,7 +157,8 @@ impl KinematicWork {
             let mut p_new = 0.0;
             for (prog, f) in &load.by_program {
                 if let Some(vp) = self.programs[k].get(*prog as usize) {
-                    p_new += f.dot(&vp.at(t_half).0);
+                    let curves = self.curves.get(k).map_or(&[][..], |c| &c[..]);
+                    p_new += f.dot(&vp.at(t_half, curves).0);
                 }
             }
             self.work[k].1 += hbar * (0.5 * (load.power + p_new));

@@ -9,6 +9,7 @@ use crate::clock::Clock;
 use crate::contact::{ContactConfig, ContactState, PairStats};
 use crate::error::Fault;
 use crate::forces::ForceSums;
+use crate::probe::{nodes_of, NodeProbe};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +27,9 @@ pub struct BodyReport {
     pub max_move: f64,
     pub hot_element: usize,
     pub hot_density: f64,
+    /// Force and moment the supports exert on the body at t_n [N, N m] (LS-DYNA
+    /// SPCFORC), when the group reports reactions and the body has constrained DOFs.
+    pub reaction: Option<(Vec3, Vec3)>,
 }
 
 impl BodyReport {
@@ -41,6 +45,7 @@ impl BodyReport {
             max_move: 0.0,
             hot_element: 0,
             hot_density: 0.0,
+            reaction: None,
         }
     }
 }
@@ -63,6 +68,15 @@ pub struct Group {
     /// its definition), in contact with this group's bodies, never reported.
     #[serde(default)]
     pub copies: Vec<u32>,
+    /// Report the supports' reactions (`BodyReport::reaction`).
+    #[serde(default)]
+    pub reactions: bool,
+    /// History nodes (body id, node index), sorted: their rows after each step are in
+    /// `probed` (outputs off: both empty, nothing is done).
+    #[serde(default)]
+    pub probes: Vec<(u32, u32)>,
+    #[serde(skip)]
+    pub probed: Vec<NodeProbe>,
 }
 
 /// An energy or a stable time step that overflowed is a blow-up of this body, reported
@@ -105,6 +119,7 @@ fn report(b: &Body, f: &ForceSums, lo: Vec3, hi: Vec3, max_move: f64) -> BodyRep
         max_move,
         hot_element: f.hot_element,
         hot_density: f.hot_density,
+        reaction: None,
     }
 }
 
@@ -116,6 +131,9 @@ impl Group {
             contact: ContactConfig::default(),
             contact_state: ContactState::default(),
             copies: Vec::new(),
+            reactions: false,
+            probes: Vec::new(),
+            probed: Vec::new(),
         }
     }
 
@@ -154,6 +172,11 @@ impl Group {
         out
     }
 
+    /// History rows of the last step (or of the start), body after body.
+    pub fn probed(&self) -> &[NodeProbe] {
+        &self.probed
+    }
+
     /// Contact forces at the current positions; lowers each report's stable dt where
     /// contact requires it.
     /// `h`, `step`: the step that led here (0, 0 at the start), for the crossing check.
@@ -190,6 +213,14 @@ impl Group {
             b.state.energy.kinetic = b.kinetic_energy_now();
             out.push(report(b, &f, lo, hi, 0.0));
         }
+        self.probed.clear();
+        for b in &self.bodies {
+            let nodes = nodes_of(&self.probes, b.def.id);
+            if !nodes.is_empty() {
+                let v = b.probe_velocities(nodes);
+                b.probe(nodes, &v, 0.0, &mut self.probed);
+            }
+        }
         self.contact_pass(&mut out, 0.0, 0)?;
         finite_reports(&out, 0)?;
         Ok(self.owned_reports(out))
@@ -200,8 +231,15 @@ impl Group {
     pub fn advance(&mut self, clock: &Clock, h: f64) -> Result<Vec<BodyReport>, Fault> {
         let sc = clock.step_of(h);
         let mut sums = Vec::with_capacity(self.bodies.len());
+        self.probed.clear();
+        let hbar = 0.5 * (sc.h_prev + sc.h);
         for b in &mut self.bodies {
+            let nodes = nodes_of(&self.probes, b.def.id);
+            let before = b.probe_velocities(nodes);
             sums.push(b.integrate(&sc, self.gravity)?);
+            if !nodes.is_empty() {
+                b.probe(nodes, &before, hbar, &mut self.probed);
+            }
         }
         let step = clock.after(h).step;
         let moves: Vec<(f64, usize)> = sums.iter().map(|s| (s.max_move, s.max_move_node)).collect();
@@ -209,7 +247,11 @@ impl Group {
         let mut out = Vec::with_capacity(self.bodies.len());
         for (b, s) in self.bodies.iter_mut().zip(&sums) {
             let f = b.internal_forces(h, step)?;
-            out.push(report(b, &f, s.lo, s.hi, s.max_move));
+            let mut r = report(b, &f, s.lo, s.hi, s.max_move);
+            if self.reactions && b.def.fixed.iter().any(|&m| m != 0) {
+                r.reaction = Some((s.reaction_force, s.reaction_moment));
+            }
+            out.push(r);
         }
         self.contact_pass(&mut out, h, step)?;
         finite_reports(&out, step)?;

@@ -7,7 +7,7 @@
 //! Mass damping c (f = -c m v_n, v_n the mean of the two half-step velocities) is
 //! integrated implicitly: v_{n+1/2} = ((1 - c hbar/2) v_{n-1/2} + hbar a) / (1 + c hbar/2).
 
-use crate::body::{ramp_factor, Body, NO_PROGRAM};
+use crate::body::{Body, NO_PROGRAM};
 use crate::error::Fault;
 use crate::forces::CHUNK;
 use crate::Vec3;
@@ -23,6 +23,10 @@ pub struct NodeSums {
     /// forces (on this body), mass damping (dissipated, >= 0).
     pub external: f64,
     pub reaction: f64,
+    /// Force and moment the constraints exert on the body at t_n (sum over its
+    /// constrained DOFs of the impulse they apply over hbar, divided by hbar).
+    pub reaction_force: Vec3,
+    pub reaction_moment: Vec3,
     pub contact: f64,
     pub mass_damping: f64,
     /// f_int(x_n) . v_{n+1/2} (forces and moments), for the shadow internal energy.
@@ -43,6 +47,8 @@ impl Default for NodeSums {
             kinetic: 0.0,
             external: 0.0,
             reaction: 0.0,
+            reaction_force: Vec3::zeros(),
+            reaction_moment: Vec3::zeros(),
             contact: 0.0,
             mass_damping: 0.0,
             internal_power: 0.0,
@@ -60,6 +66,8 @@ impl NodeSums {
         self.kinetic += o.kinetic;
         self.external += o.external;
         self.reaction += o.reaction;
+        self.reaction_force += o.reaction_force;
+        self.reaction_moment += o.reaction_moment;
         self.contact += o.contact;
         self.mass_damping += o.mass_damping;
         self.internal_power += o.internal_power;
@@ -104,6 +112,7 @@ impl Body {
         let loads = &self.def.loads;
         let load_of = &self.def.load_of;
         let programs = &self.def.programs;
+        let curves = &self.def.curves;
         let (mass, inertia, fixed, program) = (
             &self.def.mass,
             &self.def.inertia,
@@ -134,7 +143,7 @@ impl Body {
                             .iter()
                             .take_while(|l| l.node as usize == i)
                         {
-                            let sc = ramp_factor(t, l.t0, l.t1);
+                            let sc = l.scale(t, curves);
                             f += l.force * sc;
                             mom += l.moment * sc;
                         }
@@ -169,7 +178,7 @@ impl Body {
                     if fx != 0 {
                         let (pv, pw) = match program[i] {
                             NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
-                            p => programs[p as usize].at(t_half),
+                            p => programs[p as usize].at(t_half, curves),
                         };
                         for d in 0..3 {
                             if fx & (1 << d) != 0 {
@@ -188,8 +197,13 @@ impl Body {
                     s.internal_power += fi.dot(&v_new) + mi.dot(&w_new);
                     if fx != 0 {
                         // impulse the constraint applied, times the mean velocity
-                        s.reaction += (m * (v_new - free_v) * dd.recip()).dot(&vn)
-                            + (inr * (w_new - free_w) * dd.recip()).dot(&wn);
+                        let (jf, jm) = (
+                            m * (v_new - free_v) * dd.recip(),
+                            inr * (w_new - free_w) * dd.recip(),
+                        );
+                        s.reaction += jf.dot(&vn) + jm.dot(&wn);
+                        s.reaction_force += jf / hbar;
+                        s.reaction_moment += jm / hbar;
                     }
                     if c > 0.0 {
                         s.mass_damping +=

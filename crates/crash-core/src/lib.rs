@@ -11,6 +11,7 @@ pub mod body;
 pub mod brief;
 pub mod clock;
 pub mod contact;
+pub mod curve;
 pub mod driver;
 pub mod element;
 pub mod energy;
@@ -23,6 +24,7 @@ pub mod material;
 pub mod mesh;
 pub mod modal;
 pub mod output;
+pub mod probe;
 pub mod shapes;
 
 /// 3-vector of f64 (nalgebra).
@@ -31,6 +33,7 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 pub use body::{dof, Body, BodyDef, BodyEnergy, BodyState, NodalLoad, VelocityProgram};
 pub use brief::BodyBrief;
 pub use clock::Clock;
+pub use curve::{TimeCurve, NO_CURVE};
 pub use driver::{Run, RunConfig};
 pub use element::Stabilization;
 pub use energy::{EnergyLedger, EnergyTotals, KinematicWork};
@@ -38,3 +41,4 @@ pub use error::{CoreError, Fault};
 pub use group::{BodyReport, Group};
 pub use material::{Material, Section};
 pub use mesh::Mesh;
+pub use probe::NodeProbe;

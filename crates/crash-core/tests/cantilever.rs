@@ -35,6 +35,7 @@ fn tip_loads(b: &mut crash_core::Body, force: Vec3, moment: Vec3, ramp: f64) {
             moment: moment * w,
             t0: 0.0,
             t1: ramp,
+            curve: crash_core::NO_CURVE,
         });
     }
 }

@@ -29,6 +29,7 @@ fn force_approach_slope_matches_reissner_stiffness() {
             velocity: Vec3::new(0.0, 0.0, vp),
             angular: Vec3::zeros(),
             ramp: 2e-4,
+            curve: crash_core::NO_CURVE,
         },
     );
     let cfg = ContactConfig {

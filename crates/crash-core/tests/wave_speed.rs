@@ -33,6 +33,7 @@ fn membrane_wave_speed_matches_plate_theory() {
                 velocity: Vec3::new(1.0, 0.0, 0.0),
                 angular: Vec3::zeros(),
                 ramp: 0.0,
+                curve: crash_core::NO_CURVE,
             },
         );
         let probes = [0.3, 0.7];

@@ -51,13 +51,32 @@ impl ContactRow {
 }
 
 #[derive(Debug)]
-struct CsvFile {
+pub(crate) struct CsvFile {
     path: PathBuf,
-    w: BufWriter<File>,
+    pub(crate) w: BufWriter<File>,
+}
+
+/// Fields of a CSV line: commas inside double quotes do not count (RFC 4180).
+fn field_count(line: &str) -> usize {
+    let mut quoted = false;
+    1 + line
+        .chars()
+        .filter(|&c| {
+            if c == '"' {
+                quoted = !quoted;
+            }
+            c == ',' && !quoted
+        })
+        .count()
+}
+
+/// The field at `col` of a line without quoted fields before it.
+fn field(line: &str, col: usize) -> Option<&str> {
+    line.split(',').nth(col)
 }
 
 impl CsvFile {
-    fn create(path: &Path, header: &str) -> Result<Self, IoError> {
+    pub(crate) fn create(path: &Path, header: &str) -> Result<Self, IoError> {
         write_atomic(path, |w| writeln!(w, "{header}"))?;
         Self::append(path)
     }
@@ -73,6 +92,17 @@ impl CsvFile {
     /// Keep the header and the complete rows with time <= `up_to_time`; a torn last
     /// line (interrupted write) is dropped.
     fn reopen(path: &Path, header: &str, up_to_time: f64) -> Result<Self, IoError> {
+        Self::reopen_at(path, header, 0, up_to_time)
+    }
+
+    /// `reopen` for files whose time is column `time_col` (the columns before it are
+    /// never quoted).
+    pub(crate) fn reopen_at(
+        path: &Path,
+        header: &str,
+        time_col: usize,
+        up_to_time: f64,
+    ) -> Result<Self, IoError> {
         if !path.exists() {
             return Self::create(path, header);
         }
@@ -85,11 +115,8 @@ impl CsvFile {
         let ncol = header.split(',').count();
         let keep: Vec<&str> = lines
             .take_while(|l| {
-                let complete = l.ends_with('\n') && l.split(',').count() == ncol;
-                let t = l
-                    .split(',')
-                    .next()
-                    .and_then(|t| t.trim().parse::<f64>().ok());
+                let complete = l.ends_with('\n') && field_count(l.trim_end()) == ncol;
+                let t = field(l, time_col).and_then(|t| t.trim().parse::<f64>().ok());
                 complete && t.is_some_and(|t| t <= up_to_time)
             })
             .collect();
@@ -100,8 +127,12 @@ impl CsvFile {
         Self::append(path)
     }
 
-    fn flush(&mut self) -> Result<(), IoError> {
+    pub(crate) fn flush(&mut self) -> Result<(), IoError> {
         self.w.flush().at(&self.path)
+    }
+
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
     }
 }
 

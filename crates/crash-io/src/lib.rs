@@ -10,6 +10,7 @@ pub mod frame_writer;
 pub mod history;
 pub mod matsum_read;
 pub mod render;
+pub mod results;
 pub mod run;
 pub mod series;
 pub mod summary;
@@ -31,6 +32,10 @@ pub use history::{
 pub use render::{
     contact_sheet, energy_plot, loglog_plot, render_frame, Camera, Colouring, Image, LogSeries,
     RenderOptions, View,
+};
+pub use results::{
+    csv_name, ResultFile, NODOUT_CSV, NODOUT_HEADER, RCFORC_CSV, RCFORC_HEADER, SPCFORC_CSV,
+    SPCFORC_HEADER,
 };
 pub use run::render_run;
 pub use series::{read_pvd, PvdEntry, SeriesWriter, PVD_FILE};

@@ -1,15 +1,19 @@
 //! The commands a master sends and the replies a worker gives (exactly one per command).
 
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Fault, Vec3};
+use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Fault, NodeProbe, Vec3};
 use crash_io::FrameBody;
 use std::sync::Arc;
 
 /// Run-wide parameters every group needs.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Setup {
     pub gravity: Vec3,
     pub contact: ContactConfig,
+    /// Report support reactions (spcforc.csv asked for).
+    pub reactions: bool,
+    /// History nodes (body id, node index), sorted (nodout.csv asked for).
+    pub probes: Arc<Vec<(u32, u32)>>,
 }
 
 /// A body handed to or from a worker: its state, and its definition when the receiver
@@ -139,6 +143,8 @@ pub struct StepReport {
     /// The worker's decoding of this command and encoding of its previous reply [ns]
     /// (0 in process): a part of the barrier.
     pub codec_ns: u64,
+    /// History nodes of the worker's groups, group after group (empty unless asked).
+    pub probes: Vec<NodeProbe>,
 }
 
 #[derive(Debug, Clone)]

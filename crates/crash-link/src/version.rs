@@ -11,7 +11,9 @@ use thiserror::Error;
 /// connection of their own (Welcome carries the session token), Reset for a rollback.
 /// v6: read-only copies of kinematic bodies (Regroup lists them per group, Load of
 /// copies, Unload that keeps), contact statistics carry the loads on kinematic bodies.
-pub const PROTOCOL_VERSION: u32 = 6;
+/// v7: load curves in body definitions, support reactions and history nodes (Setup asks,
+/// reports carry them) for spcforc.csv and nodout.csv.
+pub const PROTOCOL_VERSION: u32 = 7;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

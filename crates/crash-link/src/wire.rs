@@ -10,7 +10,8 @@ use crash_proto::pb;
 use crash_proto::pb::master_message::Command as PbCommand;
 use crash_proto::pb::worker_message::Reply as PbReply;
 use crash_proto::report::{
-    contacts_from_pb, contacts_to_pb, fault_from_pb, fault_to_pb, reports_from_pb, reports_to_pb,
+    contacts_from_pb, contacts_to_pb, fault_from_pb, fault_to_pb, probes_from_pb, probes_to_pb,
+    reports_from_pb, reports_to_pb,
 };
 use crash_proto::{def_from_pb, def_to_pb, state_from_pb, state_to_pb, vec3_to_pb, ProtoError};
 
@@ -223,6 +224,8 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
         Command::Setup(s) => PbCommand::Setup(pb::Setup {
             gravity: Some(vec3_to_pb(&s.gravity)),
             contact: Some(contact_to_pb(&s.contact)),
+            reactions: s.reactions,
+            probes: s.probes.iter().flat_map(|p| [p.0, p.1]).collect(),
         }),
         Command::Load { at, bodies } | Command::LoadCopies { at, bodies } => {
             PbCommand::Load(pb::Load {
@@ -293,9 +296,16 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                     .contact
                     .as_ref()
                     .ok_or(ProtoError::Missing("setup.contact"))?;
+                if !s.probes.len().is_multiple_of(2) {
+                    return Err(ProtoError::Invalid("setup: probes not in pairs".into()));
+                }
                 Command::Setup(Setup {
                     gravity: Vec3::new(g.x, g.y, g.z),
                     contact: contact_from_pb(c)?,
+                    reactions: s.reactions,
+                    probes: std::sync::Arc::new(
+                        s.probes.chunks_exact(2).map(|p| (p[0], p[1])).collect(),
+                    ),
                 })
             }
             PbCommand::Load(l) => {
@@ -357,6 +367,7 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
             compute_nanos: rep.compute_ns,
             contacts: Some(contacts_to_pb(&rep.contacts)),
             codec_nanos: rep.codec_ns,
+            probes: (!rep.probes.is_empty()).then(|| probes_to_pb(&rep.probes)),
         }),
         Reply::Unloaded(bodies) => PbReply::Unloaded(pb::BodyLoads {
             bodies: bodies.iter().map(|b| load_to_pb(b, true)).collect(),
@@ -446,5 +457,9 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
             None => Vec::new(),
         },
         codec_ns: r.codec_nanos,
+        probes: match &r.probes {
+            Some(p) => probes_from_pb(p)?,
+            None => Vec::new(),
+        },
     })
 }

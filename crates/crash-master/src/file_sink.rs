@@ -5,8 +5,9 @@
 use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
 use crate::groups_csv::{GroupsCsv, GROUPS_CSV};
-use crate::input::RunSize;
-use crate::sink::{GroupRow, Sink, SinkError};
+use crate::input::{ResultRequest, RunSize};
+use crate::result_files::ResultFiles;
+use crate::sink::{GroupRow, ResultRows, Sink, SinkError};
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
 use crash_core::EnergyTotals;
@@ -114,6 +115,10 @@ pub struct FileSink {
     energy: EnergyHistory,
     contacts: ContactHistory,
     groups: GroupsCsv,
+    /// matsum.csv, rcforc.csv, nodout.csv, spcforc.csv (`with_results`).
+    results: ResultFiles,
+    /// The checkpoint time a reopened directory continues from.
+    resumed_at: Option<f64>,
     series: BackgroundSeries,
     /// Time spent handing frames to the writer thread on the caller's (the step
     /// loop's) thread [ns]; waits when the writer lags and drains at checkpoints
@@ -153,6 +158,8 @@ impl FileSink {
             energy: EnergyHistory::create(dir.join(ENERGY_CSV))?,
             contacts: ContactHistory::create(dir.join(CONTACTS_CSV))?,
             groups: GroupsCsv::create(&dir.join(GROUPS_CSV))?,
+            results: ResultFiles::default(),
+            resumed_at: None,
             series: BackgroundSeries::start(SeriesWriter::create(dir)?)?,
             handover_ns: 0,
             drain_ns: 0,
@@ -193,6 +200,8 @@ impl FileSink {
             energy: EnergyHistory::reopen(dir.join(ENERGY_CSV), t)?,
             contacts: ContactHistory::reopen(dir.join(CONTACTS_CSV), t)?,
             groups: GroupsCsv::reopen(&dir.join(GROUPS_CSV), t)?,
+            results: ResultFiles::default(),
+            resumed_at: Some(t),
             series: BackgroundSeries::start(SeriesWriter::reopen(dir, frames_until)?)?,
             handover_ns: 0,
             drain_ns: 0,
@@ -218,6 +227,13 @@ impl FileSink {
     /// frame writer lagging behind the run.
     pub fn take_notes(&mut self) -> Vec<String> {
         self.series.take_stall_note().into_iter().collect()
+    }
+
+    /// Write the result files `req` asks for (a reopened directory keeps their rows up
+    /// to the checkpoint).
+    pub fn with_results(mut self, req: &ResultRequest) -> Result<Self, SinkError> {
+        self.results = ResultFiles::open(&self.dir, req, self.resumed_at)?;
+        Ok(self)
     }
 
     /// Record the element kernels' instruction-set path in summary.json.
@@ -351,6 +367,10 @@ impl Sink for FileSink {
         Ok(())
     }
 
+    fn results(&mut self, step: u64, time: f64, rows: &ResultRows<'_>) -> Result<(), SinkError> {
+        self.results.write(step, time, rows, &self.names)
+    }
+
     /// The restart file, after the rows up to the checkpoint are on disk (so a
     /// reopen after an interruption finds them all).
     fn checkpoint(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
@@ -364,6 +384,7 @@ impl Sink for FileSink {
         self.energy.flush()?;
         self.contacts.flush()?;
         self.groups.flush()?;
+        self.results.flush()?;
         crash_io::write_checkpoint_keyed(
             path,
             &RestartRef {
@@ -385,10 +406,10 @@ impl Sink for FileSink {
         Ok(())
     }
 
-    /// Back to the checkpoint's time: energy.csv and contacts.csv keep their rows up to
-    /// it (a torn last line is dropped), frames.pvd its frames up to it (later frame
-    /// files removed), as a `--resume` does; the indicators and warnings return to
-    /// what they were then.
+    /// Back to the checkpoint's time: energy.csv, contacts.csv and the result files keep
+    /// their rows up to it (a torn last line is dropped), frames.pvd its frames up to it
+    /// (later frame files removed), as a `--resume` does; the indicators and warnings
+    /// return to what they were then.
     fn rollback(&mut self, state: &MasterCheckpoint) -> Result<(), SinkError> {
         let t = state.clock.time;
         self.energy.flush()?;
@@ -397,6 +418,7 @@ impl Sink for FileSink {
         self.contacts = ContactHistory::reopen(self.dir.join(CONTACTS_CSV), t)?;
         self.groups.flush()?;
         self.groups = GroupsCsv::reopen(&self.dir.join(GROUPS_CSV), t)?;
+        self.results.rollback(t)?;
         // the writer thread first writes what it holds, then starts again from the
         // frames up to the checkpoint
         self.series.finish()?;
@@ -431,6 +453,7 @@ impl Sink for FileSink {
         let r = self.series.end_frame();
         self.handover_ns += t.elapsed().as_nanos() as u64;
         r?;
+        self.results.flush()?;
         if self.echo {
             for n in self.take_notes() {
                 eprintln!("crash: note: {n}");
@@ -451,6 +474,7 @@ impl Sink for FileSink {
         self.energy.flush()?;
         self.contacts.flush()?;
         self.groups.flush()?;
+        self.results.flush()?;
         let s = &mut self.summary;
         s.steps = stats.steps;
         s.time_reached_s = stats.time;

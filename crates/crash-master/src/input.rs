@@ -55,6 +55,45 @@ pub struct RunInput {
     /// Simulated time between frames [s].
     pub output_interval: f64,
     pub scene_hash: u64,
+    /// matsum.csv, rcforc.csv, nodout.csv, spcforc.csv.
+    pub results: ResultRequest,
+}
+
+/// When the result files are written: intervals [s] (0: never), and the history nodes
+/// (body id, node index, node id of the mesh file), sorted by body and node.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ResultRequest {
+    pub matsum: f64,
+    pub rcforc: f64,
+    pub nodout: f64,
+    pub spcforc: f64,
+    pub history: Vec<(u32, u32, u64)>,
+}
+
+impl ResultRequest {
+    /// From a scene's `[outputs]`: matsum.csv and rcforc.csv at their interval or the
+    /// frame interval (they cost the workers nothing); nodout.csv when history nodes are
+    /// named, spcforc.csv when its interval is given (both need data from every step).
+    pub fn of(o: &crash_scene::outputs::Outputs, output_interval: f64) -> Self {
+        let mut history: Vec<(u32, u32, u64)> = o
+            .history
+            .iter()
+            .map(|&(b, n, tag)| (b, n as u32, tag))
+            .collect();
+        history.sort_unstable();
+        history.dedup();
+        Self {
+            matsum: o.matsum.unwrap_or(output_interval),
+            rcforc: o.rcforc.unwrap_or(output_interval),
+            nodout: if history.is_empty() {
+                0.0
+            } else {
+                o.nodout.unwrap_or(output_interval)
+            },
+            spcforc: o.spcforc.unwrap_or(0.0),
+            history,
+        }
+    }
 }
 
 /// How big a run is (for the summary).
@@ -96,6 +135,7 @@ impl RunInput {
             config,
             output_interval: b.output_interval,
             scene_hash: b.scene_hash,
+            results: ResultRequest::of(&b.outputs, b.output_interval),
         }
     }
 
@@ -112,6 +152,7 @@ impl RunInput {
             config,
             output_interval: plan.output_interval,
             scene_hash: plan.scene_hash,
+            results: ResultRequest::of(&plan.outputs, plan.output_interval),
         }
     }
 

@@ -199,7 +199,10 @@ fn run(args: Args) -> anyhow::Result<()> {
         .with_energy_limit(energy_limit)
         .with_frame_format(frame_format)
         .with_body_names(names)
-        .with_echo(true);
+        .with_echo(true)
+        .with_results(&input.results)
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("cannot create the result files in {}", args.out.display()))?;
     if let Some(p) = args.secret_file.as_deref() {
         if crash_link::auth::readable_by_others(p) {
             eprintln!(

@@ -6,7 +6,7 @@ use crate::error::MasterError;
 use crate::stats::RunStats;
 use crash_core::contact::PairStats;
 use crash_core::hash::StateHasher;
-use crash_core::EnergyTotals;
+use crash_core::{BodyReport, EnergyTotals, NodeProbe};
 use crash_io::FrameBody;
 
 pub use crate::error::SinkError;
@@ -31,6 +31,12 @@ pub trait Sink {
     }
     /// The groups (who computes what) at a time they changed, and at every output time.
     fn groups(&mut self, _step: u64, _time: f64, _rows: &[GroupRow]) -> Result<(), SinkError> {
+        Ok(())
+    }
+
+    /// The result rows due at this step (matsum.csv, rcforc.csv, nodout.csv,
+    /// spcforc.csv), after its energy row.
+    fn results(&mut self, _step: u64, _time: f64, _rows: &ResultRows<'_>) -> Result<(), SinkError> {
         Ok(())
     }
     /// The loop's state after a step, every `RunOptions::checkpoint_every` steps
@@ -74,6 +80,19 @@ pub struct GroupRow {
     pub elements: usize,
     /// The group's compute time in the last step [ns] (0 before the first step).
     pub step_ns: u64,
+}
+
+/// What each result file gets at one step (None: that file is not due).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ResultRows<'a> {
+    /// Per-body energies (matsum.csv), in body-id order.
+    pub matsum: Option<&'a [BodyReport]>,
+    /// Contact pairs, sorted (rcforc.csv: those with pushed nodes).
+    pub rcforc: Option<&'a [PairStats]>,
+    /// History nodes with their mesh-file node ids, sorted by body and node.
+    pub nodout: Option<&'a [(u64, NodeProbe)]>,
+    /// Per-body reports (spcforc.csv: those with a reaction).
+    pub spcforc: Option<&'a [BodyReport]>,
 }
 
 /// One energy row.

@@ -12,7 +12,8 @@ use crate::pb;
 use crash_core::body::NodalLoad;
 use crash_core::element::{HourglassState, ShellState, Stabilization};
 use crash_core::{
-    Body, BodyDef, BodyEnergy, BodyState, Material, Mesh, Section, Vec3, VelocityProgram,
+    Body, BodyDef, BodyEnergy, BodyState, Material, Mesh, Section, TimeCurve, Vec3,
+    VelocityProgram, NO_CURVE,
 };
 
 const TRI_REF: usize = 7;
@@ -153,6 +154,14 @@ pub fn def_to_pb(b: &BodyDef) -> pb::BodyDef {
         contact: b.contact,
         self_contact: b.self_contact,
         kinematic: b.kinematic,
+        program_curve: b.programs.iter().map(|p| p.curve).collect(),
+        load_curve: b.loads.iter().map(|l| l.curve).collect(),
+        curve_len: b.curves.iter().map(|c| c.points.len() as u32).collect(),
+        curve_points: b
+            .curves
+            .iter()
+            .flat_map(|c| c.points.iter().flat_map(|p| [p.0, p.1]))
+            .collect(),
     }
 }
 
@@ -312,6 +321,37 @@ pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
         )));
     }
     check(id, "load_values", &d.load_values, d.load_nodes.len(), LOAD)?;
+    check(
+        id,
+        "program_curve",
+        &d.program_curve,
+        d.programs.len() / PROGRAM,
+        1,
+    )?;
+    check(id, "load_curve", &d.load_curve, d.load_nodes.len(), 1)?;
+    let points: u64 = d.curve_len.iter().map(|&n| n as u64).sum();
+    if points.checked_mul(2) != Some(d.curve_points.len() as u64) {
+        return Err(ProtoError::Invalid(format!(
+            "body {id}: curves of {points} points carry {} values",
+            d.curve_points.len()
+        )));
+    }
+    let mut at = 0;
+    let mut curves = Vec::with_capacity(d.curve_len.len());
+    for &n in &d.curve_len {
+        let v = &d.curve_points[at..at + 2 * n as usize];
+        at += 2 * n as usize;
+        let c = TimeCurve {
+            points: v.chunks_exact(2).map(|p| (p[0], p[1])).collect(),
+        };
+        if !c.is_valid() {
+            return Err(ProtoError::Invalid(format!(
+                "body {id}: a load curve is not a time table"
+            )));
+        }
+        curves.push(c);
+    }
+    b.def_mut().curves = curves;
     b.def_mut().mass.clone_from(&d.mass);
     b.def_mut().inertia.clone_from(&d.inertia);
     b.def_mut().fixed.clone_from(&d.fixed);
@@ -325,22 +365,26 @@ pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
     b.def_mut().programs = d
         .programs
         .chunks_exact(PROGRAM)
-        .map(|c| VelocityProgram {
+        .zip(&d.program_curve)
+        .map(|(c, &curve)| VelocityProgram {
             velocity: vec3(&c[0..3]),
             angular: vec3(&c[3..6]),
             ramp: c[6],
+            curve,
         })
         .collect();
     b.def_mut().loads = d
         .load_nodes
         .iter()
         .zip(d.load_values.chunks_exact(LOAD))
-        .map(|(&node, c)| NodalLoad {
+        .zip(&d.load_curve)
+        .map(|((&node, c), &curve)| NodalLoad {
             node,
             force: vec3(&c[0..3]),
             moment: vec3(&c[3..6]),
             t0: c[6],
             t1: c[7],
+            curve,
         })
         .collect();
     b.def_mut().load_of.clone_from(&d.load_of);
@@ -376,6 +420,14 @@ fn validate_indices(b: &Body) -> Result<(), ProtoError> {
         .find(|&&l| l != u32::MAX && l as usize >= nl)
     {
         return bad(format!("load {l} of {nl}"));
+    }
+    let nc = b.def.curves.len();
+    let curves = b.def.programs.iter().map(|p| p.curve);
+    if let Some(c) = curves
+        .chain(b.def.loads.iter().map(|l| l.curve))
+        .find(|&c| c != NO_CURVE && c as usize >= nc)
+    {
+        return bad(format!("load curve {c} of {nc}"));
     }
     let nn = b.def.x0.len();
     if let Some(l) = b.def.loads.iter().find(|l| l.node as usize >= nn) {

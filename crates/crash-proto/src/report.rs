@@ -5,7 +5,7 @@ use crate::error::ProtoError;
 use crate::pb;
 use crate::pb::fault::Kind;
 use crash_core::contact::{KinLoad, PairStats};
-use crash_core::{BodyEnergy, BodyReport, Fault};
+use crash_core::{BodyEnergy, BodyReport, Fault, NodeProbe};
 
 const VALUES: usize = 15;
 const ELEMENTS: usize = 2;
@@ -17,8 +17,15 @@ pub fn reports_to_pb(reports: &[BodyReport]) -> pb::BodyReports {
         id: Vec::with_capacity(n),
         values: Vec::with_capacity(VALUES * n),
         elements: Vec::with_capacity(ELEMENTS * n),
+        reaction_index: Vec::new(),
+        reactions: Vec::new(),
     };
-    for r in reports {
+    for (k, r) in reports.iter().enumerate() {
+        if let Some((f, m)) = r.reaction {
+            out.reaction_index.push(k as u32);
+            out.reactions
+                .extend_from_slice(&[f.x, f.y, f.z, m.x, m.y, m.z]);
+        }
         let e = &r.energy;
         out.id.push(r.id);
         out.values.extend_from_slice(&[
@@ -80,7 +87,21 @@ pub fn reports_from_pb(p: &pb::BodyReports) -> Result<Vec<BodyReport>, ProtoErro
             max_move: v[13],
             hot_element: index(e[1])?,
             hot_density: v[14],
+            reaction: None,
         });
+    }
+    if p.reactions.len() != 6 * p.reaction_index.len() {
+        return Err(ProtoError::Invalid(format!(
+            "{} reactions carry {} values",
+            p.reaction_index.len(),
+            p.reactions.len()
+        )));
+    }
+    for (&k, v) in p.reaction_index.iter().zip(p.reactions.chunks_exact(6)) {
+        let r = out
+            .get_mut(k as usize)
+            .ok_or_else(|| ProtoError::Invalid(format!("reaction of body {k} of {n}")))?;
+        r.reaction = Some((vec3(&v[0..3]), vec3(&v[3..6])));
     }
     Ok(out)
 }
@@ -382,4 +403,44 @@ pub fn fault_from_pb(p: &pb::Fault) -> Result<Fault, ProtoError> {
             },
         },
     )
+}
+
+/// Column-pack history node rows.
+pub fn probes_to_pb(rows: &[NodeProbe]) -> pb::NodeProbes {
+    let mut out = pb::NodeProbes {
+        body: Vec::with_capacity(rows.len()),
+        node: Vec::with_capacity(rows.len()),
+        values: Vec::with_capacity(9 * rows.len()),
+    };
+    for r in rows {
+        out.body.push(r.body);
+        out.node.push(r.node);
+        for v in [r.u, r.v, r.a] {
+            out.values.extend_from_slice(&[v.x, v.y, v.z]);
+        }
+    }
+    out
+}
+
+pub fn probes_from_pb(p: &pb::NodeProbes) -> Result<Vec<NodeProbe>, ProtoError> {
+    let n = p.body.len();
+    if p.node.len() != n || p.values.len() != 9 * n {
+        return Err(ProtoError::Invalid(format!(
+            "{n} history nodes carry {} node ids and {} values",
+            p.node.len(),
+            p.values.len()
+        )));
+    }
+    Ok(p.body
+        .iter()
+        .zip(&p.node)
+        .zip(p.values.chunks_exact(9))
+        .map(|((&body, &node), v)| NodeProbe {
+            body,
+            node,
+            u: vec3(&v[0..3]),
+            v: vec3(&v[3..6]),
+            a: vec3(&v[6..9]),
+        })
+        .collect())
 }

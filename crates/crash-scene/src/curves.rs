@@ -1,12 +1,11 @@
 //! Load curves (`[curves.NAME] points = [[t, v], ...]`): checked, evaluated, and
-//! recognised when they are a ramp the solver core can already run.
+//! recognised when they are a ramp the solver core runs as such.
 //!
 //! A curve is linear between its points, holds its first value before the first point
-//! and its last value after the last one. The core has no general time functions yet:
-//! a prescribed velocity is constant after a linear ramp from t = 0
-//! (`crash_core::VelocityProgram`), a nodal load is constant after a linear ramp from t0
-//! to t1 (`crash_core::NodalLoad`). `Curve::as_ramp` finds the curves of that form;
-//! the others are refused at build time with `ErrorKind::Unsupported`.
+//! and its last value after the last one. `Curve::as_ramp` finds the curves that are a
+//! core ramp (a prescribed velocity constant after a linear ramp from t = 0, a nodal
+//! load constant after a linear ramp from t0 to t1): those run as ramps, bit for bit as
+//! before curves existed; the others run as `crash_core::TimeCurve` tables.
 
 use crate::context::Ctx;
 use crate::error::SceneError;

@@ -8,7 +8,7 @@ use crate::error::{ErrorKind, SceneError};
 use crate::globals::finite_vec;
 use crate::schema::BodySpec;
 use crate::select::{dofs, select};
-use crash_core::{Body, NodalLoad, Vec3, VelocityProgram};
+use crash_core::{Body, NodalLoad, TimeCurve, Vec3, VelocityProgram, NO_CURVE};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Positions and ids a selector picks from.
@@ -44,16 +44,25 @@ fn curve<'a>(
     })
 }
 
-fn unsupported(ctx: &Ctx, key: &str, name: &str, c: &Curve, core: &str) -> SceneError {
-    let owner = key.strip_suffix(".curve").unwrap_or(key);
-    ctx.value_error(
-        ErrorKind::Unsupported,
-        key,
-        format!(
-            "load curve \"{name}\" on {owner} is parsed but not yet supported by the solver core ({}): {core}",
-            c.describe()
-        ),
-    )
+/// The body's index of curve `name` (added to the body on first use).
+fn curve_index(
+    ctx: &Ctx,
+    key: &str,
+    name: &str,
+    c: &Curve,
+    body: &mut Body,
+    used: &mut BTreeMap<String, u32>,
+) -> Result<u32, SceneError> {
+    if let Some(&i) = used.get(name) {
+        return Ok(i);
+    }
+    let i = body
+        .add_curve(TimeCurve {
+            points: c.points.clone(),
+        })
+        .map_err(|e| ctx.invalid(key, e.to_string()))?;
+    used.insert(name.to_string(), i);
+    Ok(i)
 }
 
 /// Apply `fix`, `prescribe` and `load` of body spec `b` (key `key`) to `body`.
@@ -67,6 +76,8 @@ pub fn apply(
     info: &mut BodyInfo,
 ) -> Result<(), SceneError> {
     let pick = |k: &str, v: &toml::Value| select(ctx, k, v, nodes.local, nodes.global, nodes.tags);
+    // curves that are ramps run as ramps (as before curves existed); others as tables
+    let mut used: BTreeMap<String, u32> = BTreeMap::new();
     for (k, f) in b.fix.iter().enumerate() {
         let fk = format!("{key}.fix[{k}]");
         let picked = pick(&format!("{fk}.select"), &f.select)?;
@@ -80,7 +91,7 @@ pub fn apply(
         let picked = pick(&format!("{pk}.select"), &p.select)?;
         let velocity = finite_vec(ctx, &format!("{pk}.velocity"), Some(p.velocity))?;
         let angular = finite_vec(ctx, &format!("{pk}.angular_velocity"), p.angular_velocity)?;
-        let (scale, ramp) = match (&p.curve, p.ramp) {
+        let (scale, ramp, cid) = match (&p.curve, p.ramp) {
             (Some(_), Some(_)) => {
                 return Err(ctx.key_error(
                     ErrorKind::Invalid,
@@ -92,12 +103,15 @@ pub fn apply(
                 let ck = format!("{pk}.curve");
                 let c = curve(ctx, &ck, name, curves)?;
                 match c.as_ramp() {
-                    Some(r) if r.t0 == 0.0 => (r.value, r.t1),
-                    _ => return Err(unsupported(ctx, &ck, name, c,
-                        "a prescribed velocity can only rise linearly from 0 at t = 0 and then stay constant (or be constant from the start)")),
+                    Some(r) if r.t0 == 0.0 => (r.value, r.t1, NO_CURVE),
+                    _ => (1.0, 0.0, curve_index(ctx, &ck, name, c, body, &mut used)?),
                 }
             }
-            (None, r) => (1.0, non_negative(ctx, &format!("{pk}.ramp"), r, "s")?),
+            (None, r) => (
+                1.0,
+                non_negative(ctx, &format!("{pk}.ramp"), r, "s")?,
+                NO_CURVE,
+            ),
         };
         body.prescribe(
             &picked,
@@ -105,11 +119,12 @@ pub fn apply(
                 velocity: velocity * scale,
                 angular: angular * scale,
                 ramp,
+                curve: cid,
             },
         );
     }
     // loads with the same ramp on one node are summed; the core adds up the others
-    let mut per_node: BTreeMap<(usize, u64, u64), NodalLoad> = BTreeMap::new();
+    let mut per_node: BTreeMap<(usize, u64, u64, u32), NodalLoad> = BTreeMap::new();
     for (k, l) in b.load.iter().enumerate() {
         let lk = format!("{key}.load[{k}]");
         let picked = pick(&format!("{lk}.select"), &l.select)?;
@@ -122,7 +137,7 @@ pub fn apply(
         let n = picked.len() as f64;
         let force = finite_vec(ctx, &format!("{lk}.force"), l.force)? / n;
         let moment = finite_vec(ctx, &format!("{lk}.moment"), l.moment)? / n;
-        let (scale, t0, t1) = match &l.curve {
+        let (scale, t0, t1, cid) = match &l.curve {
             Some(name) => {
                 if let Some(other) = [("start", l.start), ("ramp", l.ramp)]
                     .iter()
@@ -136,19 +151,25 @@ pub fn apply(
                 }
                 let ck = format!("{lk}.curve");
                 let c = curve(ctx, &ck, name, curves)?;
-                let r = c.as_ramp().ok_or_else(|| unsupported(ctx, &ck, name, c,
-                    "a nodal load can only be 0 until t0, rise linearly to its value at t1 and then stay constant"))?;
-                (r.value, r.t0, r.t1)
+                match c.as_ramp() {
+                    Some(r) => (r.value, r.t0, r.t1, NO_CURVE),
+                    None => (
+                        1.0,
+                        0.0,
+                        0.0,
+                        curve_index(ctx, &ck, name, c, body, &mut used)?,
+                    ),
+                }
             }
             None => {
                 let t0 = non_negative(ctx, &format!("{lk}.start"), l.start, "s")?;
                 let t1 = t0 + non_negative(ctx, &format!("{lk}.ramp"), l.ramp, "s")?;
-                (1.0, t0, t1)
+                (1.0, t0, t1, NO_CURVE)
             }
         };
         for node in picked {
             per_node
-                .entry((node, t0.to_bits(), t1.to_bits()))
+                .entry((node, t0.to_bits(), t1.to_bits(), cid))
                 .and_modify(|p| {
                     p.force += force * scale;
                     p.moment += moment * scale;
@@ -159,6 +180,34 @@ pub fn apply(
                     moment: moment * scale,
                     t0,
                     t1,
+                    curve: cid,
+                });
+        }
+    }
+    for (k, pr) in b.pressure.iter().enumerate() {
+        let pk = format!("{key}.pressure[{k}]");
+        if !pr.value.is_finite() {
+            return Err(ctx.invalid(&format!("{pk}.value"), "must be finite (Pa)"));
+        }
+        let cid = match &pr.curve {
+            Some(name) => {
+                let ck = format!("{pk}.curve");
+                let c = curve(ctx, &ck, name, curves)?;
+                curve_index(ctx, &ck, name, c, body, &mut used)?
+            }
+            None => NO_CURVE,
+        };
+        for (node, force) in pressure_forces(body, pr.value) {
+            per_node
+                .entry((node, 0, 0, cid))
+                .and_modify(|p| p.force += force)
+                .or_insert(NodalLoad {
+                    node: node as u32,
+                    force,
+                    moment: Vec3::zeros(),
+                    t0: 0.0,
+                    t1: 0.0,
+                    curve: cid,
                 });
         }
     }
@@ -168,4 +217,30 @@ pub fn apply(
         body.add_load(l);
     }
     Ok(())
+}
+
+/// Nodal forces of pressure p on every element: -p A n / (corners) per corner, with the
+/// element's reference area A and unit normal n (summed per node, node order).
+pub fn pressure_forces(body: &Body, p: f64) -> BTreeMap<usize, Vec3> {
+    let d = &*body.def;
+    let x = &d.x0;
+    let mut out: BTreeMap<usize, Vec3> = BTreeMap::new();
+    let mut add = |nodes: &[u32], area: f64, n: Vec3| {
+        let len = n.norm();
+        if len > 0.0 {
+            let f = n * (-p * area / (len * nodes.len() as f64));
+            for &i in nodes {
+                *out.entry(i as usize).or_insert_with(Vec3::zeros) += f;
+            }
+        }
+    };
+    for e in &d.tris {
+        let [a, b, c] = e.nodes.map(|i| x[i as usize]);
+        add(&e.nodes, e.area0, (b - a).cross(&(c - a)));
+    }
+    for e in &d.quads {
+        let [a, b, c, q] = e.nodes.map(|i| x[i as usize]);
+        add(&e.nodes, e.area0, (c - a).cross(&(q - b)));
+    }
+    out
 }

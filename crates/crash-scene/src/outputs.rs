@@ -1,7 +1,8 @@
 //! `[outputs]`: result intervals beyond the frames (named after the LS-DYNA files they
 //! stand for) and the nodes whose histories are wanted, and how the frames are stored
 //! (`precision`, `compression`). Parsed and checked here and handed over in
-//! `Built::outputs`; the run does not write the interval files yet.
+//! `Built::outputs`; the run writes matsum.csv, rcforc.csv, nodout.csv and spcforc.csv
+//! from them (`crash_master::ResultRequest`).
 
 use crate::context::Ctx;
 use crate::error::{ErrorKind, SceneError};

@@ -156,6 +156,8 @@ pub struct BodySpec {
     pub prescribe: Vec<PrescribeSpec>,
     #[serde(default)]
     pub load: Vec<LoadSpec>,
+    #[serde(default)]
+    pub pressure: Vec<PressureSpec>,
 }
 
 /// Right-handed rotation by `angle` degrees about `axis` (any length > 0).
@@ -265,5 +267,17 @@ pub struct LoadSpec {
     pub ramp: Option<f64>,
     /// A curve of `curves` that scales force and moment over time (instead of start
     /// and ramp).
+    pub curve: Option<String>,
+}
+
+/// A pressure on every element of a body, along the elements' reference normals
+/// (a dead load: direction and area of the initial configuration).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureSpec {
+    /// Pressure [Pa]; positive pushes against the element normal (n = (x2-x1) x (x3-x1)
+    /// for a triangle, the diagonals' cross product for a quad).
+    pub value: f64,
+    /// A curve of `curves` that scales the pressure over time (default: constant).
     pub curve: Option<String>,
 }

@@ -38,4 +38,21 @@ fn docs_complete_example_builds_as_documented() {
     // the box is kinematic, starting at rest (ramp)
     assert!(b.bodies[2].def.kinematic);
     assert!(b.bodies[2].state.v.iter().all(|v| v.norm() == 0.0));
+    // the pressure pulse: nodal loads on a table; they add up to -p A along z (the
+    // plate lies in z = 0, its normal +z)
+    let plate = &b.bodies[0].def;
+    let c = plate
+        .loads
+        .iter()
+        .find(|l| l.curve != crash_core::NO_CURVE)
+        .expect("the pressure pulse")
+        .curve;
+    assert_eq!(plate.curves[c as usize].points.len(), 3);
+    let total: f64 = plate
+        .loads
+        .iter()
+        .filter(|l| l.curve == c)
+        .map(|l| l.force.z)
+        .sum();
+    assert!((total + 2.0e3 * 0.5 * 0.3).abs() < 1e-9, "{total}");
 }

@@ -336,23 +336,22 @@ fn prescribed_node_with_free_dofs_is_refused() {
 }
 
 #[test]
-fn general_load_curve_is_parsed_but_refused_at_the_motion_card() {
-    // curve 1 rises and falls back: not a ramp the core can run
+fn general_load_curve_on_the_motion_card_runs_as_a_time_table() {
+    // curve 1 rises and falls back: no ramp, so the body carries the table itself
     let t = with(
         "               0.001                 1.0",
         "               0.001                 0.0",
     );
-    let e = fail(&t);
-    scene_err(
-        &e,
-        ErrorKind::Unsupported,
-        line_of(&t, "         2         3         0         1"),
-        &[
-            "*BOUNDARY_PRESCRIBED_MOTION_RIGID",
-            "load curve \"lc1\"",
-            "is parsed but not yet supported by the solver core",
-        ],
-    );
+    let b = run(&t, DeckOptions::default()).expect("a general curve is accepted");
+    let moving = b
+        .bodies
+        .iter()
+        .find(|b| !b.def.programs.is_empty())
+        .expect("a body with prescribed motion");
+    let c = moving.def.programs[0].curve;
+    assert_ne!(c, crash_core::NO_CURVE, "the program runs the curve");
+    let table = &moving.def.curves[c as usize].points;
+    assert_eq!(table.last().map(|p| p.1), Some(0.0), "{table:?}");
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! The scene keys added for keyword decks, used directly in TOML: load curves (ramps
-//! mapped onto the core, anything else refused as not yet supported), node-id
+//! mapped onto the core ramps, anything else run as a time table), node-id
 //! selectors, the shear factor, the point an initial spin is given about, several
 //! ramps on one node, and the `[outputs]` requests.
 
@@ -31,29 +31,27 @@ fn a_ramp_curve_on_prescribed_motion_becomes_the_core_ramp() {
 }
 
 #[test]
-fn a_general_curve_is_parsed_but_refused_as_not_yet_supported() {
-    // rises and falls: the core has no such program yet
+fn a_general_curve_runs_as_a_time_table() {
+    // rises and falls: the body carries the table, the program points at it
     let text = format!(
         "{BASE}{PUSH}\n[curves.push]\npoints = [[0.0, 0.0], [1.0e-4, 1.0], [2.0e-4, 0.0]]\n"
     );
-    let e = error(&text);
-    check(
-        &e,
-        ErrorKind::Unsupported,
-        29,
-        9,
-        "bodies[1].prescribe[0].curve",
-        &["load curve \"push\" on bodies[1].prescribe[0] is parsed but not yet supported by the solver core", "3 point(s)"],
+    let b = build(&text);
+    let d = &b.bodies[1].def;
+    let p = d.programs[0];
+    assert_eq!(p.velocity, Vec3::new(0.0, 0.0, -2.0));
+    assert_eq!(
+        d.curves[p.curve as usize].points,
+        vec![(0.0, 0.0), (1.0e-4, 1.0), (2.0e-4, 0.0)]
     );
-    // a load may start later than t = 0; a prescribed velocity may not
-    let late = format!(
-        "{BASE}{PUSH}\n[curves.push]\npoints = [[0.0, 0.0], [1.0e-4, 0.0], [2.0e-4, 1.0]]\n"
-    );
-    assert_eq!(error(&late).kind, ErrorKind::Unsupported);
+    // a load that is a ramp still runs as one (t0, t1), without a table
     let load = format!("{BASE}\n[[bodies.load]]\nselect = \"all\"\nforce = [0.0, 0.0, -8.0]\ncurve = \"late\"\n\n[curves.late]\npoints = [[0.0, 0.0], [1.0e-4, 0.0], [2.0e-4, 1.0]]\n");
     let b = build(&load);
     let l = b.bodies[1].def.loads[0];
-    assert_eq!((l.t0, l.t1), (1.0e-4, 2.0e-4));
+    assert_eq!(
+        (l.t0, l.t1, l.curve),
+        (1.0e-4, 2.0e-4, crash_core::NO_CURVE)
+    );
 }
 
 #[test]

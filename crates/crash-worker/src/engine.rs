@@ -103,6 +103,8 @@ impl Engine {
                 for g in &mut self.groups {
                     g.gravity = s.gravity;
                     g.contact = s.contact;
+                    g.reactions = s.reactions;
+                    g.probes = s.probes.to_vec();
                 }
                 self.setup = Some(s);
                 Ok(Reply::Ack)
@@ -160,9 +162,21 @@ impl Engine {
     }
 
     fn new_group(&self, bodies: Vec<Body>, copies: Vec<Body>) -> Result<Group, EngineError> {
-        let setup = self.setup.ok_or(EngineError::NoSetup)?;
+        let setup = self.setup.as_ref().ok_or(EngineError::NoSetup)?;
         let mut g = Group::with_copies(bodies, copies, setup.gravity);
         g.contact = setup.contact;
+        g.reactions = setup.reactions;
+        if !setup.probes.is_empty() {
+            // only this group's bodies: the lookup per step stays short
+            let mut ids: Vec<u32> = g.bodies.iter().map(|b| b.def.id).collect();
+            ids.sort_unstable();
+            g.probes = setup
+                .probes
+                .iter()
+                .filter(|p| ids.binary_search(&p.0).is_ok())
+                .copied()
+                .collect();
+        }
         Ok(g)
     }
 
@@ -427,6 +441,7 @@ impl Engine {
             compute_ns: 0,
             contacts: Vec::new(),
             codec_ns: 0,
+            probes: Vec::new(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.first();
@@ -442,6 +457,7 @@ impl Engine {
                             s.kin_b.nodes.clear();
                         }
                     }
+                    rep.probes.extend_from_slice(g.probed());
                 }
                 Err(fault) => {
                     self.broken = true;

@@ -41,6 +41,8 @@ fn setup() -> Setup {
     Setup {
         gravity: Vec3::new(0.0, 0.0, -9.81),
         contact: Default::default(),
+        reactions: false,
+        probes: Default::default(),
     }
 }
 
@@ -189,11 +191,7 @@ fn kinematic_scene() -> Vec<Body> {
     let all: Vec<usize> = (0..p.node_count()).collect();
     p.prescribe(
         &all,
-        crash_core::VelocityProgram {
-            velocity: Vec3::new(0.0, 0.0, 1.0),
-            angular: Vec3::zeros(),
-            ramp: 0.0,
-        },
+        crash_core::VelocityProgram::ramped(Vec3::new(0.0, 0.0, 1.0), Vec3::zeros(), 0.0),
     );
     assert!(p.def.kinematic);
     p.def_mut().contact = true;

@@ -46,6 +46,7 @@ pub fn reissner(level: Level) -> Result<Measurement, CaseError> {
                 velocity: Vec3::new(0.0, 0.0, vp),
                 angular: Vec3::zeros(),
                 ramp: 2e-4,
+                curve: crash_core::NO_CURVE,
             },
         );
         let elements = c.element_count() + p.element_count();

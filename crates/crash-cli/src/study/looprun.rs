@@ -92,6 +92,7 @@ impl LoopRun {
             },
             output_interval: end_time,
             scene_hash: 0,
+            results: Default::default(),
         };
         Self {
             input: Some(input),

@@ -340,6 +340,7 @@ impl FreePlate {
             },
             output_interval: self.end_time / 4.0,
             scene_hash: 0,
+            results: Default::default(),
         };
         run_and_classify(input, crash_scene::globals::DEFAULT_ENERGY_LIMIT)
     }

@@ -130,6 +130,7 @@ pub fn cantilever(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
                 moment: Vec3::zeros(),
                 t0: 0.0,
                 t1: 0.05,
+                curve: crash_core::NO_CURVE,
             });
         }
         let elements = b.element_count();
@@ -179,6 +180,7 @@ pub fn wave_speed(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
                 velocity: Vec3::new(1.0, 0.0, 0.0),
                 angular: Vec3::zeros(),
                 ramp: 0.0,
+                curve: crash_core::NO_CURVE,
             },
         );
         let probes = [0.3, 0.7];

@@ -146,6 +146,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let n = self.info.len();
         self.contacts.clear();
         self.group_ns.clear();
+        self.probed.clear();
         if self.reports.len() != n {
             self.reports.clear();
             self.reports
@@ -167,6 +168,22 @@ impl<L: WorkerLink> Master<'_, L> {
             }
             self.account(&rep.groups);
             self.contacts.extend_from_slice(&rep.contacts);
+            for p in rep.probes {
+                let key = (p.body, p.node);
+                let h = &self.results.history;
+                match h.binary_search_by_key(&key, |h| (h.0, h.1)) {
+                    Ok(k) => self.probed.push((h[k].2, p)),
+                    Err(_) => {
+                        return Err(self.worker_error(
+                            w,
+                            LinkError::Protocol(format!(
+                                "unexpected history node {} of body {}",
+                                p.node, p.body
+                            )),
+                        ))
+                    }
+                }
+            }
         }
         if count != n {
             return Err(MasterError::Incomplete {
@@ -183,6 +200,7 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         self.kinematic.add(&self.contacts);
         self.kinematic.apply(&mut self.reports);
+        self.probed.sort_by_key(|p| (p.1.body, p.1.node));
         Ok(())
     }
 

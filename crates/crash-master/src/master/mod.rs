@@ -13,12 +13,14 @@
 //! step; it holds no nodal data between output times.
 
 use crate::error::MasterError;
-use crate::input::{BodySource, RunInput, RunOptions};
+use crate::input::{BodySource, ResultRequest, RunInput, RunOptions};
 use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::stats::RunStats;
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::{BodyBrief, BodyReport, Clock, EnergyLedger, KinematicWork, RunConfig, Vec3};
+use crash_core::{
+    BodyBrief, BodyReport, Clock, EnergyLedger, KinematicWork, NodeProbe, RunConfig, Vec3,
+};
 use crash_link::{LinkError, WorkerLink};
 
 mod barrier;
@@ -27,6 +29,7 @@ mod output;
 mod placement;
 mod plausible;
 mod recover;
+mod results;
 mod resume;
 mod time_loop;
 
@@ -98,6 +101,10 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     contacts: Vec<PairStats>,
     /// `contacts` carry the per-node forces on kinematic bodies (the step asked).
     kin_nodes: bool,
+    /// The result files' requests, and the history nodes of the last step (with their
+    /// mesh-file node ids, sorted by body and node).
+    results: ResultRequest,
+    probed: Vec<(u64, NodeProbe)>,
     frames: u64,
     last_frame_step: Option<u64>,
     pub(crate) stats: RunStats,
@@ -180,7 +187,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
                 sorted
                     .iter()
                     .filter(|b| b.kinematic)
-                    .map(|b| (b.id, b.programs.clone())),
+                    .map(|b| (b.id, b.programs.clone(), b.curves.clone())),
             ),
             names: input.names_by_id(&ids),
             group_ns: Default::default(),
@@ -196,6 +203,8 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             seen: Vec::with_capacity(n),
             contacts: Vec::new(),
             kin_nodes: false,
+            results: input.results.clone(),
+            probed: Vec::new(),
             frames: 0,
             last_frame_step: None,
             stats: RunStats::default(),

@@ -179,7 +179,9 @@ impl<L: WorkerLink> Master<'_, L> {
         let setup = self.setup();
         // (a dropped worker's commands are skipped by the exchange)
         self.expect_acks(
-            (0..nw).map(|_| vec![Command::Setup(setup)]).collect(),
+            (0..nw)
+                .map(|_| vec![Command::Setup(setup.clone())])
+                .collect(),
             "Setup",
         )?;
         let at = self.clock;

@@ -18,6 +18,8 @@ impl<L: WorkerLink> Master<'_, L> {
         Setup {
             gravity: self.gravity,
             contact: self.contact,
+            reactions: self.results.spcforc > 0.0,
+            probes: std::sync::Arc::new(self.results.history.iter().map(|h| (h.0, h.1)).collect()),
         }
     }
 
@@ -62,6 +64,7 @@ impl<L: WorkerLink> Master<'_, L> {
             .map_err(MasterError::sink)?;
         sink.contacts(0, 0.0, &self.meim.pairs())
             .map_err(MasterError::sink)?;
+        self.write_results(sink, None)?;
         self.output(sink, true)?;
         Ok(())
     }
@@ -141,6 +144,7 @@ impl<L: WorkerLink> Master<'_, L> {
             .map_err(MasterError::sink)?;
         sink.contact_stats(step, time, &self.contacts)
             .map_err(MasterError::sink)?;
+        self.write_results(sink, Some(at.time))?;
         let boxes: Vec<BodyBox> = self.reports.iter().map(|r| self.box_of(r)).collect();
         let changed = self.update_meim(&boxes);
         if changed {
