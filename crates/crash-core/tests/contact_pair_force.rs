@@ -11,23 +11,7 @@ use crash_core::{Clock, Vec3};
 #[test]
 fn pair_force_is_equal_and_opposite_and_its_impulse_is_the_momentum_change() {
     let (r, t, v0) = (0.05, 0.001, 2.0);
-    let x0 = r + 0.5 * t + 2e-4;
-    let a = sphere(
-        0,
-        r,
-        t,
-        3,
-        Vec3::new(-x0, 0.0, 0.0),
-        Vec3::new(v0, 0.0, 0.0),
-    );
-    let b = sphere(
-        1,
-        r,
-        t,
-        3,
-        Vec3::new(x0, 0.0, 0.0),
-        Vec3::new(-v0, 0.0, 0.0),
-    );
+    let (a, b) = head_on_pair(r, t, 3, 2e-4, v0);
     let cfg = ContactConfig {
         margin: 1e-3,
         ..Default::default()

@@ -11,23 +11,7 @@ use crash_core::{Run, RunConfig, Vec3};
 fn head_on_spheres_conserve_momentum_and_exchange_velocities() {
     let (r, t) = (0.1, 0.001);
     let v0 = 1.0;
-    let x0 = r + 0.5 * t + 1e-4;
-    let a = sphere(
-        0,
-        r,
-        t,
-        4,
-        Vec3::new(-x0, 0.0, 0.0),
-        Vec3::new(v0, 0.0, 0.0),
-    );
-    let b = sphere(
-        1,
-        r,
-        t,
-        4,
-        Vec3::new(x0, 0.0, 0.0),
-        Vec3::new(-v0, 0.0, 0.0),
-    );
+    let (a, b) = head_on_pair(r, t, 4, 1e-4, v0);
     let cfg = ContactConfig {
         margin: 1e-3,
         ..Default::default()

@@ -448,15 +448,8 @@ impl Engine {
             match r {
                 Ok(reports) => {
                     rep.bodies.extend(reports);
-                    let at = rep.contacts.len();
-                    rep.contacts.extend_from_slice(g.contact_stats());
-                    if !kin_nodes {
-                        // per-node forces on kinematic bodies travel only before a frame
-                        for s in &mut rep.contacts[at..] {
-                            s.kin_a.nodes.clear();
-                            s.kin_b.nodes.clear();
-                        }
-                    }
+                    rep.contacts
+                        .extend(g.contact_stats().iter().map(|s| s.for_report(kin_nodes)));
                     rep.probes.extend_from_slice(g.probed());
                 }
                 Err(fault) => {

@@ -56,6 +56,19 @@ impl KinLoad {
         self.power == 0.0 && self.by_program.is_empty() && self.nodes.is_empty()
     }
 
+    /// A copy with or without the per-node forces (sent only before a frame).
+    fn copy(&self, nodes: bool) -> Self {
+        Self {
+            power: self.power,
+            by_program: self.by_program.clone(),
+            nodes: if nodes {
+                self.nodes.clone()
+            } else {
+                Vec::new()
+            },
+        }
+    }
+
     /// Sum the pushes per node (kept in hit order by the stable sort).
     fn settle_nodes(&mut self) {
         if self.nodes.is_empty() {
@@ -95,6 +108,18 @@ pub struct PairStats {
     pub kin_a: KinLoad,
     #[serde(default)]
     pub kin_b: KinLoad,
+}
+
+impl PairStats {
+    /// A copy for a step report: the per-node loads on kinematic bodies only when
+    /// `nodes` (a frame follows), so other steps neither copy nor send them.
+    pub fn for_report(&self, nodes: bool) -> Self {
+        Self {
+            kin_a: self.kin_a.copy(nodes),
+            kin_b: self.kin_b.copy(nodes),
+            ..*self
+        }
+    }
 }
 
 /// Search caches of a group (R-trees, Verlet reference positions) and the last pass's

@@ -32,6 +32,31 @@ pub fn sphere(id: u32, r: f64, t: f64, level: u32, centre: Vec3, v: Vec3) -> Bod
 }
 
 /// Square plate lx x lx in the plane z = z0, n x n quads, every DOF held (kinematic).
+/// Two spheres (ids 0 and 1) on the x axis, `gap` apart at their mid-surfaces' closest
+/// points beyond contact (t/2 each side), closing head-on at `v0` each.
+#[allow(dead_code)] // not every test file uses every helper
+pub fn head_on_pair(r: f64, t: f64, level: u32, gap: f64, v0: f64) -> (Body, Body) {
+    let x0 = r + 0.5 * t + gap;
+    (
+        sphere(
+            0,
+            r,
+            t,
+            level,
+            Vec3::new(-x0, 0.0, 0.0),
+            Vec3::new(v0, 0.0, 0.0),
+        ),
+        sphere(
+            1,
+            r,
+            t,
+            level,
+            Vec3::new(x0, 0.0, 0.0),
+            Vec3::new(-v0, 0.0, 0.0),
+        ),
+    )
+}
+
 pub fn fixed_plate(id: u32, lx: f64, n: usize, t: f64, z0: f64) -> Body {
     let mut m = plate(lx, lx, n, n, ElementKind::Quad);
     m.transform(&nalgebra::Matrix3::identity(), Vec3::new(0.0, 0.0, z0));
