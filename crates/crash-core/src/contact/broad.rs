@@ -20,7 +20,11 @@ pub struct BodyBox {
 impl BodyBox {
     /// Box of a body's current positions.
     pub fn of(body: &Body) -> Self {
-        let (lo, hi) = crate::mesh::bounds(&body.state.x);
+        Self::with_bounds(body, crate::mesh::bounds(&body.state.x))
+    }
+
+    /// Box of a body whose node bounds are known.
+    pub fn with_bounds(body: &Body, (lo, hi): (Vec3, Vec3)) -> Self {
         Self {
             id: body.def.id,
             lo,

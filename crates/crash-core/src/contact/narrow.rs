@@ -29,10 +29,10 @@ pub struct Hit {
     pub depth: f64,
 }
 
-/// Box (lo, hi) beyond which a node cannot touch the segment body: its node box grown
-/// by both half-thicknesses.
-pub fn reach_box(seg_body: &Body, node_body: &Body) -> (Vec3, Vec3) {
-    let (lo, hi) = crate::mesh::bounds(&seg_body.state.x);
+/// Box (lo, hi) beyond which a node cannot touch the segment body: its node box
+/// (`surf.bounds`, fresh) grown by both half-thicknesses.
+pub fn reach_box(surf: &Surface, seg_body: &Body, node_body: &Body) -> (Vec3, Vec3) {
+    let (lo, hi) = surf.bounds;
     let c = 0.5 * (seg_body.def.section.thickness + node_body.def.section.thickness);
     (lo.add_scalar(-c), hi.add_scalar(c))
 }
@@ -57,7 +57,7 @@ pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit>
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     let r = 0.5 * nb.def.section.thickness;
     let tie = TIE * c;
-    let (lo, hi) = reach_box(sb, nb);
+    let (lo, hi) = reach_box(surf, sb, nb);
     let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] && p[d] <= hi[d]);
     let chunks: Vec<Vec<Hit>> = nb
         .state

@@ -11,7 +11,6 @@ use super::broad::{candidate_pairs, BodyBox};
 use super::config::{ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY};
 use super::narrow::{forces, search, Hit, Normals, Push};
 use super::segment::Segment;
-use super::smooth::nodal_normals;
 use super::surface::Surface;
 use super::sweep::{closing_speed, first_crossing};
 use crate::body::{Body, NO_PROGRAM};
@@ -127,6 +126,8 @@ impl PairStats {
 #[derive(Debug, Clone, Default)]
 pub struct ContactState {
     surfaces: BTreeMap<u32, Surface>,
+    /// Nodal normals per body, valid at the nodes the current pass reads.
+    normals: BTreeMap<u32, Vec<Vec3>>,
     stats: Vec<PairStats>,
 }
 
@@ -146,14 +147,17 @@ impl ContactState {
 /// with self pairs for bodies that have self-contact on. Pairs of two kinematic bodies
 /// are left out: contact cannot move either (and such a pair may meet in several
 /// groups as read-only copies: it must not be counted twice).
-fn pairs_of(bodies: &[Body], cfg: &ContactConfig) -> Vec<(usize, usize)> {
+fn pairs_of(bodies: &[Body], cfg: &ContactConfig, bounds: &[(Vec3, Vec3)]) -> Vec<(usize, usize)> {
     let index: BTreeMap<u32, usize> = bodies
         .iter()
         .enumerate()
         .filter(|(_, b)| b.def.contact)
         .map(|(k, b)| (b.def.id, k))
         .collect();
-    let boxes: Vec<BodyBox> = index.values().map(|&k| BodyBox::of(&bodies[k])).collect();
+    let boxes: Vec<BodyBox> = index
+        .values()
+        .map(|&k| BodyBox::with_bounds(&bodies[k], bounds[k]))
+        .collect();
     let mut pairs: Vec<(u32, u32)> = candidate_pairs(&boxes, cfg.margin);
     pairs.extend(
         index
@@ -173,6 +177,7 @@ fn ensure_surface<'s>(
     surfaces: &'s mut BTreeMap<u32, Surface>,
     body: &Body,
     skin: f64,
+    bounds: (Vec3, Vec3),
 ) -> &'s mut Surface {
     let s = surfaces
         .entry(body.def.id)
@@ -181,7 +186,23 @@ fn ensure_surface<'s>(
         *s = Surface::new(body);
     }
     s.refresh(body, skin);
+    s.bounds = bounds;
     s
+}
+
+/// Box of every contact body's nodes at this pass (computed once, used by level i and
+/// by every reach test of level ii; other bodies get an empty box).
+fn body_bounds(bodies: &[Body]) -> Vec<(Vec3, Vec3)> {
+    bodies
+        .iter()
+        .map(|b| {
+            if b.def.contact {
+                crate::mesh::bounds(&b.state.x)
+            } else {
+                (Vec3::zeros(), Vec3::zeros())
+            }
+        })
+        .collect()
 }
 
 /// Element-form stable step of nodes of `nb` against segments of `surf`: a two-mass
@@ -252,11 +273,12 @@ pub fn contact_forces(
     if !cfg.enabled {
         return Ok(dt);
     }
-    let pairs = pairs_of(bodies, cfg);
+    let bounds = body_bounds(bodies);
+    let pairs = pairs_of(bodies, cfg, &bounds);
     for &(ia, ib) in &pairs {
         for k in [ia, ib] {
             let skin = cfg.margin_for(&bodies[k]);
-            ensure_surface(&mut state.surfaces, &bodies[k], skin);
+            ensure_surface(&mut state.surfaces, &bodies[k], skin, bounds[k]);
         }
     }
     for &(ia, ib) in &pairs {
@@ -290,35 +312,54 @@ pub fn contact_forces(
         if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
             continue;
         }
-        let (na, nb_) = (nodal_normals(a), nodal_normals(b));
+        let hits_a = search(a, b, sb, self_pair);
+        let hits_b = if self_pair {
+            Vec::new()
+        } else {
+            search(b, a, sa, false)
+        };
+        // nodal normals where the passes read them: the hit nodes and the corners of
+        // their segments (stale values elsewhere are never read)
+        for (hits, nb, sb_, surf_n, surf_s) in [(&hits_a, a, b, sa, sb), (&hits_b, b, a, sb, sa)] {
+            for h in hits {
+                let own = state.normals.entry(nb.def.id).or_default();
+                own.resize(nb.state.x.len(), Vec3::zeros());
+                own[h.node as usize] = surf_n.nodal_normal(h.node, &nb.state.x);
+                let seg = surf_s.segments[h.segment as usize];
+                let other = state.normals.entry(sb_.def.id).or_default();
+                other.resize(sb_.state.x.len(), Vec3::zeros());
+                for &n in seg.nodes() {
+                    other[n as usize] = surf_s.nodal_normal(n, &sb_.state.x);
+                }
+            }
+        }
+        let empty = Vec::new();
+        let na = state.normals.get(&a.def.id).unwrap_or(&empty);
+        let nb_ = state.normals.get(&b.def.id).unwrap_or(&empty);
         let first = forces(
-            &search(a, b, sb, self_pair),
+            &hits_a,
             a,
             b,
             sb,
             cfg,
             dt_ref,
             Normals {
-                segment: &nb_,
-                node: &na,
+                segment: nb_,
+                node: na,
             },
         );
-        let second = if self_pair {
-            Vec::new()
-        } else {
-            forces(
-                &search(b, a, sa, false),
-                b,
-                a,
-                sa,
-                cfg,
-                dt_ref,
-                Normals {
-                    segment: &na,
-                    node: &nb_,
-                },
-            )
-        };
+        let second = forces(
+            &hits_b,
+            b,
+            a,
+            sa,
+            cfg,
+            dt_ref,
+            Normals {
+                segment: na,
+                node: nb_,
+            },
+        );
         let mut st = PairStats {
             a: a.def.id,
             b: b.def.id,
@@ -446,13 +487,14 @@ pub struct Penetration {
 pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetration> {
     let mut out = Vec::new();
     let mut surfaces = BTreeMap::new();
-    for (ia, ib) in pairs_of(bodies, cfg) {
+    let bounds = body_bounds(bodies);
+    for (ia, ib) in pairs_of(bodies, cfg, &bounds) {
         if ia == ib {
             continue;
         }
         for (n, s) in [(ia, ib), (ib, ia)] {
             let (nb, sb) = (&bodies[n], &bodies[s]);
-            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb));
+            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb), bounds[s]);
             let hits = search(nb, sb, surf, false);
             let deepest = hits.iter().fold(None::<&Hit>, |d, h| match d {
                 Some(d) if d.depth >= h.depth => Some(d),

@@ -31,11 +31,37 @@ pub struct Surface {
     /// Node adjacency (CSR) for self-contact exclusion.
     pub adj_start: Vec<u32>,
     pub adj: Vec<u32>,
+    /// Segments incident to each node (CSR), in the summation order of
+    /// `smooth::nodal_normals`: triangles before quads, then corner slot, then segment.
+    inc_start: Vec<u32>,
+    inc: Vec<u32>,
+    /// Box of the body's nodes at the current pass (set by the contact stage once per
+    /// pass, shared by every use of it).
+    pub bounds: (Vec3, Vec3),
     tree: RTree<Entry>,
     reference: Vec<Vec3>,
     skin: f64,
     built: bool,
     pub builds: u64,
+}
+
+fn node_incidence(n: usize, segs: &[Segment]) -> (Vec<u32>, Vec<u32>) {
+    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for count in [3u8, 4] {
+        for k in 0..count as usize {
+            for (j, s) in segs.iter().enumerate().filter(|(_, s)| s.count == count) {
+                lists[s.nodes[k] as usize].push(j as u32);
+            }
+        }
+    }
+    let mut start = Vec::with_capacity(n + 1);
+    start.push(0u32);
+    let mut inc = Vec::new();
+    for l in lists {
+        inc.extend(l);
+        start.push(inc.len() as u32);
+    }
+    (start, inc)
 }
 
 fn node_adjacency(n: usize, segs: &[Segment]) -> (Vec<u32>, Vec<u32>) {
@@ -59,6 +85,17 @@ fn node_adjacency(n: usize, segs: &[Segment]) -> (Vec<u32>, Vec<u32>) {
         start.push(adj.len() as u32);
     }
     (start, adj)
+}
+
+/// Twice the area times the unit normal of a segment: (x2 - x1) x (x3 - x1) for a
+/// triangle, (x3 - x1) x (x4 - x2) for a quad.
+pub fn face_vector(s: &Segment, x: &[Vec3]) -> Vec3 {
+    let [a, b, c, d] = s.nodes.map(|i| x[i as usize]);
+    if s.count == 3 {
+        (b - a).cross(&(c - a))
+    } else {
+        (c - a).cross(&(d - b))
+    }
 }
 
 impl Surface {
@@ -95,6 +132,7 @@ impl Surface {
             .fold(f64::INFINITY, f64::min);
         let inv_k = k_unit.iter().map(|k| 1.0 / k).fold(f64::INFINITY, f64::min);
         let (adj_start, adj) = node_adjacency(body.state.x.len(), &segs);
+        let (inc_start, inc) = node_incidence(body.state.x.len(), &segs);
         Self {
             node_count: body.state.x.len(),
             segments: segs,
@@ -105,6 +143,9 @@ impl Surface {
             min_mass: body.def.mass.iter().copied().fold(f64::INFINITY, f64::min),
             adj_start,
             adj,
+            inc_start,
+            inc,
+            bounds: crate::mesh::bounds(&body.state.x),
             tree: RTree::new(),
             reference: Vec::new(),
             skin: 0.0,
@@ -172,6 +213,28 @@ impl Surface {
         );
     }
 
+    /// Unit normal of node `n` at positions `x`: the area-weighted mean of its
+    /// segments' normals, summed in the order of `smooth::nodal_normals` (so the two
+    /// agree bit for bit), or zero where they cancel. The contact stage needs normals
+    /// only at the nodes of its hits: computing those alone keeps the pass proportional
+    /// to the contact zone, not to the body.
+    pub fn nodal_normal(&self, n: u32, x: &[Vec3]) -> Vec3 {
+        let (a, b) = (
+            self.inc_start[n as usize] as usize,
+            self.inc_start[n as usize + 1] as usize,
+        );
+        let mut v = Vec3::zeros();
+        for &j in &self.inc[a..b] {
+            v += face_vector(&self.segments[j as usize], x);
+        }
+        let l = v.norm();
+        if l > 0.0 {
+            v / l
+        } else {
+            Vec3::zeros()
+        }
+    }
+
     /// Is segment `j` excluded from self-contact with node `i` (it holds the node or one
     /// of its neighbours)?
     pub fn near_in_topology(&self, i: u32, j: u32) -> bool {
@@ -181,5 +244,42 @@ impl Surface {
             .nodes()
             .iter()
             .any(|n| *n == i || nb.binary_search(n).is_ok())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::smooth::nodal_normals;
+    use crate::material::{Material, Section};
+    use crate::shapes::{plate, ElementKind};
+    use crate::Stabilization;
+
+    /// The contact stage computes normals only where a pass reads them; they must be
+    /// the full field's bits (a mixed tri/quad body, moved off its plane).
+    #[test]
+    fn nodal_normals_of_single_nodes_equal_the_whole_field_bit_for_bit() {
+        let mut m = plate(1.0, 1.0, 6, 5, ElementKind::Quad);
+        for q in m.quads.drain(..7).collect::<Vec<_>>() {
+            m.tris.push([q[0], q[1], q[2]]);
+            m.tris.push([q[0], q[2], q[3]]);
+        }
+        let sec = Section::new(Material::new(1000.0, 1e9, 0.3, 0.0).expect("valid"), 0.01);
+        let mut b = Body::new(0, "p", &m, sec, Stabilization::default()).expect("valid");
+        let mut r = 12345u64;
+        for x in &mut b.state.x {
+            r = r
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            x.z += ((r >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.05;
+        }
+        let whole = nodal_normals(&b);
+        let surf = Surface::new(&b);
+        for (n, w) in whole.iter().enumerate() {
+            let one = surf.nodal_normal(n as u32, &b.state.x);
+            for d in 0..3 {
+                assert_eq!(one[d].to_bits(), w[d].to_bits(), "node {n}");
+            }
+        }
     }
 }

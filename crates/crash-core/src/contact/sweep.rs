@@ -97,7 +97,15 @@ fn crosses(p0: &Vec3, p1: &Vec3, t0: &[Vec3; 3], t1: &[Vec3; 3], c: f64) -> Opti
 /// The (sub-)triangles of a segment with their corner weights: a triangle is itself;
 /// a quad is split into four around its centroid, as in the projection.
 fn sub_triangles(seg: &Segment, x: &[Vec3]) -> ([[Vec3; 3]; 4], [[f64; 4]; 12], usize) {
-    let xs = seg.nodes.map(|n| x[n as usize]);
+    sub_triangles_at(seg, |n| x[n as usize])
+}
+
+/// `sub_triangles` with the nodes' positions given by `at` (node id -> position).
+fn sub_triangles_at(
+    seg: &Segment,
+    at: impl Fn(u32) -> Vec3,
+) -> ([[Vec3; 3]; 4], [[f64; 4]; 12], usize) {
+    let xs = seg.nodes.map(at);
     let mut tris = [[Vec3::zeros(); 3]; 4];
     // weights of each corner on the segment's nodes (corner k of triangle j: row 3j+k)
     let mut w = [[0.0; 4]; 12];
@@ -133,13 +141,10 @@ pub fn first_crossing(
     }
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     let xb1 = &sb.state.x;
-    let xb0: Vec<Vec3> = xb1
-        .iter()
-        .zip(&sb.state.v)
-        .map(|(x, v)| x - v * h)
-        .collect();
+    // positions before the step, of the corners a candidate needs only
+    let before = |n: u32| xb1[n as usize] - sb.state.v[n as usize] * h;
     let seg_move = sb.state.v.iter().map(|v| v.norm() * h).fold(0.0, f64::max);
-    let (lo, hi) = super::narrow::reach_box(sb, nb);
+    let (lo, hi) = super::narrow::reach_box(surf, sb, nb);
     let chunks: Vec<Option<Crossing>> = nb
         .state
         .x
@@ -164,7 +169,7 @@ pub fn first_crossing(
                     }
                     let seg = &surf.segments[j as usize];
                     let (t1, w, n) = sub_triangles(seg, xb1);
-                    let (t0, _, _) = sub_triangles(seg, &xb0);
+                    let (t0, _, _) = sub_triangles_at(seg, before);
                     for s in 0..n {
                         let Some(tau) = crosses(&p0, p1, &t0[s], &t1[s], c) else {
                             continue;
