@@ -190,6 +190,19 @@ fn ensure_surface<'s>(
     s
 }
 
+/// `mesh::bounds` over fixed chunks on the thread pool (min and max are exact in any
+/// order, so the box is the same bits).
+fn par_bounds(x: &[Vec3]) -> (Vec3, Vec3) {
+    use rayon::prelude::*;
+    x.par_chunks(PAR_CHUNK).map(crate::mesh::bounds).reduce(
+        || crate::mesh::bounds(&[]),
+        |(l1, h1), (l2, h2)| (l1.inf(&l2), h1.sup(&h2)),
+    )
+}
+
+/// Nodes per task of the stage's whole-body passes (boxes, speeds).
+pub(crate) const PAR_CHUNK: usize = 2048;
+
 /// Box of every contact body's nodes at this pass (computed once, used by level i and
 /// by every reach test of level ii; other bodies get an empty box).
 fn body_bounds(bodies: &[Body]) -> Vec<(Vec3, Vec3)> {
@@ -197,7 +210,7 @@ fn body_bounds(bodies: &[Body]) -> Vec<(Vec3, Vec3)> {
         .iter()
         .map(|b| {
             if b.def.contact {
-                crate::mesh::bounds(&b.state.x)
+                par_bounds(&b.state.x)
             } else {
                 (Vec3::zeros(), Vec3::zeros())
             }

@@ -162,12 +162,20 @@ impl Surface {
     /// Rebuild the tree if it is missing, the skin changed or a node moved farther than
     /// the skin since the last build. Returns whether it rebuilt.
     pub fn refresh(&mut self, body: &Body, skin: f64) -> bool {
+        // any node beyond the skin (a yes/no: the same answer in any order, on the pool)
         let moved = || {
+            use rayon::prelude::*;
             let s2 = skin * skin;
-            body.state.x.iter().zip(&self.reference).any(|(a, b)| {
-                let d2 = (a - b).norm_squared();
-                d2.is_nan() || d2 > s2
-            })
+            body.state
+                .x
+                .par_chunks(super::stage::PAR_CHUNK)
+                .zip(self.reference.par_chunks(super::stage::PAR_CHUNK))
+                .any(|(xs, rs)| {
+                    xs.iter().zip(rs).any(|(a, b)| {
+                        let d2 = (a - b).norm_squared();
+                        d2.is_nan() || d2 > s2
+                    })
+                })
         };
         if self.built && self.skin == skin && self.reference.len() == body.state.x.len() && !moved()
         {

@@ -44,8 +44,13 @@ fn mean_velocity(b: &Body) -> Vec3 {
     }
 }
 
+/// Largest |v - u| over the nodes (a max: the same bits in any order, so on the pool).
 fn max_speed_rel(b: &Body, u: &Vec3) -> f64 {
-    b.state.v.iter().map(|v| (v - u).norm()).fold(0.0, f64::max)
+    b.state
+        .v
+        .par_chunks(super::stage::PAR_CHUNK)
+        .map(|vs| vs.iter().map(|v| (v - u).norm()).fold(0.0, f64::max))
+        .reduce(|| 0.0, f64::max)
 }
 
 /// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
@@ -143,7 +148,12 @@ pub fn first_crossing(
     let xb1 = &sb.state.x;
     // positions before the step, of the corners a candidate needs only
     let before = |n: u32| xb1[n as usize] - sb.state.v[n as usize] * h;
-    let seg_move = sb.state.v.iter().map(|v| v.norm() * h).fold(0.0, f64::max);
+    let seg_move = sb
+        .state
+        .v
+        .par_chunks(super::stage::PAR_CHUNK)
+        .map(|vs| vs.iter().map(|v| v.norm() * h).fold(0.0, f64::max))
+        .reduce(|| 0.0, f64::max);
     let (lo, hi) = super::narrow::reach_box(surf, sb, nb);
     let chunks: Vec<Option<Crossing>> = nb
         .state
