@@ -15,7 +15,9 @@
 
 use crash_core::contact::narrow::search;
 use crash_core::contact::surface::Surface;
-use crash_core::contact::{contact_forces, project, segments, ContactConfig, ContactState};
+use crash_core::contact::{
+    body_bounds, contact_forces, project, segments, ContactConfig, ContactState,
+};
 use crash_core::shapes::{icosphere, plate, ElementKind};
 use crash_core::{dof, Body, Material, Section, Stabilization, Vec3};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -73,8 +75,9 @@ fn stage_bench(c: &mut Criterion, name: &str, mut bodies: Vec<Body>) {
         ..Default::default()
     };
     let dts: Vec<f64> = bodies.iter().map(|_| 1e-6).collect();
+    let boxes = body_bounds(&bodies);
     let mut state = ContactState::default();
-    contact_forces(&mut bodies, &cfg, &mut state, &dts, 0.0, 0)
+    contact_forces(&mut bodies, &cfg, &mut state, &dts, &boxes, 0.0, 0)
         .expect("no crossing check at h = 0");
     let nodes: usize = bodies.iter().map(|b| b.state.x.len()).sum();
     let active: usize = state.stats().iter().map(|s| s.active_nodes).sum();
@@ -89,7 +92,17 @@ fn stage_bench(c: &mut Criterion, name: &str, mut bodies: Vec<Body>) {
         .warm_up_time(Duration::from_secs(1));
     g.throughput(Throughput::Elements(nodes as u64));
     g.bench_function(name, |b| {
-        b.iter(|| black_box(contact_forces(&mut bodies, &cfg, &mut state, &dts, 0.0, 0)))
+        b.iter(|| {
+            black_box(contact_forces(
+                &mut bodies,
+                &cfg,
+                &mut state,
+                &dts,
+                &boxes,
+                0.0,
+                0,
+            ))
+        })
     });
     g.finish();
 }

@@ -182,11 +182,14 @@ impl Group {
     /// `h`, `step`: the step that led here (0, 0 at the start), for the crossing check.
     fn contact_pass(&mut self, out: &mut [BodyReport], h: f64, step: u64) -> Result<(), Fault> {
         let dts: Vec<f64> = out.iter().map(|r| r.stable_dt).collect();
+        // the reports' boxes are the bodies' node boxes at these positions
+        let boxes: Vec<_> = out.iter().map(|r| (r.lo, r.hi)).collect();
         let limit = crate::contact::contact_forces(
             &mut self.bodies,
             &self.contact,
             &mut self.contact_state,
             &dts,
+            &boxes,
             h,
             step,
         )?;

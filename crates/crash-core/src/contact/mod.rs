@@ -17,6 +17,6 @@ pub use config::{
 };
 pub use segment::{project, segments, Projection, Segment};
 pub use stage::{
-    check_moves, contact_forces, initial_penetrations, ContactState, KinLoad, PairStats,
-    Penetration,
+    body_bounds, check_moves, contact_forces, initial_penetrations, ContactState, KinLoad,
+    PairStats, Penetration,
 };

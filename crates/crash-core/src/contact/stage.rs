@@ -190,27 +190,16 @@ fn ensure_surface<'s>(
     s
 }
 
-/// `mesh::bounds` over fixed chunks on the thread pool (min and max are exact in any
-/// order, so the box is the same bits).
-fn par_bounds(x: &[Vec3]) -> (Vec3, Vec3) {
-    use rayon::prelude::*;
-    x.par_chunks(PAR_CHUNK).map(crate::mesh::bounds).reduce(
-        || crate::mesh::bounds(&[]),
-        |(l1, h1), (l2, h2)| (l1.inf(&l2), h1.sup(&h2)),
-    )
-}
-
 /// Nodes per task of the stage's whole-body passes (boxes, speeds).
 pub(crate) const PAR_CHUNK: usize = 2048;
 
-/// Box of every contact body's nodes at this pass (computed once, used by level i and
-/// by every reach test of level ii; other bodies get an empty box).
-fn body_bounds(bodies: &[Body]) -> Vec<(Vec3, Vec3)> {
+/// Box of every contact body's nodes (other bodies get an empty box).
+pub fn body_bounds(bodies: &[Body]) -> Vec<(Vec3, Vec3)> {
     bodies
         .iter()
         .map(|b| {
             if b.def.contact {
-                par_bounds(&b.state.x)
+                crate::mesh::bounds(&b.state.x)
             } else {
                 (Vec3::zeros(), Vec3::zeros())
             }
@@ -258,7 +247,8 @@ fn check_crossing(
 }
 
 /// Compute contact forces at the current positions into `f_contact` of every contact
-/// body. `element_dt[k]` is body k's element critical step of this force pass (sets the
+/// body. `bounds[k]` is body k's node box at these positions (the integration has it).
+/// `element_dt[k]` is body k's element critical step of this force pass (sets the
 /// soft penalty's reference step: REFERENCE_SAFETY times the smaller of the pair's, and
 /// of the pair's closing-speed step under `SpeedRule::LimitDt`). `h` is the step that
 /// led to the current positions (0 at the start) and `step` its number: every node of a
@@ -270,6 +260,7 @@ pub fn contact_forces(
     cfg: &ContactConfig,
     state: &mut ContactState,
     element_dt: &[f64],
+    bounds: &[(Vec3, Vec3)],
     h: f64,
     step: u64,
 ) -> Result<Vec<f64>, Fault> {
@@ -286,8 +277,7 @@ pub fn contact_forces(
     if !cfg.enabled {
         return Ok(dt);
     }
-    let bounds = body_bounds(bodies);
-    let pairs = pairs_of(bodies, cfg, &bounds);
+    let pairs = pairs_of(bodies, cfg, bounds);
     for &(ia, ib) in &pairs {
         for k in [ia, ib] {
             let skin = cfg.margin_for(&bodies[k]);
