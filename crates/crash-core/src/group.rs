@@ -12,6 +12,7 @@ use crate::forces::ForceSums;
 use crate::probe::{nodes_of, NodeProbe};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
 
 /// What one body reports after a step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -77,6 +78,23 @@ pub struct Group {
     pub probes: Vec<(u32, u32)>,
     #[serde(skip)]
     pub probed: Vec<NodeProbe>,
+    /// Wall time per stage of `advance` (a measurement, not state).
+    #[serde(skip)]
+    pub times: StageTimes,
+}
+
+/// Wall time spent in each stage of `Group::advance` since the group was made: the
+/// per-stage figures of the benchmarks (two clock reads per stage and step).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Central-difference update of velocities and positions (with the constraints).
+    pub integrate: Duration,
+    /// Element internal forces and energies.
+    pub elements: Duration,
+    /// The contact pass: search, crossing check, penalty forces.
+    pub contact: Duration,
+    /// Steps timed.
+    pub steps: u64,
 }
 
 /// An energy or a stable time step that overflowed is a blow-up of this body, reported
@@ -134,6 +152,7 @@ impl Group {
             reactions: false,
             probes: Vec::new(),
             probed: Vec::new(),
+            times: StageTimes::default(),
         }
     }
 
@@ -236,6 +255,7 @@ impl Group {
         let mut sums = Vec::with_capacity(self.bodies.len());
         self.probed.clear();
         let hbar = 0.5 * (sc.h_prev + sc.h);
+        let t0 = Instant::now();
         for b in &mut self.bodies {
             let nodes = nodes_of(&self.probes, b.def.id);
             let before = b.probe_velocities(nodes);
@@ -247,6 +267,7 @@ impl Group {
         let step = clock.after(h).step;
         let moves: Vec<(f64, usize)> = sums.iter().map(|s| (s.max_move, s.max_move_node)).collect();
         crate::contact::check_moves(&self.bodies, &self.contact, &moves, h, step)?;
+        let t1 = Instant::now();
         let mut out = Vec::with_capacity(self.bodies.len());
         for (b, s) in self.bodies.iter_mut().zip(&sums) {
             let f = b.internal_forces(h, step)?;
@@ -256,7 +277,13 @@ impl Group {
             }
             out.push(r);
         }
+        let t2 = Instant::now();
         self.contact_pass(&mut out, h, step)?;
+        let t3 = Instant::now();
+        self.times.integrate += t1 - t0;
+        self.times.elements += t2 - t1;
+        self.times.contact += t3 - t2;
+        self.times.steps += 1;
         finite_reports(&out, step)?;
         Ok(self.owned_reports(out))
     }

@@ -1,0 +1,129 @@
+//! Per-stage cost of a scene in one process (issue 17, point 6): the core driver on one
+//! group (the bits of `crash run`), with each stage of the step timed inside
+//! `Group::advance` (`StageTimes`): integration, element forces, contact; "other" is the
+//! rest of the wall time of the stepping (the driver's dt rule, energies, reports).
+//! Thread counts and repetitions are interleaved (1, 2, 1, 2, ...) so machine load
+//! touches each alike; the table gives medians in ns per element-cycle and checks that
+//! every thread count ends with the same state hash (exit 1 otherwise).
+//!
+//! Run: cargo bench -p crash-tests --bench stages -- SCENE [END_TIME [REPS [THREADS...]]]
+//! (default: scenes/sphere-on-plate.toml to 1.2e-3 s, 3 repetitions, threads 1 2).
+#![allow(clippy::unwrap_used)]
+
+use crash_core::driver::Run;
+use crash_core::Group;
+use std::path::PathBuf;
+use std::time::Instant;
+
+struct Sample {
+    wall: f64,
+    integrate: f64,
+    elements: f64,
+    contact: f64,
+    per: f64,
+    hash: u64,
+}
+
+fn one(scene: &PathBuf, end: f64, threads: usize) -> Sample {
+    let built = crash_scene::load(scene).unwrap().build().unwrap();
+    let mut cfg = built.run_config();
+    cfg.end_time = end;
+    let elements: usize = built.bodies.iter().map(|b| b.element_count()).sum();
+    let mut group = Group::new(built.bodies, built.gravity);
+    group.contact = built.contact;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut run = Run::new(group, cfg).unwrap();
+        let t0 = Instant::now();
+        run.run(|_| {}).unwrap();
+        let wall = t0.elapsed().as_secs_f64();
+        let st = run.group.times;
+        let per = 1e9 / (elements as f64 * st.steps as f64);
+        Sample {
+            wall,
+            integrate: st.integrate.as_secs_f64(),
+            elements: st.elements.as_secs_f64(),
+            contact: st.contact.as_secs_f64(),
+            per,
+            hash: crash_core::hash::state_hash(&run.group.bodies),
+        }
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
+    let scene = PathBuf::from(
+        args.first()
+            .cloned()
+            .unwrap_or_else(|| "scenes/sphere-on-plate.toml".into()),
+    );
+    // cargo bench runs in the package directory: scenes are named from the workspace
+    let scene = if scene.is_relative() && !scene.exists() {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join(scene)
+    } else {
+        scene
+    };
+    let end: f64 = args.get(1).map_or(1.2e-3, |s| s.parse().unwrap());
+    let reps: usize = args.get(2).map_or(3, |s| s.parse().unwrap());
+    let threads: Vec<usize> = if args.len() > 3 {
+        args[3..].iter().map(|s| s.parse().unwrap()).collect()
+    } else {
+        vec![1, 2]
+    };
+    let mut samples: Vec<Vec<Sample>> = threads.iter().map(|_| Vec::new()).collect();
+    for r in 0..reps {
+        for (k, &t) in threads.iter().enumerate() {
+            let s = one(&scene, end, t);
+            eprintln!(
+                "rep {r}, {t} thread(s): {:.2} s, hash {:016x}",
+                s.wall, s.hash
+            );
+            samples[k].push(s);
+        }
+    }
+    println!(
+        "{} to {end} s, medians of {reps} (ns per element-cycle):",
+        scene.display()
+    );
+    println!("| threads | integrate | elements | contact | other | whole step | speed-up |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    let base = median(samples[0].iter().map(|s| s.wall * s.per).collect());
+    let mut hashes: Vec<u64> = Vec::new();
+    for (k, &t) in threads.iter().enumerate() {
+        let m = |f: &dyn Fn(&Sample) -> f64| median(samples[k].iter().map(f).collect());
+        let (i, e, c) = (
+            m(&|s| s.integrate * s.per),
+            m(&|s| s.elements * s.per),
+            m(&|s| s.contact * s.per),
+        );
+        let w = m(&|s| s.wall * s.per);
+        let o = m(&|s| (s.wall - s.integrate - s.elements - s.contact) * s.per);
+        println!(
+            "| {t} | {i:.1} | {e:.1} | {c:.1} | {o:.1} | {w:.1} | {:.2}x |",
+            base / w
+        );
+        hashes.extend(samples[k].iter().map(|s| s.hash));
+    }
+    hashes.dedup();
+    if hashes.len() != 1 {
+        eprintln!("state hashes differ between thread counts: {hashes:016x?}");
+        std::process::exit(1);
+    }
+    println!(
+        "same final state hash {:016x} for every thread count",
+        hashes[0]
+    );
+}
