@@ -208,6 +208,19 @@ pub fn cuboid(lx: f64, ly: f64, lz: f64, n: usize, kind: ElementKind) -> Mesh {
     m
 }
 
+/// Equiangular cubed sphere of radius r: each face of a cube carries n x n cells whose
+/// edges subtend equal angles (a face coordinate a in [-1, 1] maps to tan(pi a / 4)),
+/// projected onto the sphere; 6 n^2 quads (or 12 n^2 triangles, each quad split), 6 n^2
+/// + 2 nodes, outward normals.
+pub fn cubed_sphere(r: f64, n: usize, kind: ElementKind) -> Mesh {
+    let mut m = cuboid(2.0, 2.0, 2.0, n, kind);
+    for p in &mut m.nodes {
+        let q = p.map(|a| (std::f64::consts::FRAC_PI_4 * a).tan());
+        *p = q * (r / q.norm());
+    }
+    m
+}
+
 /// Spherical cap of radius r around the south pole (a mesh vertex sits exactly at
 /// (0, 0, -r)): the triangles of an icosphere of the given level whose nodes all lie
 /// below z = -r cos(theta). Returns the mesh and its rim nodes (boundary edges).
@@ -281,6 +294,31 @@ mod tests {
         assert_eq!(m.tris.len(), 20 * 256);
         assert!((m.area() - exact).abs() / exact < 0.01);
         m.validate("s").expect("valid");
+    }
+
+    /// Nodes on the sphere, Euler's count, the area within the faceting error (second
+    /// order in the cell size: n = 40 faceting is ~1e-3 below 4 pi R^2), outward faces.
+    #[test]
+    fn cubed_sphere_nodes_lie_on_the_sphere_and_its_area_converges() {
+        let exact = 4.0 * std::f64::consts::PI * 0.01;
+        for kind in [ElementKind::Quad, ElementKind::Tri] {
+            let m = cubed_sphere(0.1, 40, kind);
+            assert_eq!(m.nodes.len(), 6 * 40 * 40 + 2);
+            let per = if kind == ElementKind::Tri { 2 } else { 1 };
+            assert_eq!(m.quads.len() + m.tris.len(), 6 * 1600 * per);
+            for p in &m.nodes {
+                assert!((p.norm() - 0.1).abs() < 1e-15, "{p:?}");
+            }
+            let err = (exact - m.area()) / exact;
+            assert!(err > 0.0 && err < 2e-3, "{kind:?}: area error {err}");
+            for q in &m.quads {
+                let c = (m.nodes[q[0] as usize] + m.nodes[q[2] as usize]) * 0.5;
+                let n = (m.nodes[q[2] as usize] - m.nodes[q[0] as usize])
+                    .cross(&(m.nodes[q[3] as usize] - m.nodes[q[1] as usize]));
+                assert!(n.dot(&c) > 0.0);
+            }
+            m.validate("s").expect("valid");
+        }
     }
 
     #[test]

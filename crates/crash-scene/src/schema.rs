@@ -189,6 +189,9 @@ pub struct SphereSpec {
     pub radius: f64,
     /// Icosphere subdivision level: 20 * 4^level triangles.
     pub level: Option<i64>,
+    /// Cubed sphere instead of an icosphere: cells per cube-face edge (6 n^2 quads,
+    /// or 12 n^2 triangles with `element = "tri"`).
+    pub cubed: Option<i64>,
     /// Target edge length [m] (instead of level).
     pub element_size: Option<f64>,
 }

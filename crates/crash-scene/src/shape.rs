@@ -155,6 +155,7 @@ fn one_of<'a, C>(
 enum Gen {
     Plate(f64, f64, usize, usize, ElementKind),
     Sphere(f64, u32),
+    Cubed(f64, usize, ElementKind),
     Cylinder(f64, f64, usize, usize, ElementKind),
     Cuboid([f64; 3], usize, ElementKind),
     Loaded(Mesh),
@@ -175,6 +176,7 @@ impl Planned {
         let mesh = match self.gen {
             Gen::Plate(lx, ly, nx, ny, k) => shapes::plate(lx, ly, nx, ny, k),
             Gen::Sphere(r, level) => shapes::icosphere(r, level),
+            Gen::Cubed(r, n, k) => shapes::cubed_sphere(r, n, k),
             Gen::Cylinder(r, len, na, nl, k) => shapes::cylinder(r, len, na, nl, k),
             Gen::Cuboid(l, n, k) => shapes::cuboid(l[0], l[1], l[2], n, k),
             Gen::Loaded(m) => m,
@@ -264,38 +266,57 @@ pub fn plan(
     } else if let Some(s) = &b.sphere {
         let key = format!("{base}.sphere");
         let r = positive(ctx, &format!("{key}.radius"), s.radius, "m")?;
-        if kind == Some(ElementKind::Quad) {
-            return Err(ctx.invalid(
-                &ekey,
-                "a sphere is meshed with triangles (icosphere): use \"tri\" or omit element",
-            ));
-        }
-        let level = match one_of(ctx, &key, &s.level, s.element_size, "level")? {
-            Ok(&l) => {
-                if !(0..=MAX_LEVEL).contains(&l) {
-                    return Err(ctx.invalid(
-                        &format!("{key}.level"),
-                        format!("must be an integer in [0, {MAX_LEVEL}] (20 * 4^level triangles)"),
-                    ));
-                }
-                l as u32
+        if let Some(n) = s.cubed {
+            if s.level.is_some() || s.element_size.is_some() {
+                return Err(ctx.invalid(
+                    &format!("{key}.cubed"),
+                    "give either cubed (a cubed sphere) or level/element_size (an icosphere), not both",
+                ));
             }
-            Err(h) => {
-                let l = (0..=MAX_LEVEL as u32)
-                    .find(|&l| r * ICOSAHEDRON_EDGE / f64::from(1u32 << l) <= h);
-                l.ok_or_else(|| {
+            let n = count(ctx, &format!("{key}.cubed"), n, 1)?;
+            let k = kind.unwrap_or(ElementKind::Quad);
+            let per = if k == ElementKind::Tri { 2 } else { 1 };
+            let elements = n.saturating_mul(n).saturating_mul(6 * per);
+            cap(ctx, &key, elements)?;
+            let d = format!("cubed sphere R {r} m, 6 x {n} x {n} {}", kind_name(k));
+            let c = counts(6 * n * n + 2, elements, k);
+            (key, Gen::Cubed(r, n, k), d, c)
+        } else {
+            if kind == Some(ElementKind::Quad) {
+                return Err(ctx.invalid(
+                    &ekey,
+                    "an icosphere is meshed with triangles: use \"tri\", omit element, or give cubed = N for a cubed sphere of quads",
+                ));
+            }
+            let level = match one_of(ctx, &key, &s.level, s.element_size, "level")? {
+                Ok(&l) => {
+                    if !(0..=MAX_LEVEL).contains(&l) {
+                        return Err(ctx.invalid(
+                            &format!("{key}.level"),
+                            format!(
+                                "must be an integer in [0, {MAX_LEVEL}] (20 * 4^level triangles)"
+                            ),
+                        ));
+                    }
+                    l as u32
+                }
+                Err(h) => {
+                    let l = (0..=MAX_LEVEL as u32)
+                        .find(|&l| r * ICOSAHEDRON_EDGE / f64::from(1u32 << l) <= h);
+                    l.ok_or_else(|| {
                     ctx.invalid(
                         &format!("{key}.element_size"),
                         format!("is too small for radius {r} m: level {MAX_LEVEL} (edge {:.3e} m) is the finest", r * ICOSAHEDRON_EDGE / f64::from(1u32 << MAX_LEVEL)),
                     )
                 })?
-            }
-        };
-        let tris = 20usize << (2 * level);
-        let d = format!("sphere R {r} m, level {level} ({tris} tri)");
-        // Euler: V = F / 2 + 2 for a closed triangulated sphere
-        let c = counts(tris / 2 + 2, tris, ElementKind::Tri);
-        (key, Gen::Sphere(r, level), d, c)
+                }
+            };
+            let tris = 20usize << (2 * level);
+            let d = format!("sphere R {r} m, level {level} ({tris} tri)");
+            // Euler: V = F / 2 + 2 for a closed triangulated sphere
+            let c = counts(tris / 2 + 2, tris, ElementKind::Tri);
+            (key, Gen::Sphere(r, level), d, c)
+        }
     } else if let Some(c) = &b.cylinder {
         let key = format!("{base}.cylinder");
         let r = positive(ctx, &format!("{key}.radius"), c.radius, "m")?;
