@@ -7,7 +7,7 @@
 use super::config::{ContactConfig, PenaltyKind};
 use super::segment::{project, Projection};
 use super::smooth::smoothed;
-use super::surface::Surface;
+use super::surface::{NodeChunk, Surface, NODE_CHUNK};
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -15,9 +15,6 @@ use rayon::prelude::*;
 /// Distances within this fraction of the contact distance of the closest one are a tie,
 /// won by the lowest segment index.
 pub const TIE: f64 = 1e-9;
-
-/// Nodes per parallel task (fixed: chunk results are concatenated in node order).
-const NODE_CHUNK: usize = 512;
 
 /// A node within contact distance of a segment.
 #[derive(Debug, Clone, Copy)]
@@ -52,8 +49,14 @@ fn box_distance(p: &Vec3, nodes: &[u32], x: &[Vec3]) -> f64 {
 /// All nodes of `nb` penetrating the surface of `sb` (`surf` its search data, fresh).
 /// `self_pass`: nb and sb are the same body; segments holding the node or a neighbour,
 /// and segments already within contact distance in the reference configuration, are
-/// excluded.
-pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit> {
+/// excluded. `chunks`: `node_chunks(nb)` at this pass (chunks out of reach are skipped).
+pub fn search(
+    nb: &Body,
+    chunks: &[NodeChunk],
+    sb: &Body,
+    surf: &Surface,
+    self_pass: bool,
+) -> Vec<Hit> {
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     let r = 0.5 * nb.def.section.thickness;
     let tie = TIE * c;
@@ -66,6 +69,9 @@ pub fn search(nb: &Body, sb: &Body, surf: &Surface, self_pass: bool) -> Vec<Hit>
         .enumerate()
         .map(|(ci, xs)| {
             let mut out = Vec::new();
+            if chunks.get(ci).is_some_and(|k| !k.meets(&lo, &hi, 0.0)) {
+                return out;
+            }
             let mut cand = Vec::new();
             let mut close: Vec<(Projection, u32)> = Vec::new();
             for (k, p) in xs.iter().enumerate() {

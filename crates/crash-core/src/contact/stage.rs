@@ -187,6 +187,7 @@ fn ensure_surface<'s>(
     }
     s.refresh(body, skin);
     s.bounds = bounds;
+    s.chunks = super::surface::node_chunks(body);
     s
 }
 
@@ -225,12 +226,12 @@ fn check_crossing(
     step: u64,
 ) -> Result<(), Fault> {
     let self_pair = a.def.id == b.def.id;
-    let mut passes = vec![(a, b, sb)];
+    let mut passes = vec![(a, sa, b, sb)];
     if !self_pair {
-        passes.push((b, a, sa));
+        passes.push((b, sb, a, sa));
     }
-    for (nb, segb, surf) in passes {
-        if let Some(c) = first_crossing(nb, segb, surf, self_pair, h) {
+    for (nb, ns, segb, surf) in passes {
+        if let Some(c) = first_crossing(nb, &ns.chunks, segb, surf, self_pair, h) {
             return Err(Fault::PassThrough {
                 step,
                 body: nb.def.id,
@@ -315,11 +316,11 @@ pub fn contact_forces(
         if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
             continue;
         }
-        let hits_a = search(a, b, sb, self_pair);
+        let hits_a = search(a, &sa.chunks, b, sb, self_pair);
         let hits_b = if self_pair {
             Vec::new()
         } else {
-            search(b, a, sa, false)
+            search(b, &sb.chunks, a, sa, false)
         };
         // nodal normals where the passes read them: the hit nodes and the corners of
         // their segments (stale values elsewhere are never read)
@@ -497,8 +498,9 @@ pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetra
         }
         for (n, s) in [(ia, ib), (ib, ia)] {
             let (nb, sb) = (&bodies[n], &bodies[s]);
+            let chunks = super::surface::node_chunks(nb);
             let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb), bounds[s]);
-            let hits = search(nb, sb, surf, false);
+            let hits = search(nb, &chunks, sb, surf, false);
             let deepest = hits.iter().fold(None::<&Hit>, |d, h| match d {
                 Some(d) if d.depth >= h.depth => Some(d),
                 _ => Some(h),

@@ -13,6 +13,42 @@ use rstar::{RTree, AABB};
 
 type Entry = GeomWithData<Rectangle<[f64; 3]>, u32>;
 
+/// Nodes per task of the node passes (fixed: results are concatenated in node order).
+pub const NODE_CHUNK: usize = 512;
+
+/// The box and the largest speed of one chunk of a body's nodes at the current pass:
+/// a node pass skips a chunk whose box cannot meet the other body (the test each node
+/// would fail, made once per chunk), so its cost follows the contact zone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeChunk {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// max |v| over the chunk's nodes [m/s].
+    pub vmax: f64,
+}
+
+impl NodeChunk {
+    /// Does the chunk's box, grown by `grow`, meet the box (lo, hi)?
+    pub fn meets(&self, lo: &Vec3, hi: &Vec3, grow: f64) -> bool {
+        (0..3).all(|d| self.hi[d] >= lo[d] - grow && self.lo[d] <= hi[d] + grow)
+    }
+}
+
+/// Chunk boxes and speeds of a body's nodes (min, max: the same bits in any order).
+pub fn node_chunks(body: &Body) -> Vec<NodeChunk> {
+    use rayon::prelude::*;
+    body.state
+        .x
+        .par_chunks(NODE_CHUNK)
+        .zip(body.state.v.par_chunks(NODE_CHUNK))
+        .map(|(xs, vs)| {
+            let (lo, hi) = crate::mesh::bounds(xs);
+            let vmax = vs.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            NodeChunk { lo, hi, vmax }
+        })
+        .collect()
+}
+
 /// Search data of one body's contact surface.
 #[derive(Debug, Clone)]
 pub struct Surface {
@@ -38,6 +74,8 @@ pub struct Surface {
     /// Box of the body's nodes at the current pass (set by the contact stage once per
     /// pass, shared by every use of it).
     pub bounds: (Vec3, Vec3),
+    /// Chunk boxes and speeds of the body's nodes at the current pass (idem).
+    pub chunks: Vec<NodeChunk>,
     tree: RTree<Entry>,
     reference: Vec<Vec3>,
     skin: f64,
@@ -146,6 +184,7 @@ impl Surface {
             inc_start,
             inc,
             bounds: crate::mesh::bounds(&body.state.x),
+            chunks: node_chunks(body),
             tree: RTree::new(),
             reference: Vec::new(),
             skin: 0.0,

@@ -15,7 +15,7 @@
 //! a function of the state after the step only.
 
 use super::segment::{triangle_weights, Segment};
-use super::surface::Surface;
+use super::surface::{NodeChunk, Surface, NODE_CHUNK};
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -25,9 +25,6 @@ use rayon::prelude::*;
 /// slab at contact distance stays about c from the edge; one that goes through the
 /// mid-surface is at 0 (up to the rotation of the facet within the step).
 pub const CROSSING_TOLERANCE: f64 = 0.25;
-
-/// Nodes per parallel task of the crossing check (fixed, results in node order).
-const NODE_CHUNK: usize = 512;
 
 /// Centre-of-mass velocity of a body (mass-weighted mean of v).
 fn mean_velocity(b: &Body) -> Vec3 {
@@ -136,6 +133,7 @@ fn sub_triangles_at(
 /// `self_pass`: the same body; segments excluded from self-contact are not checked.
 pub fn first_crossing(
     nb: &Body,
+    chunks: &[NodeChunk],
     sb: &Body,
     surf: &Surface,
     self_pass: bool,
@@ -148,12 +146,8 @@ pub fn first_crossing(
     let xb1 = &sb.state.x;
     // positions before the step, of the corners a candidate needs only
     let before = |n: u32| xb1[n as usize] - sb.state.v[n as usize] * h;
-    let seg_move = sb
-        .state
-        .v
-        .par_chunks(super::stage::PAR_CHUNK)
-        .map(|vs| vs.iter().map(|v| v.norm() * h).fold(0.0, f64::max))
-        .reduce(|| 0.0, f64::max);
+    // max |v| h = (max |v|) h exactly: rounding x -> x h is monotone for h > 0
+    let seg_move = surf.chunks.iter().map(|k| k.vmax).fold(0.0, f64::max) * h;
     let (lo, hi) = super::narrow::reach_box(surf, sb, nb);
     let chunks: Vec<Option<Crossing>> = nb
         .state
@@ -161,6 +155,13 @@ pub fn first_crossing(
         .par_chunks(NODE_CHUNK)
         .enumerate()
         .map(|(ci, xs)| {
+            // each node's reach below is at most the chunk's: skip what none can meet
+            if chunks
+                .get(ci)
+                .is_some_and(|k| !k.meets(&lo, &hi, k.vmax * h + seg_move))
+            {
+                return None;
+            }
             let mut cand = Vec::new();
             for (k, p1) in xs.iter().enumerate() {
                 let i = ci * NODE_CHUNK + k;
