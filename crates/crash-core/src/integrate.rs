@@ -8,8 +8,12 @@
 //! integrated implicitly: v_{n+1/2} = ((1 - c hbar/2) v_{n-1/2} + hbar a) / (1 + c hbar/2).
 
 use crate::body::{Body, NO_PROGRAM};
+use crate::element::simd::prefetch;
 use crate::error::Fault;
 use crate::forces::CHUNK;
+
+/// How many nodes ahead the integration prefetches force slots.
+const PREFETCH: usize = 8;
 use crate::Vec3;
 use rayon::prelude::*;
 
@@ -132,6 +136,14 @@ impl Body {
                 let mut s = NodeSums::default();
                 for k in 0..xs.len() {
                     let i = ci * CHUNK + k;
+                    if !kinematic {
+                        // the force slots of a node a few places ahead (see `prefetch`)
+                        if let Some(range) = gs.get(i + PREFETCH..i + PREFETCH + 2) {
+                            for &sl in &gi[range[0] as usize..range[1] as usize] {
+                                prefetch(&slots[sl as usize]);
+                            }
+                        }
+                    }
                     let m = mass[i];
                     let inr = inertia[i];
                     // forces: external (gravity, loads), contact, minus internal
