@@ -288,6 +288,8 @@ fn run(args: Args) -> anyhow::Result<()> {
         } else {
             0.0
         },
+        // a fault a worker reports is replayed on another before it is believed
+        confirm_faults: true,
         ..RunOptions::default()
     };
     let stats = match restart {

@@ -5,7 +5,9 @@
 //! faulting step. The same fault at the same step (every field equal) is real: the run
 //! ends with it as before. That step passing without it means the first worker lied or
 //! is defective: it is dropped (`LinkError::Implausible`) and the run goes on. A run
-//! without faults pays nothing: this starts only from a fault reply.
+//! without faults pays nothing: this starts only from a fault reply. Only runs that ask
+//! for it (`RunOptions::confirm_faults`: crash-master) replay; in-process workers
+//! cannot lie.
 
 use super::Master;
 use crate::checkpoint::MasterCheckpoint;
@@ -52,11 +54,14 @@ impl<L: WorkerLink> Master<'_, L> {
         MasterError::Fault(f)
     }
 
-    /// Whether the last fault can be checked by a replay: another worker is in the run.
+    /// Whether the last fault can be checked by a replay: asked for, and another worker
+    /// is in the run.
     pub(crate) fn can_replay_fault(&self) -> bool {
-        self.faulted
-            .as_ref()
-            .is_some_and(|(w, _)| (0..self.links.len()).any(|x| x != *w && self.live[x]))
+        self.opts.confirm_faults
+            && self
+                .faulted
+                .as_ref()
+                .is_some_and(|(w, _)| (0..self.links.len()).any(|x| x != *w && self.live[x]))
     }
 
     /// Set the faulting worker aside and roll the others back to `ck`.
