@@ -12,7 +12,7 @@
 
 use crash_core::driver::Run;
 use crash_core::Group;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 struct Sample {
@@ -24,7 +24,7 @@ struct Sample {
     hash: u64,
 }
 
-fn one(scene: &PathBuf, end: f64, threads: usize) -> Sample {
+fn one(scene: &Path, end: f64, threads: usize) -> Sample {
     let built = crash_scene::load(scene).unwrap().build().unwrap();
     let mut cfg = built.run_config();
     cfg.end_time = end;

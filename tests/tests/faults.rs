@@ -1,6 +1,7 @@
 //! A cluster run survives worker loss, freezes and the master's own crash (issue 14,
 //! docs/reliability.md): crash-master + crash-worker processes on loopback, a fault
-//! injected (kill -9, SIGSTOP, a slow worker, kill -9 of the master), and each test
+//! injected (kill -9, SIGSTOP, a slow worker, kill -9 of the master; workers that join
+//! after a loss, a newcomer without the secret), and each test
 //! checks the final state hash of the run without fault and that the run directory
 //! parses with every row and frame once (energy.csv byte for byte the fault-free one).
 //! Every wait is bounded; children are killed on drop.
@@ -254,7 +255,11 @@ fn a_master_killed_mid_run_resumes_with_new_workers_to_the_same_hash_without_a_t
 #[test]
 fn losing_every_worker_stops_with_the_checkpoint_on_disk_and_a_resume_finishes_the_run() {
     let expected = reference();
-    let (mut m, mut w, out) = start("faults-all-lost", 1, &["--checkpoint-seconds", "0.3"]);
+    let (mut m, mut w, out) = start(
+        "faults-all-lost",
+        1,
+        &["--checkpoint-seconds", "0.3", "--rejoin-timeout", "0"],
+    );
     std::thread::sleep(Duration::from_millis(1000));
     w[0].kill();
     assert!(!m.wait(TIMEOUT).success());
@@ -266,5 +271,124 @@ fn losing_every_worker_stops_with_the_checkpoint_on_disk_and_a_resume_finishes_t
     assert!(ck.master.clock.step > 0);
     resume(&out, 2);
     assert_eq!(&files(&out), expected);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The newcomer's lines of the master's log: it joined, and it received bodies.
+fn assert_newcomer_took_bodies(log: &str, index: usize) {
+    assert!(
+        log.contains(&format!("worker {index} joined from 127.0.0.1:")),
+        "{log}"
+    );
+    assert!(
+        log.contains(&format!(
+            "worker {index}, which joined during the run, received"
+        )),
+        "the newcomer must have received bodies:\n{log}"
+    );
+}
+
+#[test]
+fn a_worker_joining_after_a_loss_takes_the_lost_groups_and_the_run_ends_with_the_fault_free_hash() {
+    let expected = reference();
+    let (mut m, mut w, out) = start("faults-join", 2, &["--checkpoint-seconds", "0.5"]);
+    std::thread::sleep(Duration::from_millis(1000));
+    let pid = w[1].pid();
+    w[1].kill();
+    m.expect_line(&format!("(pid {pid} on"), Duration::from_secs(60));
+    // a third worker, started after the loss
+    let url = m
+        .log()
+        .lines()
+        .find_map(|l| {
+            l.split("listening on ")
+                .nth(1)
+                .map(|a| format!("http://{}", a.trim()))
+        })
+        .unwrap();
+    let mut newcomer = worker(&url, 1, &["--step-delay-ms", "2"]);
+    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
+    let log = m.log();
+    assert_newcomer_took_bodies(&log, 2);
+    assert_eq!(&files(&out), expected);
+    for p in [&mut w[0], &mut newcomer] {
+        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn losing_every_worker_waits_for_a_newcomer_and_ends_with_the_fault_free_hash() {
+    let expected = reference();
+    let (mut m, mut w, out) = start(
+        "faults-rejoin",
+        1,
+        &["--checkpoint-seconds", "0.3", "--rejoin-timeout", "60"],
+    );
+    std::thread::sleep(Duration::from_millis(1000));
+    w[0].kill();
+    m.expect_line(
+        "every worker was lost; waiting up to 60 s",
+        Duration::from_secs(60),
+    );
+    let url = m
+        .log()
+        .lines()
+        .find_map(|l| {
+            l.split("listening on ")
+                .nth(1)
+                .map(|a| format!("http://{}", a.trim()))
+        })
+        .unwrap();
+    let mut newcomer = worker(&url, 1, &[]);
+    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
+    let log = m.log();
+    assert_newcomer_took_bodies(&log, 1);
+    assert!(log.contains("continuing from step"), "{log}");
+    assert_eq!(&files(&out), expected);
+    assert!(
+        newcomer.wait(Duration::from_secs(30)).success(),
+        "{}",
+        newcomer.log()
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn a_newcomer_without_the_secret_is_refused_after_the_start_and_takes_nothing() {
+    const SECRET: &str = "a secret of the faults tests, 32 b";
+    let expected = reference();
+    let out = out_dir("faults-join-no-secret");
+    let key = [("CRASH_SECRET", SECRET)];
+    let (mut m, url) = crash_tests::procs::master_env(
+        &test_scene(SCENE),
+        1,
+        &out,
+        &["--end-time", END_TIME, "--checkpoint-seconds", "0.5"],
+        &key,
+    );
+    let mut honest = crash_tests::procs::worker_env(&url, 1, &["--step-delay-ms", "2"], &key);
+    m.expect_line("workers attached", Duration::from_secs(60));
+    std::thread::sleep(Duration::from_millis(500));
+    let mut stranger = worker(&url, 1, &[]);
+    assert!(!stranger.wait(Duration::from_secs(60)).success());
+    assert!(
+        stranger.log().contains("refused this worker"),
+        "{}",
+        stranger.log()
+    );
+    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
+    let log = m.log();
+    assert!(
+        log.contains("refused worker") && log.contains("has none"),
+        "{log}"
+    );
+    assert!(!log.contains("joined from"), "{log}");
+    assert_eq!(&files(&out), expected);
+    assert!(
+        honest.wait(Duration::from_secs(30)).success(),
+        "{}",
+        honest.log()
+    );
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -1,7 +1,9 @@
 //! Issue 14, hardening (docs/reliability.md), on loopback processes: a worker that
 //! holds the secret but reports what cannot be true (a negative kinetic energy, a fault
-//! of a body it does not hold) is dropped and the run ends on the honest worker with the
-//! fault-free hash; TLS gives the plain run's hash and refuses a worker that trusts
+//! of a body it does not hold, a made-up fault of its own body that a replay on the
+//! other worker does not confirm) is dropped and the run ends on the honest worker with
+//! the fault-free hash; a real fault is confirmed by the replay and ends the run as
+//! `crash run` does; TLS gives the plain run's hash and refuses a worker that trusts
 //! another certificate; an edited keyed restart file is refused naming it. Every wait is
 //! bounded; children are killed on drop.
 #![allow(clippy::unwrap_used)] // a test panics on failure
@@ -64,6 +66,29 @@ fn made_up_fault(reply: &mut Reply) {
             fault: crash_core::Fault::NonFinite {
                 step: 1,
                 body: 9999,
+                place: "node 0".into(),
+                what: "velocity or position",
+            },
+        };
+    }
+}
+
+/// Step reports seen by the worker that makes up a fault of its own body.
+static OWN_FAULT_REPORTS: AtomicU64 = AtomicU64::new(0);
+
+/// Honest for 300 reports, then a fault of the first body it holds (a body and group it
+/// does hold: the plausibility checks pass it).
+fn made_up_own_fault(reply: &mut Reply) {
+    let Reply::Report(rep) = reply else { return };
+    let Some(first) = rep.bodies.first().map(|b| b.id) else {
+        return;
+    };
+    if OWN_FAULT_REPORTS.fetch_add(1, Ordering::Relaxed) == 300 {
+        *reply = Reply::Fault {
+            group_first: first,
+            fault: crash_core::Fault::NonFinite {
+                step: 301,
+                body: first,
                 place: "node 0".into(),
                 what: "velocity or position",
             },
@@ -144,6 +169,71 @@ fn a_worker_making_up_a_fault_of_a_body_it_does_not_hold_is_dropped_not_believed
         "{log}"
     );
     assert!(FAULT_REPORTS.load(Ordering::Relaxed) > 300);
+}
+
+#[test]
+fn a_worker_making_up_a_fault_of_its_own_body_is_dropped_and_the_run_ends_with_the_fault_free_hash()
+{
+    let log = run_with_a_liar("hardening-own-fault", made_up_own_fault);
+    assert!(
+        log.contains("reported a fault: step 301: non-finite velocity or position")
+            && log.contains("replays it on the other workers"),
+        "{log}"
+    );
+    assert!(
+        log.contains("reported what cannot be true: a fault that did not recur when its step was replayed on the other workers"),
+        "{log}"
+    );
+    assert!(OWN_FAULT_REPORTS.load(Ordering::Relaxed) > 300);
+}
+
+#[test]
+fn a_real_fault_in_a_cluster_run_is_confirmed_by_the_replay_and_ends_with_exit_3_as_crash_run() {
+    // two spheres closing at 400 m/s with a tiny contact margin: a tunnelling fault
+    let out = out_dir("hardening-real-fault");
+    std::fs::create_dir_all(&out).unwrap();
+    let text = std::fs::read_to_string(test_scene("two-spheres-tiny.toml"))
+        .unwrap()
+        .replace(
+            "penalty_scale = 0.1",
+            "penalty_scale = 0.1\nmargin = 1.0e-5",
+        )
+        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [400.0, 0.0, 0.0]");
+    let scene = out.join("fast.toml");
+    std::fs::write(&scene, &text).unwrap();
+    let local = out.join("local");
+    let (s, l) = (scene.to_str().unwrap(), local.to_str().unwrap());
+    let mut p = crash_tests::procs::Proc::spawn(
+        "crash",
+        &crash_tests::procs::bin("crash"),
+        &["run", s, "--out", l, "--quiet", "--no-pictures"],
+    );
+    assert_eq!(p.wait(TIMEOUT).code(), Some(3), "{}", p.log());
+    let expected = crash_io::read_summary(local.join(crash_io::SUMMARY_JSON))
+        .unwrap()
+        .fault
+        .unwrap();
+    // 2 workers, checkpoints every 20 steps: the fault is replayed, then believed
+    let run = out.join("cluster");
+    let (mut m, url) = master(
+        &scene,
+        2,
+        &run,
+        &["--checkpoint-seconds", "0", "--checkpoint-every", "20"],
+    );
+    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+    assert_eq!(m.wait(TIMEOUT).code(), Some(3), "{}", m.log());
+    let log = m.log();
+    assert!(log.contains("replays it on the other workers"), "{log}");
+    assert!(log.contains("in the replay: it is real"), "{log}");
+    assert!(log.contains(&expected), "expected '{expected}':\n{log}");
+    let s = crash_io::read_summary(run.join(crash_io::SUMMARY_JSON)).unwrap();
+    assert_eq!(s.fault.as_deref(), Some(expected.as_str()));
+    // both workers (the one set aside too) were told to stop
+    for p in &mut w {
+        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    }
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 /// `crash run` with these arguments and environment; (success, stderr).

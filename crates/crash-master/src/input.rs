@@ -197,6 +197,13 @@ pub struct RunOptions {
     /// the run goes back to when a worker is lost; with neither kind, a lost worker
     /// ends the run.
     pub checkpoint_seconds: f64,
+    /// When every worker was lost, wait this long for a newcomer (`join::Newcomers`)
+    /// and roll back onto it [s] (0: stop at once). Runs without newcomers stop at once.
+    pub rejoin_seconds: f64,
+    /// Replay a worker's fault on the other workers before believing it (with a
+    /// checkpoint and another live worker; `master/confirm.rs`). For workers that could
+    /// lie (crash-master's); in-process workers cannot, so `crash run` leaves it off.
+    pub confirm_faults: bool,
 }
 
 impl Default for RunOptions {
@@ -209,6 +216,8 @@ impl Default for RunOptions {
             rebalance_interval: 500,
             checkpoint_every: 0,
             checkpoint_seconds: 0.0,
+            rejoin_seconds: 0.0,
+            confirm_faults: false,
         }
     }
 }

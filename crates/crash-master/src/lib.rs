@@ -20,6 +20,8 @@ pub mod groups_csv;
 pub mod guard;
 pub mod heartbeat;
 pub mod input;
+pub mod join;
+pub mod joiner;
 mod master;
 pub mod meim;
 pub mod pairs;
@@ -36,6 +38,7 @@ pub use error::MasterError;
 pub use file_sink::FileSink;
 pub use file_sink::{frame_format, read_restart, read_restart_keyed, RestartFile, RESTART_FILE};
 pub use input::{BodySource, CostModel, ResultRequest, RunInput, RunOptions, RunSize};
+pub use join::{Newcomers, NoNewcomers};
 pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions, TlsIdentity};
 pub use session::Session;
@@ -54,7 +57,7 @@ pub fn run_with<L: WorkerLink>(
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
-    drive(input, None, links, sink, opts)
+    drive(input, None, links, None, sink, opts)
 }
 
 /// Continue a run from a checkpoint (`Sink::checkpoint`) of the same scene to the
@@ -67,20 +70,21 @@ pub fn resume_with<L: WorkerLink>(
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
-    drive(input, Some(state), links, sink, opts)
+    drive(input, Some(state), links, None, sink, opts)
 }
 
-fn drive<L: WorkerLink>(
+fn drive<'a, L: WorkerLink>(
     input: RunInput,
     resume: Option<MasterCheckpoint>,
-    links: &mut [L],
+    links: &'a mut [L],
+    joiner: Option<&'a mut (dyn Newcomers<L> + 'a)>,
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
     let wall = Instant::now();
     // wall time before the checkpoint (the time lost after it is not counted)
     let wall_before = resume.as_ref().map_or(0.0, |c| c.stats.wall_s);
-    let mut s = match Session::start(input, resume, links, sink, opts) {
+    let mut s = match Session::start_with(input, resume, links, joiner, sink, opts) {
         Ok(s) => s,
         Err(e) => {
             let stats = RunStats {
@@ -108,29 +112,37 @@ fn drive<L: WorkerLink>(
     if result.is_ok() {
         result = loop {
             let r = to_the_end(&mut s, sink, &mut ck);
-            match (&r, &ck.saved) {
+            let (state, replay) = match (&r, &ck.saved) {
                 // a worker gone or frozen: drop it, go back to the last checkpoint on
                 // the others, replay
-                (Err(e), Some(state)) if s.has_lost() => {
-                    tracing::warn!("{e}");
-                    let back = s
-                        .recover(state)
-                        .and_then(|()| sink.rollback(state).map_err(MasterError::sink));
-                    if let Err(e) = back {
-                        // keep the checkpoint on disk to continue with --resume
-                        if sink.rollback(state).is_ok() {
-                            let _ = sink.checkpoint(state);
-                        }
-                        break Err(e);
-                    }
-                    tracing::info!(
-                        "continuing from step {} ({} workers dropped so far)",
-                        state.clock.step,
-                        s.recoveries()
-                    );
-                }
+                (Err(_), Some(state)) if s.has_lost() => (state, false),
+                // a fault: replayed on the other workers before it is believed
+                (Err(MasterError::Fault(_)), Some(state)) if s.can_replay_fault() => (state, true),
                 _ => break r,
+            };
+            if let Err(e) = &r {
+                if !replay {
+                    tracing::warn!("{e}");
+                }
             }
+            let back = if replay {
+                s.replay_fault(state)
+            } else {
+                s.recover(state)
+            }
+            .and_then(|()| sink.rollback(state).map_err(MasterError::sink));
+            if let Err(e) = back {
+                // keep the checkpoint on disk to continue with --resume
+                if sink.rollback(state).is_ok() {
+                    let _ = sink.checkpoint(state);
+                }
+                break Err(e);
+            }
+            tracing::info!(
+                "continuing from step {} ({} workers dropped so far)",
+                state.clock.step,
+                s.recoveries()
+            );
         };
     }
     s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
@@ -227,14 +239,16 @@ fn to_the_end<L: WorkerLink>(
     s.finish(sink).map(|_| ())
 }
 
-/// Remote mode: the master loop over the worker processes attached to `cluster`.
+/// Remote mode: the master loop over the worker processes attached to `cluster`, and
+/// those that attach during the run.
 pub fn run_remote(
     input: RunInput,
     cluster: &mut Cluster,
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
-    run_with(input, cluster.links_mut(), sink, opts)
+    let (links, joiner) = cluster.parts();
+    drive(input, None, links, Some(joiner), sink, opts)
 }
 
 /// Remote mode from a checkpoint: any number of workers.
@@ -245,5 +259,6 @@ pub fn resume_remote(
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
-    resume_with(input, state, cluster.links_mut(), sink, opts)
+    let (links, joiner) = cluster.parts();
+    drive(input, Some(state), links, Some(joiner), sink, opts)
 }

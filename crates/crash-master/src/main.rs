@@ -12,6 +12,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
+/// Exit code of a run stopped by a physical fault (as `crash run`'s).
+const EXIT_FAULT: u8 = 3;
+
 #[derive(Parser, Debug)]
 #[command(
     name = "crash-master",
@@ -62,6 +65,11 @@ struct Args {
     /// (then, unless --checkpoint-every is given, a lost worker ends the run).
     #[arg(long, default_value_t = 5.0)]
     checkpoint_seconds: f64,
+    /// When every worker was lost, wait this long for a worker to join (the same
+    /// admission as at the start) and continue from the last checkpoint on it [s];
+    /// 0: stop at once (with the checkpoint on disk for --resume).
+    #[arg(long, default_value_t = 60.0, value_name = "SECONDS")]
+    rejoin_timeout: f64,
     /// MEIM boxes are inflated by this multiple of the contact margin (>= 1).
     #[arg(long, default_value_t = 2.0)]
     margin_factor: f64,
@@ -150,7 +158,14 @@ fn main() -> ExitCode {
                 return ExitCode::from(crash_master::stop::EXIT_INTERRUPTED);
             }
             eprintln!("crash-master: error: {e:#}");
-            ExitCode::FAILURE
+            // a physical fault (after a replay confirmed it, docs/reliability.md):
+            // the exit code of `crash run`
+            match e.downcast_ref::<MasterError>() {
+                Some(MasterError::Fault(_) | MasterError::Margin { .. }) => {
+                    ExitCode::from(EXIT_FAULT)
+                }
+                _ => ExitCode::FAILURE,
+            }
         }
     }
 }
@@ -268,6 +283,13 @@ fn run(args: Args) -> anyhow::Result<()> {
         } else {
             0.0
         },
+        rejoin_seconds: if args.rejoin_timeout.is_finite() {
+            args.rejoin_timeout.max(0.0)
+        } else {
+            0.0
+        },
+        // a fault a worker reports is replayed on another before it is believed
+        confirm_faults: true,
         ..RunOptions::default()
     };
     let stats = match restart {

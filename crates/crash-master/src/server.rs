@@ -1,7 +1,8 @@
 //! The master's gRPC server: it serves `crash.v1.Coordinator` (and grpc.health.v1),
 //! each worker dials in, says Hello and keeps one bidirectional stream open for the
 //! whole run; `Cluster::accept` turns the attached workers into links
-//! (`remote_link::RemoteWorker`).
+//! (`remote_link::RemoteWorker`), and `Joiner` those that attach later (the attach
+//! channel stays open for the whole run).
 //!
 //! Threads: one current-thread tokio runtime, owned by the master's thread and driven
 //! only while the master waits for replies (`RemoteWorker::recv` blocks on it). The
@@ -22,7 +23,8 @@
 
 use crate::error::MasterError;
 use crate::guard::{conn_info, limit_request, ConnInfo, Gate};
-use crate::heartbeat::{interval_for, Beats, DEFAULT_TIMEOUT};
+use crate::heartbeat::{Beats, DEFAULT_TIMEOUT};
+use crate::joiner::Joiner;
 use crate::remote_link::{Outbound, RemoteWorker};
 use crash_link::{
     check_version, escape_peer, HelloFields, Secret, HEALTH_SERVICE, MAX_MESSAGE, MAX_MESSAGE_CAP,
@@ -31,7 +33,6 @@ use crash_link::{
 use crash_proto::pb::coordinator_server::{Coordinator, CoordinatorServer};
 use crash_proto::pb::worker_message::Reply as PbReply;
 use crash_proto::pb::{self, master_message};
-use std::collections::BTreeSet;
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -96,11 +97,11 @@ impl Default for RemoteOptions {
 }
 
 /// A worker that said a valid Hello.
-struct Attached {
-    hello: pb::Hello,
-    peer: String,
-    inbound: Streaming<pb::WorkerMessage>,
-    outbound: Outbound,
+pub(crate) struct Attached {
+    pub(crate) hello: pb::Hello,
+    pub(crate) peer: String,
+    pub(crate) inbound: Streaming<pb::WorkerMessage>,
+    pub(crate) outbound: Outbound,
 }
 
 struct Service {
@@ -195,9 +196,7 @@ async fn handshake(
     let Some(sender) = sender else {
         return Err(refuse(
             &who,
-            Status::unavailable(
-                "this master is not accepting workers: its run already has all its workers",
-            ),
+            Status::unavailable("this master is not accepting workers: its run is over"),
         ));
     };
     if let Some(c) = &conn {
@@ -212,9 +211,7 @@ async fn handshake(
     if let Err(mpsc::error::SendError(a)) = failed {
         let _ = a.outbound.send(Err(refuse(
             &who,
-            Status::unavailable(
-                "this master is not accepting workers: its run already has all its workers",
-            ),
+            Status::unavailable("this master is not accepting workers: its run is over"),
         )));
     }
     Ok(())
@@ -277,9 +274,10 @@ pub struct Cluster {
     addr: SocketAddr,
     workers: usize,
     opts: RemoteOptions,
-    rx: Option<mpsc::UnboundedReceiver<Attached>>,
     service: Arc<Service>,
     links: Vec<RemoteWorker>,
+    /// Workers admitted after the start (the attach channel stays open for the run).
+    joiner: Joiner,
     stop: Option<oneshot::Sender<()>>,
 }
 
@@ -364,12 +362,13 @@ impl Cluster {
                 tracing::error!("the gRPC server stopped: {e}");
             }
         });
+        let rt = Arc::new(rt);
         Ok(Self {
-            rt: Arc::new(rt),
+            joiner: Joiner::new(rt.clone(), rx, service.beats.clone(), opts.clone()),
+            rt,
             addr,
             workers,
             opts,
-            rx: Some(rx),
             service,
             links: Vec::new(),
             stop: Some(stop),
@@ -386,9 +385,13 @@ impl Cluster {
     }
 
     /// Wait until all workers have attached, then welcome them (indices in order of
-    /// arrival). Later workers are refused.
+    /// arrival). The attach channel stays open: workers that attach later join the run
+    /// at a step boundary (`Joiner`).
     pub fn accept(&mut self) -> Result<(), MasterError> {
-        let Some(mut rx) = self.rx.take() else {
+        if !self.links.is_empty() {
+            return Ok(());
+        }
+        let Some(rx) = self.joiner.channel() else {
             return Ok(());
         };
         let n = self.workers;
@@ -422,11 +425,6 @@ impl Cluster {
             .await;
             got
         });
-        // stop accepting: later attaches are refused with a clear message
-        if let Ok(mut g) = self.service.attach.lock() {
-            *g = None;
-        }
-        drop(rx);
         if crate::stop::requested() {
             return Err(MasterError::Interrupted { step: 0, time: 0.0 });
         }
@@ -438,45 +436,16 @@ impl Cluster {
                 t.as_secs_f64()
             )));
         }
-        let every = interval_for(self.opts.heartbeat_timeout.unwrap_or(DEFAULT_TIMEOUT));
         for (i, a) in attached.into_iter().enumerate() {
-            let token = self
-                .service
-                .beats
-                .register(i as u32)
-                .map_err(|e| MasterError::Network(e.to_string()))?;
-            let welcome = pb::MasterMessage {
-                command: Some(master_message::Command::Welcome(pb::Welcome {
-                    protocol_version: PROTOCOL_VERSION,
-                    worker_index: i as u32,
-                    workers: n as u32,
-                    session_token: token,
-                    heartbeat_interval_ms: every.as_millis().clamp(1, 60_000) as u32,
-                })),
-            };
-            a.outbound.send(Ok(welcome)).map_err(|_| {
-                MasterError::Network(format!("worker {i} at {} left before Welcome", a.peer))
-            })?;
-            self.links.push(RemoteWorker {
-                rt: self.rt.clone(),
-                index: i,
-                peer: format!(
-                    "{} (pid {} on '{}')",
-                    a.peer,
-                    a.hello.pid,
-                    escape_peer(&a.hello.host)
-                ),
-                threads: a.hello.threads,
-                tx: Some(a.outbound),
-                inbound: a.inbound,
-                sent: BTreeSet::new(),
-                codec_ns: 0,
-                timeout: self.opts.reply_timeout,
-                beats: self.service.beats.clone(),
-                heartbeat_timeout: self.opts.heartbeat_timeout,
-            });
+            let link = self.joiner.welcome(a, i, n).map_err(MasterError::Network)?;
+            self.links.push(link);
         }
         Ok(())
+    }
+
+    /// The workers of the start and the source of those that join later.
+    pub fn parts(&mut self) -> (&mut [RemoteWorker], &mut Joiner) {
+        (&mut self.links, &mut self.joiner)
     }
 
     pub fn links_mut(&mut self) -> &mut [RemoteWorker] {
@@ -486,6 +455,10 @@ impl Cluster {
 
 impl Drop for Cluster {
     fn drop(&mut self) {
+        if let Ok(mut g) = self.service.attach.lock() {
+            *g = None;
+        }
+        self.joiner.close();
         self.links.clear();
         if let Some(s) = self.stop.take() {
             let _ = s.send(());

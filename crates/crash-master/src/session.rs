@@ -5,6 +5,7 @@
 use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
 use crate::input::{RunInput, RunOptions};
+use crate::join::Newcomers;
 use crate::master::Master;
 use crate::sink::Sink;
 use crate::stats::RunStats;
@@ -34,7 +35,19 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         sink: &mut dyn Sink,
         opts: &RunOptions,
     ) -> Result<Self, MasterError> {
-        let mut m = Master::new(links, &input, *opts)?;
+        Self::start_with(input, resume, links, None, sink, opts)
+    }
+
+    /// As `start`, with workers that may join during the run (`join::Newcomers`).
+    pub fn start_with(
+        input: RunInput,
+        resume: Option<MasterCheckpoint>,
+        links: &'a mut [L],
+        joiner: Option<&'a mut (dyn Newcomers<L> + 'a)>,
+        sink: &mut dyn Sink,
+        opts: &RunOptions,
+    ) -> Result<Self, MasterError> {
+        let mut m = Master::new(links, joiner, &input, *opts)?;
         let RunInput { bodies, briefs, .. } = input;
         let started = match resume {
             None => m.start(bodies, &briefs, sink),
@@ -75,6 +88,18 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         self.m.recover(state)
     }
 
+    /// Whether the last fault reply can be checked by replaying its step on the other
+    /// workers (`replay_fault`).
+    pub fn can_replay_fault(&self) -> bool {
+        self.m.can_replay_fault()
+    }
+
+    /// Set the worker that reported the last fault aside and roll the run back to
+    /// `state` on the others: the replay tells a real fault from a made-up one.
+    pub fn replay_fault(&mut self, state: &MasterCheckpoint) -> Result<(), MasterError> {
+        self.m.replay_fault(state)
+    }
+
     /// Workers dropped so far.
     pub fn recoveries(&self) -> u64 {
         self.m.recoveries()
@@ -90,9 +115,9 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         self.m.max_energy_error()
     }
 
-    /// The workers (in-process ones can be read between steps).
-    pub fn links(&self) -> &[L] {
-        self.m.links()
+    /// Worker `w` (in-process ones can be read between steps).
+    pub fn link(&self, w: usize) -> Option<&L> {
+        self.m.link(w)
     }
 
     /// Steps done and time reached into the statistics (after a stop: the summary then

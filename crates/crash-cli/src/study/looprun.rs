@@ -124,7 +124,9 @@ impl LoopRun {
         let result = (|| {
             while !s.finished() {
                 s.step(&mut sink)?;
-                let engine = s.links()[0].engine();
+                let Some(engine) = s.link(0).map(|w| w.engine()) else {
+                    break;
+                };
                 observe(&View {
                     bodies: engine.bodies(),
                     clock: s.clock(),

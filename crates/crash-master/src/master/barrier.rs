@@ -35,6 +35,7 @@ impl<L: WorkerLink> Master<'_, L> {
         &mut self,
         cmds: Vec<Vec<Command>>,
     ) -> Result<Vec<Vec<Reply>>, MasterError> {
+        self.faulted = None;
         let counts: Vec<usize> = cmds.iter().map(Vec::len).collect();
         let mut failed: Vec<Option<LinkError>> = vec![None; counts.len()];
         for (w, list) in cmds.into_iter().enumerate() {
@@ -49,7 +50,7 @@ impl<L: WorkerLink> Master<'_, L> {
             }
         }
         let mut out = Vec::with_capacity(counts.len());
-        let mut fault: Option<(u32, Fault)> = None;
+        let mut fault: Option<(u32, Fault, usize)> = None;
         let mut refused: Option<(usize, String)> = None;
         for (w, &count) in counts.iter().enumerate() {
             let mut replies = Vec::with_capacity(count);
@@ -72,8 +73,8 @@ impl<L: WorkerLink> Master<'_, L> {
                                 failed[w] = Some(LinkError::Implausible(escape_peer(&what)));
                                 break;
                             }
-                            if fault.as_ref().is_none_or(|(g, _)| group_first < *g) {
-                                fault = Some((group_first, f));
+                            if fault.as_ref().is_none_or(|(g, _, _)| group_first < *g) {
+                                fault = Some((group_first, f, w));
                             }
                         }
                         Ok(r) => replies.push(r),
@@ -98,8 +99,9 @@ impl<L: WorkerLink> Master<'_, L> {
         if let Some((w, reason)) = refused {
             return Err(self.worker_error(w, LinkError::Refused(reason)));
         }
-        if let Some((_, f)) = fault {
-            return Err(MasterError::Fault(f));
+        if let Some((_, f, w)) = fault {
+            // confirm.rs: replayed elsewhere before it is believed (with checkpoints)
+            return Err(self.on_fault(w, f));
         }
         Ok(out)
     }

@@ -7,13 +7,16 @@
 //! - `resume`: the loop's state into a checkpoint and back;
 //! - `plausible`: what workers send checked against what can be true;
 //! - `recover`: a lost worker dropped, the run rolled back to the last checkpoint on
-//!   the survivors.
+//!   the survivors;
+//! - `newcomers`: workers that join after the start, added at step boundaries;
+//! - `confirm`: a worker's fault replayed elsewhere to tell a real one from a lie.
 //!
 //! The master keeps one small record per body (`BodyInfo`) and the reports of the last
 //! step; it holds no nodal data between output times.
 
 use crate::error::MasterError;
 use crate::input::{BodySource, ResultRequest, RunInput, RunOptions};
+use crate::join::Newcomers;
 use crate::meim::Meim;
 use crate::pairs::PairSearch;
 use crate::stats::RunStats;
@@ -24,7 +27,9 @@ use crash_core::{
 use crash_link::{LinkError, WorkerLink};
 
 mod barrier;
+mod confirm;
 mod groups;
+mod newcomers;
 mod output;
 mod placement;
 mod plausible;
@@ -57,9 +62,46 @@ pub(crate) type GroupLayout = (Vec<u32>, Vec<u32>);
 /// Relative tolerance of the end-time and output-time comparisons (as the driver).
 const TIME_EPS: f64 = 1e-12;
 
+/// A worker of the run: one the caller gave (borrowed) or one that joined later (owned
+/// by the master; dropped with it).
+enum Slot<'a, L> {
+    Given(&'a mut L),
+    Joined(L),
+}
+
+impl<L> std::ops::Deref for Slot<'_, L> {
+    type Target = L;
+    fn deref(&self) -> &L {
+        match self {
+            Slot::Given(l) => l,
+            Slot::Joined(l) => l,
+        }
+    }
+}
+
+impl<L> std::ops::DerefMut for Slot<'_, L> {
+    fn deref_mut(&mut self) -> &mut L {
+        match self {
+            Slot::Given(l) => l,
+            Slot::Joined(l) => l,
+        }
+    }
+}
+
 pub(crate) struct Master<'a, L: WorkerLink> {
-    links: &'a mut [L],
-    /// Workers still in the run (a lost one is dropped for good; indices stay).
+    links: Vec<Slot<'a, L>>,
+    /// Where workers that attach after the start come from (None: nowhere).
+    joiner: Option<&'a mut (dyn Newcomers<L> + 'a)>,
+    /// Newcomers that hold no body yet (the log says when they first get some).
+    fresh: Vec<usize>,
+    /// A newcomer joined: place the groups anew at this step's regroup.
+    rebalance: bool,
+    /// The worker and fault of the last exchange's fault reply (`confirm`).
+    faulted: Option<(usize, crash_core::Fault)>,
+    /// A fault being replayed on the other workers (`confirm`).
+    suspect: Option<confirm::Suspect>,
+    /// Workers still in the run (a lost one is dropped for good; indices stay; a
+    /// suspect is out while its fault is replayed).
     live: Vec<bool>,
     /// Workers found gone or frozen by the last exchange, not yet dropped.
     lost: Vec<(usize, LinkError)>,
@@ -113,6 +155,7 @@ pub(crate) struct Master<'a, L: WorkerLink> {
 impl<'a, L: WorkerLink> Master<'a, L> {
     pub(crate) fn new(
         links: &'a mut [L],
+        joiner: Option<&'a mut (dyn Newcomers<L> + 'a)>,
         input: &RunInput,
         opts: RunOptions,
     ) -> Result<Self, MasterError> {
@@ -168,7 +211,12 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             .fold(0.0, f64::max);
         Ok(Self {
             live: vec![true; links.len()],
-            links,
+            links: links.iter_mut().map(Slot::Given).collect(),
+            joiner,
+            fresh: Vec::new(),
+            rebalance: false,
+            faulted: None,
+            suspect: None,
             lost: Vec::new(),
             source: None,
             skin,
@@ -237,8 +285,9 @@ impl<'a, L: WorkerLink> Master<'a, L> {
         self.index(id).map_or("?", |i| self.names[i].as_str())
     }
 
-    pub(crate) fn links(&self) -> &[L] {
-        self.links
+    /// Worker `w` (given or joined).
+    pub(crate) fn link(&self, w: usize) -> Option<&L> {
+        self.links.get(w).map(|l| &**l)
     }
 
     pub(crate) fn max_energy_error(&self) -> f64 {
@@ -247,6 +296,10 @@ impl<'a, L: WorkerLink> Master<'a, L> {
 
     /// Best-effort shutdown of every worker still in the run (some may be gone).
     pub(crate) fn shutdown(&mut self, reason: &str) {
+        // a worker whose fault is being replayed is still in the run
+        if let Some(s) = self.suspect.take() {
+            self.live[s.worker] = true;
+        }
         for (l, &live) in self.links.iter_mut().zip(&self.live) {
             if live {
                 l.close(reason);

@@ -6,6 +6,8 @@
 //! computes the same bits on any worker, so the replayed steps give the bits they gave
 //! before and the run ends with the hash of a run without fault. A survivor that lacks a
 //! body's definition gets it built anew from the scene; the others get the state only.
+//! Workers that joined meanwhile take part in the placement (newcomers.rs); with no
+//! worker left the master waits for one up to `rejoin_seconds`.
 
 use super::Master;
 use crate::checkpoint::MasterCheckpoint;
@@ -39,7 +41,9 @@ impl<L: WorkerLink> Master<'_, L> {
                 self.live[w] = false;
                 self.recoveries += 1;
             }
-            if self.live_count() == 0 {
+            // newcomers that are ready take part in the placement
+            self.admit(std::time::Duration::ZERO);
+            if self.live_count() == 0 && !self.wait_for_newcomer(ck.clock.step) {
                 return Err(MasterError::NoWorkers {
                     step: at,
                     checkpoint: ck.clock.step,
@@ -89,6 +93,8 @@ impl<L: WorkerLink> Master<'_, L> {
             Ok(BodyLoad { id, def, state })
         });
         self.source = source;
-        loaded
+        loaded?;
+        self.announce();
+        Ok(())
     }
 }

@@ -81,6 +81,8 @@ impl<L: WorkerLink> Master<'_, L> {
     /// One global step (the last one shortened to land on the end time).
     pub(crate) fn step(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
         let _span = tracing::debug_span!("step", step = self.clock.step).entered();
+        // workers that attached since the last step (newcomers.rs)
+        self.admit_at_step()?;
         let (h, short) = step_length(self.next_dt, self.cfg.end_time - self.clock.time);
         if short {
             self.stats.last_dt = h;
@@ -109,6 +111,8 @@ impl<L: WorkerLink> Master<'_, L> {
             )?
         };
         let wall = ns(t0);
+        // a fault being replayed did not recur: its reporter lied (confirm.rs)
+        self.replayed_without_fault(at.step);
         let slowest = reps
             .iter()
             .map(|r| r.compute_ns)
@@ -157,10 +161,12 @@ impl<L: WorkerLink> Master<'_, L> {
             && step.is_multiple_of(self.opts.rebalance_interval);
         self.stats.stages.meim_ns += ns(t1);
         drop(_s);
-        if changed || periodic {
+        if changed || periodic || self.rebalance {
+            self.rebalance = false;
             let _s = tracing::debug_span!("migration").entered();
             let t2 = Instant::now();
             self.migrate(changed)?;
+            self.announce();
             self.stats.stages.migration_ns += ns(t2);
         }
         if changed {
