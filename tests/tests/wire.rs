@@ -218,7 +218,11 @@ fn step_report_round_trips_bit_exact() {
     g.probes = vec![(0, 1), (0, 3)];
     let mut bodies: Vec<BodyReport> = g.advance(&Clock::default(), 1e-7).unwrap();
     // a reaction on one body (the wire carries them for some bodies only)
-    bodies[0].reaction = Some((Vec3::new(1.5, -2.0, 1e-300), Vec3::new(0.0, 3.0, -0.5)));
+    bodies[0].reaction = Some(crash_core::Reaction {
+        force: Vec3::new(1.5, -2.0, 1e-300),
+        moment: Vec3::new(0.0, 3.0, -0.5),
+        moment_origin: Vec3::new(-7.0, 0.125, f64::MIN_POSITIVE),
+    });
     let probes = g.probed().to_vec();
     assert_eq!(probes.len(), 2);
     let rep = StepReport {

@@ -28,9 +28,20 @@ pub struct BodyReport {
     pub max_move: f64,
     pub hot_element: usize,
     pub hot_density: f64,
-    /// Force and moment the supports exert on the body at t_n [N, N m] (LS-DYNA
-    /// SPCFORC), when the group reports reactions and the body has constrained DOFs.
-    pub reaction: Option<(Vec3, Vec3)>,
+    /// What the supports exert on the body at t_n (LS-DYNA SPCFORC), when the group
+    /// reports reactions and the body has constrained DOFs.
+    pub reaction: Option<Reaction>,
+}
+
+/// Resultants of the support reactions on one body at t_n.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Reaction {
+    /// Sum of the nodal reaction forces F_i [N].
+    pub force: Vec3,
+    /// Sum of the rotational-DOF reaction moments m_i [N m].
+    pub moment: Vec3,
+    /// Resultant moment about the global origin [N m]: sum x_i(t_n) x F_i + sum m_i.
+    pub moment_origin: Vec3,
 }
 
 impl BodyReport {
@@ -273,7 +284,11 @@ impl Group {
             let f = b.internal_forces(h, step)?;
             let mut r = report(b, &f, s.lo, s.hi, s.max_move);
             if self.reactions && b.def.fixed.iter().any(|&m| m != 0) {
-                r.reaction = Some((s.reaction_force, s.reaction_moment));
+                r.reaction = Some(Reaction {
+                    force: s.reaction_force,
+                    moment: s.reaction_moment,
+                    moment_origin: s.reaction_moment_origin,
+                });
             }
             out.push(r);
         }

@@ -31,6 +31,8 @@ pub struct NodeSums {
     /// constrained DOFs of the impulse they apply over hbar, divided by hbar).
     pub reaction_force: Vec3,
     pub reaction_moment: Vec3,
+    /// The reactions' resultant moment about the origin: sum x_n x F + reaction_moment.
+    pub reaction_moment_origin: Vec3,
     pub contact: f64,
     pub mass_damping: f64,
     /// f_int(x_n) . v_{n+1/2} (forces and moments), for the shadow internal energy.
@@ -53,6 +55,7 @@ impl Default for NodeSums {
             reaction: 0.0,
             reaction_force: Vec3::zeros(),
             reaction_moment: Vec3::zeros(),
+            reaction_moment_origin: Vec3::zeros(),
             contact: 0.0,
             mass_damping: 0.0,
             internal_power: 0.0,
@@ -72,6 +75,7 @@ impl NodeSums {
         self.reaction += o.reaction;
         self.reaction_force += o.reaction_force;
         self.reaction_moment += o.reaction_moment;
+        self.reaction_moment_origin += o.reaction_moment_origin;
         self.contact += o.contact;
         self.mass_damping += o.mass_damping;
         self.internal_power += o.internal_power;
@@ -214,8 +218,11 @@ impl Body {
                             inr * (w_new - free_w) * dd.recip(),
                         );
                         s.reaction += jf.dot(&vn) + jm.dot(&wn);
-                        s.reaction_force += jf / hbar;
-                        s.reaction_moment += jm / hbar;
+                        let (rf, rm) = (jf / hbar, jm / hbar);
+                        s.reaction_force += rf;
+                        s.reaction_moment += rm;
+                        // xs[k] is still x_n, the position the reaction acts at
+                        s.reaction_moment_origin += xs[k].cross(&rf) + rm;
                     }
                     if c > 0.0 {
                         s.mass_damping +=

@@ -144,9 +144,10 @@ fn support_reaction_closes_momentum_balance_each_step() {
         let hbar = 0.5 * (clock.last_dt + H);
         let r = g.advance(&clock, H).expect("step");
         clock = clock.after(H);
-        let (rf, _) = r[0]
+        let rf = r[0]
             .reaction
-            .expect("a supported body reports its reaction");
+            .expect("a supported body reports its reaction")
+            .force;
         let p = g.bodies[0].linear_momentum();
         // d(momentum)/dt = applied + reaction (the element forces add up to zero)
         let err = ((p - p_prev) / hbar - (applied + rf)).norm() / applied.norm();

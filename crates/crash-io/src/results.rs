@@ -7,7 +7,7 @@
 
 use crate::error::{AtPath, IoError};
 use crate::history::CsvFile;
-use crash_core::{BodyEnergy, Vec3};
+use crash_core::{BodyEnergy, Reaction, Vec3};
 use std::borrow::Cow;
 use std::io::Write;
 use std::path::Path;
@@ -20,8 +20,10 @@ pub const SPCFORC_CSV: &str = "spcforc.csv";
 pub const RCFORC_HEADER: &str = "step,time_s,body_a,body_b,fx_N,fy_N,fz_N,f_N";
 pub const NODOUT_HEADER: &str =
     "step,time_s,body,node,ux_m,uy_m,uz_m,vx_m_s,vy_m_s,vz_m_s,ax_m_s2,ay_m_s2,az_m_s2";
-/// Force and moment the supports exert on the body.
-pub const SPCFORC_HEADER: &str = "step,time_s,body,fx_N,fy_N,fz_N,mx_Nm,my_Nm,mz_Nm";
+/// Force and moment the supports exert on the body, and their resultant moment about
+/// the origin O = (0, 0, 0).
+pub const SPCFORC_HEADER: &str =
+    "step,time_s,body,fx_N,fy_N,fz_N,mx_Nm,my_Nm,mz_Nm,mox_Nm,moy_Nm,moz_Nm";
 
 /// A name as a CSV field: quoted (quotes doubled) when it holds a comma, a quote or a
 /// line break.
@@ -119,24 +121,28 @@ impl ResultFile {
         ))
     }
 
-    /// spcforc.csv: the supports' force [N] and moment [N m] on one body.
+    /// spcforc.csv: the supports' force [N], moment [N m] and resultant moment about
+    /// the origin [N m] on one body.
     pub fn spcforc(
         &mut self,
         step: u64,
         time: f64,
         body: &str,
-        f: Vec3,
-        m: Vec3,
+        r: &Reaction,
     ) -> Result<(), IoError> {
+        let (f, m, o) = (r.force, r.moment, r.moment_origin);
         self.row(format_args!(
-            "{step},{time:e},{},{:e},{:e},{:e},{:e},{:e},{:e}\n",
+            "{step},{time:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
             csv_name(body),
             f.x,
             f.y,
             f.z,
             m.x,
             m.y,
-            m.z
+            m.z,
+            o.x,
+            o.y,
+            o.z
         ))
     }
 }

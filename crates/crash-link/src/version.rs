@@ -12,8 +12,9 @@ use thiserror::Error;
 /// v6: read-only copies of kinematic bodies (Regroup lists them per group, Load of
 /// copies, Unload that keeps), contact statistics carry the loads on kinematic bodies.
 /// v7: load curves in body definitions, support reactions and history nodes (Setup asks,
-/// reports carry them) for spcforc.csv and nodout.csv.
-pub const PROTOCOL_VERSION: u32 = 7;
+/// reports carry them) for spcforc.csv and nodout.csv. v8: a reaction carries its
+/// resultant moment about the origin too (stride 9).
+pub const PROTOCOL_VERSION: u32 = 8;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -89,8 +89,8 @@ impl ResultFiles {
         }
         if let (Some(f), Some(reports)) = (spcforc.as_mut(), rows.spcforc) {
             for r in reports {
-                if let Some((force, moment)) = r.reaction {
-                    f.spcforc(step, time, &name(r.id), force, moment)?;
+                if let Some(re) = &r.reaction {
+                    f.spcforc(step, time, &name(r.id), re)?;
                 }
             }
         }

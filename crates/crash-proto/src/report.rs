@@ -5,10 +5,12 @@ use crate::error::ProtoError;
 use crate::pb;
 use crate::pb::fault::Kind;
 use crash_core::contact::{KinLoad, PairStats};
-use crash_core::{BodyEnergy, BodyReport, Fault, NodeProbe};
+use crash_core::{BodyEnergy, BodyReport, Fault, NodeProbe, Reaction};
 
 const VALUES: usize = 15;
 const ELEMENTS: usize = 2;
+/// Force, moment, moment about the origin.
+const REACTION_VALUES: usize = 9;
 
 /// Column-pack the per-body reports of one worker.
 pub fn reports_to_pb(reports: &[BodyReport]) -> pb::BodyReports {
@@ -21,10 +23,11 @@ pub fn reports_to_pb(reports: &[BodyReport]) -> pb::BodyReports {
         reactions: Vec::new(),
     };
     for (k, r) in reports.iter().enumerate() {
-        if let Some((f, m)) = r.reaction {
+        if let Some(re) = r.reaction {
             out.reaction_index.push(k as u32);
-            out.reactions
-                .extend_from_slice(&[f.x, f.y, f.z, m.x, m.y, m.z]);
+            for v in [re.force, re.moment, re.moment_origin] {
+                out.reactions.extend_from_slice(&[v.x, v.y, v.z]);
+            }
         }
         let e = &r.energy;
         out.id.push(r.id);
@@ -90,18 +93,26 @@ pub fn reports_from_pb(p: &pb::BodyReports) -> Result<Vec<BodyReport>, ProtoErro
             reaction: None,
         });
     }
-    if p.reactions.len() != 6 * p.reaction_index.len() {
+    if p.reactions.len() != REACTION_VALUES * p.reaction_index.len() {
         return Err(ProtoError::Invalid(format!(
             "{} reactions carry {} values",
             p.reaction_index.len(),
             p.reactions.len()
         )));
     }
-    for (&k, v) in p.reaction_index.iter().zip(p.reactions.chunks_exact(6)) {
+    for (&k, v) in p
+        .reaction_index
+        .iter()
+        .zip(p.reactions.chunks_exact(REACTION_VALUES))
+    {
         let r = out
             .get_mut(k as usize)
             .ok_or_else(|| ProtoError::Invalid(format!("reaction of body {k} of {n}")))?;
-        r.reaction = Some((vec3(&v[0..3]), vec3(&v[3..6])));
+        r.reaction = Some(Reaction {
+            force: vec3(&v[0..3]),
+            moment: vec3(&v[3..6]),
+            moment_origin: vec3(&v[6..9]),
+        });
     }
     Ok(out)
 }
