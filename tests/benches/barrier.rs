@@ -135,6 +135,7 @@ fn echo(c: &mut Criterion) {
                 at: Clock::default(),
                 dt: 1e-9,
                 kin_nodes: false,
+                due: crash_core::Due::ALL,
             })
             .unwrap();
             let Reply::Report(_) = l.recv().unwrap() else {
@@ -160,6 +161,7 @@ fn barrier(c: &mut Criterion) {
                             at: clock,
                             dt: 1e-9,
                             kin_nodes: false,
+                            due: crash_core::Due::ALL,
                         })
                         .unwrap();
                     }
@@ -194,6 +196,7 @@ fn loaded(c: &mut Criterion) {
                 at: clock,
                 dt: 1e-8,
                 kin_nodes: false,
+                due: crash_core::Due::ALL,
             })
             .unwrap();
             let Reply::Report(r) = l.recv().unwrap() else {

@@ -77,6 +77,7 @@ fn valid_commands() -> Vec<Vec<u8>> {
             at,
             dt: 1e-7,
             kin_nodes: true,
+            due: crash_core::Due::ALL,
         },
         Command::Frame(vec![0, 1]),
         Command::States(vec![1]),
@@ -94,6 +95,7 @@ fn valid_replies() -> Vec<Vec<u8>> {
         at: Clock::default(),
         dt: 1e-7,
         kin_nodes: true,
+        due: crash_core::Due::ALL,
     })];
     out.push(e.handle(Command::Frame(vec![0])));
     let at = e.clock().unwrap();
@@ -103,6 +105,7 @@ fn valid_replies() -> Vec<Vec<u8>> {
         at,
         dt: 1.0,
         kin_nodes: false,
+        due: crash_core::Due::ALL,
     }));
     out.iter()
         .map(|r| reply_to_pb(r).encode_to_vec())
@@ -247,6 +250,7 @@ fn command(e: &Engine, op: Op) -> Option<Command> {
             at: at.unwrap_or(now),
             dt,
             kin_nodes,
+            due: crash_core::Due::ALL,
         },
         Op::Frame(ids) => Command::Frame(ids),
         Op::States(ids) => Command::States(ids),

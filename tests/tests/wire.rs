@@ -305,6 +305,10 @@ fn commands_round_trip() {
             at,
             dt: 1.234e-7,
             kin_nodes: true,
+            due: crash_core::Due {
+                reactions: true,
+                probes: false,
+            },
         },
         Command::Unload {
             ids: vec![5, 2],

@@ -62,6 +62,23 @@ impl BodyReport {
     }
 }
 
+/// Which optional figures a step reports (each only when the group has it on):
+/// the master asks for them on the steps whose result rows are due.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct Due {
+    /// Support reactions (spcforc.csv).
+    pub reactions: bool,
+    /// History nodes (nodout.csv).
+    pub probes: bool,
+}
+
+impl Due {
+    pub const ALL: Due = Due {
+        reactions: true,
+        probes: true,
+    };
+}
+
 /// A set of bodies integrated together.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Group {
@@ -260,15 +277,28 @@ impl Group {
     }
 
     /// One step of length h from `clock` (the run's clock, owned by its loop): returns
-    /// one report per owned body, in the group's body order.
+    /// one report per owned body, in the group's body order, with the reactions and
+    /// history nodes that are on.
     pub fn advance(&mut self, clock: &Clock, h: f64) -> Result<Vec<BodyReport>, Fault> {
+        self.advance_with(clock, h, Due::ALL)
+    }
+
+    /// `advance`, reporting reactions and history nodes only where `due` says so (they
+    /// change nothing else: a result row follows this step or not).
+    pub fn advance_with(
+        &mut self,
+        clock: &Clock,
+        h: f64,
+        due: Due,
+    ) -> Result<Vec<BodyReport>, Fault> {
         let sc = clock.step_of(h);
         let mut sums = Vec::with_capacity(self.bodies.len());
         self.probed.clear();
         let hbar = 0.5 * (sc.h_prev + sc.h);
         let t0 = Instant::now();
+        let probes: &[(u32, u32)] = if due.probes { &self.probes } else { &[] };
         for b in &mut self.bodies {
-            let nodes = nodes_of(&self.probes, b.def.id);
+            let nodes = nodes_of(probes, b.def.id);
             let before = b.probe_velocities(nodes);
             sums.push(b.integrate(&sc, self.gravity)?);
             if !nodes.is_empty() {
@@ -283,7 +313,7 @@ impl Group {
         for (b, s) in self.bodies.iter_mut().zip(&sums) {
             let f = b.internal_forces(h, step)?;
             let mut r = report(b, &f, s.lo, s.hi, s.max_move);
-            if self.reactions && b.def.fixed.iter().any(|&m| m != 0) {
+            if self.reactions && due.reactions && b.def.fixed.iter().any(|&m| m != 0) {
                 r.reaction = Some(Reaction {
                     force: s.reaction_force,
                     moment: s.reaction_moment,

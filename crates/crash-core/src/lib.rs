@@ -38,7 +38,7 @@ pub use driver::{Run, RunConfig};
 pub use element::Stabilization;
 pub use energy::{EnergyLedger, EnergyTotals, KinematicWork};
 pub use error::{CoreError, Fault};
-pub use group::{BodyReport, Group, Reaction, StageTimes};
+pub use group::{BodyReport, Due, Group, Reaction, StageTimes};
 pub use material::{Material, Section};
 pub use mesh::Mesh;
 pub use probe::NodeProbe;

@@ -1,7 +1,9 @@
 //! The commands a master sends and the replies a worker gives (exactly one per command).
 
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Fault, NodeProbe, Vec3};
+use crash_core::{
+    Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Due, Fault, NodeProbe, Vec3,
+};
 use crash_io::FrameBody;
 use std::sync::Arc;
 
@@ -97,10 +99,13 @@ pub enum Command {
     Start,
     /// Take the step of length `dt` that starts at clock `at`. `kin_nodes`: report the
     /// pass's per-node forces on kinematic bodies (`KinLoad::nodes`): a frame follows.
+    /// `due`: report reactions and history nodes (when Setup turned them on): their
+    /// result rows follow this step.
     Step {
         at: Clock,
         dt: f64,
         kin_nodes: bool,
+        due: Due,
     },
     /// What an output frame shows of these bodies (held by the worker).
     Frame(Vec<u32>),

@@ -13,7 +13,8 @@ use thiserror::Error;
 /// copies, Unload that keeps), contact statistics carry the loads on kinematic bodies.
 /// v7: load curves in body definitions, support reactions and history nodes (Setup asks,
 /// reports carry them) for spcforc.csv and nodout.csv. v8: a reaction carries its
-/// resultant moment about the origin too (stride 9).
+/// resultant moment about the origin too (stride 9); Step says whether reactions and
+/// history nodes are due (sent only for steps whose result rows are written).
 pub const PROTOCOL_VERSION: u32 = 8;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

@@ -4,7 +4,7 @@
 
 use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
 use crash_core::contact::{ContactConfig, PenaltyKind, SpeedRule};
-use crash_core::{Clock, Vec3};
+use crash_core::{Clock, Due, Vec3};
 use crash_io::FrameBody;
 use crash_proto::pb;
 use crash_proto::pb::master_message::Command as PbCommand;
@@ -255,10 +255,17 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
             },
         }),
         Command::Start => PbCommand::Start(pb::Start {}),
-        Command::Step { at, dt, kin_nodes } => PbCommand::Step(pb::Step {
+        Command::Step {
+            at,
+            dt,
+            kin_nodes,
+            due,
+        } => PbCommand::Step(pb::Step {
             at: Some(clock_to_pb(at)),
             dt: *dt,
             kin_nodes: *kin_nodes,
+            reactions: due.reactions,
+            probes: due.probes,
         }),
         Command::Frame(ids) => PbCommand::Frame(pb::FrameRequest { ids: ids.clone() }),
         Command::States(ids) => PbCommand::States(pb::StatesRequest { ids: ids.clone() }),
@@ -346,6 +353,10 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                 at: clock_from_pb(s.at.as_ref())?,
                 dt: s.dt,
                 kin_nodes: s.kin_nodes,
+                due: Due {
+                    reactions: s.reactions,
+                    probes: s.probes,
+                },
             },
             PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
             PbCommand::States(s) => Command::States(s.ids.clone()),

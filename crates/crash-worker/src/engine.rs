@@ -121,13 +121,18 @@ impl Engine {
                 self.at = Some(Clock::default());
                 return self.run(|g| g.start(), true);
             }
-            Command::Step { at, dt, kin_nodes } => {
+            Command::Step {
+                at,
+                dt,
+                kin_nodes,
+                due,
+            } => {
                 if let Err(e) = self.check_clock(&at) {
                     Err(e)
                 } else if !(dt.is_finite() && dt > 0.0) {
                     Err(EngineError::Step { step: at.step, dt })
                 } else {
-                    let reply = self.run(|g| g.advance(&at, dt), kin_nodes);
+                    let reply = self.run(|g| g.advance_with(&at, dt, due), kin_nodes);
                     self.at = Some(at.after(dt));
                     return reply;
                 }

@@ -81,6 +81,7 @@ fn steps_give_the_core_groups_bits() {
             at: clock,
             dt: 1e-7,
             kin_nodes: false,
+            due: crash_core::Due::ALL,
         }) else {
             panic!("no report")
         };
@@ -112,12 +113,14 @@ fn a_step_for_another_moment_is_refused() {
         at: wrong,
         dt: 1e-7,
         kin_nodes: false,
+        due: crash_core::Due::ALL,
     }));
     assert!(msg.contains("step 3") && msg.contains("step 0"), "{msg}");
     let msg = error(e.handle(Command::Step {
         at: Clock::default(),
         dt: f64::NAN,
         kin_nodes: false,
+        due: crash_core::Due::ALL,
     }));
     assert!(msg.contains("invalid time step"), "{msg}");
 }
@@ -278,6 +281,7 @@ fn kinematic_copies_stay_bit_identical_to_the_owner() {
                 at: clock,
                 dt,
                 kin_nodes: true,
+                due: crash_core::Due::ALL,
             }) else {
                 panic!("no step report")
             };
@@ -312,4 +316,62 @@ fn kinematic_copies_stay_bit_identical_to_the_owner() {
         );
     }
     assert_eq!(a.body_count() + b.body_count(), 3, "copies are not counted");
+}
+
+/// Reactions and history nodes travel only with the steps the master marks due, and
+/// leaving them out changes nothing else (the same state bits as the core's group
+/// reporting every step).
+#[test]
+fn reactions_and_history_nodes_are_reported_only_on_due_steps() {
+    let mut e = Engine::new();
+    let s = Setup {
+        reactions: true,
+        probes: std::sync::Arc::new(vec![(0, 3)]),
+        ..setup()
+    };
+    ack(e.handle(Command::Setup(s.clone())));
+    ack(e.handle(Command::Load {
+        at: Clock::default(),
+        bodies: bodies().into_iter().map(BodyLoad::whole).collect(),
+    }));
+    ack(e.handle(Command::regroup(vec![vec![0, 1]])));
+    assert!(matches!(e.handle(Command::Start), Reply::Report(_)));
+    let mut g = Group::new(bodies(), s.gravity);
+    g.reactions = true;
+    g.probes = vec![(0, 3)];
+    g.start().unwrap();
+    let mut clock = Clock::default();
+    for k in 0..12 {
+        let due = crash_core::Due {
+            reactions: k % 3 == 0,
+            probes: k % 4 == 0,
+        };
+        let Reply::Report(rep) = e.handle(Command::Step {
+            at: clock,
+            dt: 1e-7,
+            kin_nodes: false,
+            due,
+        }) else {
+            panic!("no report")
+        };
+        let core = g.advance(&clock, 1e-7).unwrap();
+        assert_eq!(rep.bodies[0].reaction.is_some(), due.reactions, "step {k}");
+        assert_eq!(!rep.probes.is_empty(), due.probes, "step {k}");
+        if due.reactions {
+            assert_eq!(rep.bodies, core, "step {k}");
+        }
+        if due.probes {
+            assert_eq!(rep.probes, g.probed(), "step {k}");
+        }
+        clock = clock.after(1e-7);
+    }
+    let Reply::States(states) = e.handle(Command::States(Vec::new())) else {
+        panic!("no states")
+    };
+    let held: Vec<Body> = states
+        .into_iter()
+        .zip(bodies())
+        .map(|((_, s), b)| Body::from_parts(b.def, s).unwrap())
+        .collect();
+    assert_eq!(state_hash(&held), state_hash(&g.bodies));
 }

@@ -15,6 +15,21 @@ fn crossed(before: f64, now: f64, interval: f64) -> bool {
 }
 
 impl<L: WorkerLink> Master<'_, L> {
+    /// Which of matsum, rcforc, nodout, spcforc have a row at `now` after a step from
+    /// `before` (None: the start). Known before the step is sent, so the workers
+    /// compute and send reactions and history nodes only for the steps that write them.
+    pub(super) fn rows_due(&self, before: Option<f64>, now: f64) -> [bool; 4] {
+        let end = now >= self.cfg.end_time * (1.0 - TIME_EPS);
+        let r = &self.results;
+        [r.matsum, r.rcforc, r.nodout, r.spcforc].map(|interval| {
+            interval > 0.0
+                && match before {
+                    None => true,
+                    Some(t0) => end || crossed(t0, now, interval),
+                }
+        })
+    }
+
     /// Hand the due rows to the sink (`before`: the step's start time, None at the
     /// start of the run).
     pub(super) fn write_results(
@@ -23,20 +38,12 @@ impl<L: WorkerLink> Master<'_, L> {
         before: Option<f64>,
     ) -> Result<(), MasterError> {
         let (step, now) = (self.clock.step, self.clock.time);
-        let end = self.finished();
-        let due = |interval: f64| {
-            interval > 0.0
-                && match before {
-                    None => true,
-                    Some(t0) => end || crossed(t0, now, interval),
-                }
-        };
-        let r = &self.results;
+        let [matsum, rcforc, nodout, spcforc] = self.rows_due(before, now);
         let rows = ResultRows {
-            matsum: due(r.matsum).then_some(&self.reports[..]),
-            rcforc: due(r.rcforc).then_some(&self.contacts[..]),
-            nodout: due(r.nodout).then_some(&self.probed[..]),
-            spcforc: due(r.spcforc).then_some(&self.reports[..]),
+            matsum: matsum.then_some(&self.reports[..]),
+            rcforc: rcforc.then_some(&self.contacts[..]),
+            nodout: nodout.then_some(&self.probed[..]),
+            spcforc: spcforc.then_some(&self.reports[..]),
         };
         if rows.matsum.is_none()
             && rows.rcforc.is_none()

@@ -9,7 +9,7 @@ use crate::input::CostModel;
 use crate::sink::Sink;
 use crash_core::contact::BodyBox;
 use crash_core::driver::{check_runaway, choose_dt, step_length};
-use crash_core::{BodyBrief, Clock, EnergyTotals, Fault};
+use crash_core::{BodyBrief, Clock, Due, EnergyTotals, Fault};
 use crash_link::{BodyLoad, Command, Setup, WorkerLink};
 use std::time::Instant;
 
@@ -99,6 +99,12 @@ impl<L: WorkerLink> Master<'_, L> {
         let after = at.after(h).time;
         let kin_nodes = self.frame_due(after) || after >= self.cfg.end_time * (1.0 - TIME_EPS);
         self.kin_nodes = kin_nodes;
+        // reactions and history nodes only for a step whose rows are written
+        let [_, _, nodout, spcforc] = self.rows_due(Some(at.time), after);
+        let due = Due {
+            reactions: spcforc,
+            probes: nodout,
+        };
         let reps = {
             let _s = tracing::debug_span!("barrier").entered();
             self.reports_of(
@@ -106,6 +112,7 @@ impl<L: WorkerLink> Master<'_, L> {
                     at,
                     dt: h,
                     kin_nodes,
+                    due,
                 },
                 "Step",
             )?
