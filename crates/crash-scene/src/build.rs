@@ -216,10 +216,15 @@ pub(crate) fn body(
         loaded_nodes: 0,
     };
     let tags = s.source.as_ref().map(|src| src.node_tags.clone());
+    let element_tags: Option<Vec<u64>> = s
+        .source
+        .as_ref()
+        .map(|src| src.element_tags.iter().map(|t| t.0).collect());
     let nodes = Nodes {
         local: &local,
         global: &global,
         tags: tags.as_deref(),
+        element_tags: element_tags.as_deref(),
     };
     motion::apply(ctx, &key, b, &mut body, &nodes, curves, &mut info)?;
     info.fixed_nodes = body.def.fixed.iter().filter(|&&f| f != 0).count();

@@ -17,6 +17,8 @@ pub struct Nodes<'a> {
     pub local: &'a [Vec3],
     pub global: &'a [Vec3],
     pub tags: Option<&'a [u64]>,
+    /// Element ids of the mesh file (body element order: triangles, then quads).
+    pub element_tags: Option<&'a [u64]>,
 }
 
 pub fn non_negative(ctx: &Ctx, key: &str, v: Option<f64>, unit: &str) -> Result<f64, SceneError> {
@@ -197,7 +199,11 @@ pub fn apply(
             }
             None => NO_CURVE,
         };
-        for (node, force) in pressure_forces(body, pr.value) {
+        let only = match &pr.elements {
+            None => None,
+            Some(ids) => Some(elements(ctx, &format!("{pk}.elements"), ids, body, nodes)?),
+        };
+        for (node, force) in pressure_forces(body, pr.value, only.as_ref()) {
             per_node
                 .entry((node, 0, 0, cid))
                 .and_modify(|p| p.force += force)
@@ -219,9 +225,50 @@ pub fn apply(
     Ok(())
 }
 
-/// Nodal forces of pressure p on every element: -p A n / (corners) per corner, with the
-/// element's reference area A and unit normal n (summed per node, node order).
-pub fn pressure_forces(body: &Body, p: f64) -> BTreeMap<usize, Vec3> {
+/// Element indices (triangles, then quads) of the ids `ids` of the body's mesh file
+/// (1, 2, ... for a generated shape).
+fn elements(
+    ctx: &Ctx,
+    key: &str,
+    ids: &[u64],
+    body: &Body,
+    nodes: &Nodes<'_>,
+) -> Result<BTreeSet<usize>, SceneError> {
+    let count = body.def.tris.len() + body.def.quads.len();
+    let index: BTreeMap<u64, usize> = match nodes.element_tags {
+        Some(tags) => tags.iter().enumerate().map(|(k, &t)| (t, k)).collect(),
+        None => (0..count).map(|k| (k as u64 + 1, k)).collect(),
+    };
+    if ids.is_empty() {
+        return Err(ctx.invalid(
+            key,
+            "an empty list loads nothing: leave it out for all elements",
+        ));
+    }
+    let mut out = BTreeSet::new();
+    for id in ids {
+        let k = index.get(id).ok_or_else(|| {
+            ctx.value_error(
+                ErrorKind::Reference,
+                key,
+                format!("no element {id} in this body's mesh"),
+            )
+        })?;
+        if !out.insert(*k) {
+            return Err(ctx.invalid(key, format!("element {id} is named twice")));
+        }
+    }
+    Ok(out)
+}
+
+/// Nodal forces of pressure p on every element (or those in `only`, by index: triangles,
+/// then quads): -p A n / (corners) per corner, with the element's reference area A and
+/// unit normal n (summed per node, node order).
+pub fn pressure_forces(
+    body: &Body,
+    p: f64,
+    only: Option<&BTreeSet<usize>>,
+) -> BTreeMap<usize, Vec3> {
     let d = &*body.def;
     let x = &d.x0;
     let mut out: BTreeMap<usize, Vec3> = BTreeMap::new();
@@ -234,11 +281,13 @@ pub fn pressure_forces(body: &Body, p: f64) -> BTreeMap<usize, Vec3> {
             }
         }
     };
-    for e in &d.tris {
+    let on = |k: usize| only.is_none_or(|o| o.contains(&k));
+    let nt = d.tris.len();
+    for (_, e) in d.tris.iter().enumerate().filter(|(k, _)| on(*k)) {
         let [a, b, c] = e.nodes.map(|i| x[i as usize]);
         add(&e.nodes, e.area0, (b - a).cross(&(c - a)));
     }
-    for e in &d.quads {
+    for (_, e) in d.quads.iter().enumerate().filter(|(k, _)| on(nt + k)) {
         let [a, b, c, q] = e.nodes.map(|i| x[i as usize]);
         add(&e.nodes, e.area0, (c - a).cross(&(q - b)));
     }

@@ -273,7 +273,7 @@ pub struct LoadSpec {
     pub curve: Option<String>,
 }
 
-/// A pressure on every element of a body, along the elements' reference normals
+/// A pressure on the elements of a body (all, or `elements`), along their reference normals
 /// (a dead load: direction and area of the initial configuration).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -283,4 +283,7 @@ pub struct PressureSpec {
     pub value: f64,
     /// A curve of `curves` that scales the pressure over time (default: constant).
     pub curve: Option<String>,
+    /// The elements loaded, by their ids in the body's mesh file (Gmsh element tags;
+    /// a generated shape numbers its elements 1, 2, ... triangles first); default: all.
+    pub elements: Option<Vec<u64>>,
 }

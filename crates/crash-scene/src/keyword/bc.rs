@@ -8,13 +8,13 @@
 
 use super::convert::{
     by_body, dof_axis, dof_bit, dof_names, rigid, sel, ContactOut, Index, LoadOut, Model,
-    Prescribe, Sel, ALL,
+    Prescribe, PressureOut, Sel, ALL,
 };
 use super::deck::Driven;
 use super::lexer::Loc;
 use super::{DeckError, DeckOptions};
 use crate::curves::Curve;
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 /// A node's prescribed DOFs: (DOF, curve, scale factor bits), sorted.
 type Signature = Vec<(i64, i64, u64)>;
@@ -257,6 +257,77 @@ pub(super) fn loads(ix: &Index<'_>, m: &mut Model) -> Result<(), DeckError> {
                 curve: l.lcid,
                 loc: l.loc,
                 what: format!("*{}", l.keyword),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// *LOAD_SHELL_ELEMENT / _SET: per body, the pressure on the named shells (all of the
+/// body's shells: no element list, as a scene's pressure on the whole body).
+pub(super) fn pressures(ix: &Index<'_>, m: &mut Model) -> Result<(), DeckError> {
+    let d = ix.deck;
+    if d.pressures.is_empty() {
+        return Ok(());
+    }
+    let part_of: HashMap<i64, i64> = d.shells.iter().map(|s| (s.id, s.part)).collect();
+    for p in &d.pressures {
+        if !d.curves.contains_key(&p.lcid) {
+            return Err(ix.err(
+                p.loc,
+                &p.keyword,
+                format!("LCID: curve {} is not defined (*DEFINE_CURVE)", p.lcid),
+            ));
+        }
+        let mut eids: Vec<i64> = if p.set {
+            let s = d.shell_sets.get(&p.id).ok_or_else(|| {
+                ix.err(
+                    p.loc,
+                    &p.keyword,
+                    format!("shell set {} is not defined (*SET_SHELL_LIST)", p.id),
+                )
+            })?;
+            let mut v = s.items.clone();
+            for &(a, b) in &s.ranges {
+                v.extend(
+                    d.shells
+                        .iter()
+                        .map(|e| e.id)
+                        .filter(|id| (a..=b).contains(id)),
+                );
+            }
+            v
+        } else {
+            vec![p.id]
+        };
+        eids.sort_unstable();
+        eids.dedup();
+        let mut per_body: BTreeMap<usize, Vec<i64>> = BTreeMap::new();
+        for &eid in &eids {
+            let part = part_of.get(&eid).ok_or_else(|| {
+                ix.err(
+                    p.loc,
+                    &p.keyword,
+                    format!("element {eid} is not defined (*ELEMENT_SHELL)"),
+                )
+            })?;
+            let b = ix.body_of.get(part).copied().unwrap_or(0);
+            per_body.entry(b).or_default().push(eid);
+        }
+        for (b, ids) in per_body {
+            let body = &mut m.bodies[b];
+            if rigid(ix, body).is_some() {
+                return Err(ix.err(p.loc, &p.keyword, format!(
+                    "a pressure on the rigid part {} does nothing (it is kinematic in crash): refused", body.pid
+                )));
+            }
+            let all = ids.len() == body.surface.element_tags.len();
+            body.pressures.push(PressureOut {
+                elements: (!all).then_some(ids),
+                value: p.sf,
+                curve: p.lcid,
+                loc: p.loc,
+                what: format!("*{}", p.keyword),
             });
         }
     }

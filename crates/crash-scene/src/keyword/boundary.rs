@@ -2,7 +2,7 @@
 //! velocities.
 
 use super::cards::{i, r, Row, F};
-use super::deck::{Cards, Deck, Driven, InitialVelocity, Spc, Target};
+use super::deck::{Cards, Deck, Driven, InitialVelocity, ShellPressure, Spc, Target};
 use super::DeckError;
 
 #[rustfmt::skip]
@@ -131,6 +131,30 @@ pub fn driven(deck: &mut Deck, c: &mut Cards<'_>, kind: Kind) -> Result<(), Deck
         } else {
             deck.loads.push(rec);
         }
+    }
+    Ok(())
+}
+
+#[rustfmt::skip]
+const SHELL_LOAD: &[F] = &[i("EID/ESID", 10), i("LCID", 10), r("SF", 10), r("AT", 10)];
+
+/// *LOAD_SHELL_ELEMENT (`set`: false) and *LOAD_SHELL_SET: pressure SF x curve LCID.
+pub fn shell_pressure(deck: &mut Deck, c: &mut Cards<'_>, set: bool) -> Result<(), DeckError> {
+    while let Some(row) = c.next(SHELL_LOAD)? {
+        if (0..4).all(|k| row.raw(k).is_empty()) {
+            continue;
+        }
+        let id = row.id(0)?;
+        // an arrival (birth) time would switch the pressure on with a jump at AT
+        row.unsupported(3, "an arrival time (AT; shift the curve instead)")?;
+        deck.pressures.push(ShellPressure {
+            id,
+            set,
+            lcid: row.id(1)?,
+            sf: sf(&row, 2)?,
+            keyword: c.b.name.clone(),
+            loc: row.loc,
+        });
     }
     Ok(())
 }

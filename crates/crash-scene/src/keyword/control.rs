@@ -2,7 +2,7 @@
 //! that act on the model (`boundary` reads supports, prescribed motion, nodal loads
 //! and initial velocities).
 
-use super::boundary::{driven, generation, spc, velocity, Kind};
+use super::boundary::{driven, generation, shell_pressure, spc, velocity, Kind};
 use super::cards::{i, r, t, Row, F};
 use super::deck::{Cards, Contact, Db, Deck, Target};
 use super::props::{ids, LIST8};
@@ -18,6 +18,8 @@ pub fn block(deck: &mut Deck, c: &mut Cards<'_>, name: &str) -> Option<Result<()
         "BOUNDARY_PRESCRIBED_MOTION_RIGID" => driven(deck, c, Kind::MotionRigid),
         "LOAD_NODE_POINT" => driven(deck, c, Kind::LoadNode),
         "LOAD_NODE_SET" => driven(deck, c, Kind::LoadSet),
+        "LOAD_SHELL_ELEMENT" => shell_pressure(deck, c, false),
+        "LOAD_SHELL_SET" => shell_pressure(deck, c, true),
         "INITIAL_VELOCITY" => velocity(deck, c),
         "INITIAL_VELOCITY_GENERATION" => generation(deck, c),
         "CONTACT_AUTOMATIC_SINGLE_SURFACE" => contact(deck, c, true, false),

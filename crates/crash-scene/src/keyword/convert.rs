@@ -41,6 +41,16 @@ pub struct LoadOut {
     pub what: String,
 }
 
+/// A pressure on a body's shells: `elements` (deck element ids, ascending) or all.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressureOut {
+    pub elements: Option<Vec<i64>>,
+    pub value: f64,
+    pub curve: i64,
+    pub loc: Loc,
+    pub what: String,
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct BodyOut {
     pub pid: i64,
@@ -54,6 +64,7 @@ pub struct BodyOut {
     pub fixes: Vec<(Sel, u8, Loc, String)>,
     pub prescribes: Vec<Prescribe>,
     pub loads: Vec<LoadOut>,
+    pub pressures: Vec<PressureOut>,
     pub velocity: Option<InitialVelocity>,
     pub contact: bool,
     pub self_contact: bool,
@@ -246,6 +257,7 @@ pub fn model(deck: &Deck, opts: &DeckOptions) -> Result<Model, DeckError> {
     }
     super::bc::supports_and_motion(&ix, &mut m)?;
     super::bc::loads(&ix, &mut m)?;
+    super::bc::pressures(&ix, &mut m)?;
     velocities(&ix, &mut m)?;
     super::bc::contacts(&ix, &mut m, opts)?;
     outputs(&ix, &mut m)?;

@@ -110,6 +110,19 @@ pub struct Driven {
     pub loc: Loc,
 }
 
+/// A pressure on shells (*LOAD_SHELL_ELEMENT, *LOAD_SHELL_SET): pressure SF scaled by
+/// curve LCID, positive against the element normal.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShellPressure {
+    /// An element id, or a shell set id (`set`).
+    pub id: i64,
+    pub set: bool,
+    pub lcid: i64,
+    pub sf: f64,
+    pub keyword: String,
+    pub loc: Loc,
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Curve {
     pub id: i64,
@@ -180,10 +193,12 @@ pub struct Deck {
     pub mats: BTreeMap<i64, Mat>,
     pub node_sets: BTreeMap<i64, Set>,
     pub part_sets: BTreeMap<i64, Set>,
+    pub shell_sets: BTreeMap<i64, Set>,
     pub curves: BTreeMap<i64, Curve>,
     pub spcs: Vec<Spc>,
     pub motions: Vec<Driven>,
     pub loads: Vec<Driven>,
+    pub pressures: Vec<ShellPressure>,
     pub velocities: Vec<InitialVelocity>,
     pub contacts: Vec<Contact>,
     pub end_time: Option<(f64, Loc)>,

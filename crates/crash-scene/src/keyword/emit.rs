@@ -172,6 +172,7 @@ pub fn emit(deck: &Deck, m: Model, name: &str, mesh_prefix: &str) -> Converted {
                 .iter()
                 .filter_map(|p| p.curve)
                 .chain(b.loads.iter().map(|l| l.curve))
+                .chain(b.pressures.iter().map(|p| p.curve))
         })
         .collect();
     for c in deck.curves.values() {
@@ -289,6 +290,19 @@ pub fn emit(deck: &Deck, m: Model, name: &str, mesh_prefix: &str) -> Converted {
             }
             o.line(format!("curve = \"lc{}\"", l.curve));
             o.origin(&format!("{key}.load[{k}]"), l.loc, &l.what);
+        }
+        for (k, p) in b.pressures.iter().enumerate() {
+            o.line("");
+            o.line(format!(
+                "[[bodies.pressure]]  {} (Pa; positive against the element normal)",
+                o.at(&p.what, p.loc)
+            ));
+            o.line(format!("value = {:?}", p.value));
+            o.line(format!("curve = \"lc{}\"", p.curve));
+            if let Some(ids) = &p.elements {
+                o.line(format!("elements = [{}]", id_list(ids)));
+            }
+            o.origin(&format!("{key}.pressure[{k}]"), p.loc, &p.what);
         }
         meshes.push((file, b.surface, b.element_files));
     }

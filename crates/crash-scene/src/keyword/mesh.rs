@@ -125,6 +125,7 @@ pub(super) fn bodies(ix: &mut Index<'_>) -> Result<Vec<BodyOut>, DeckError> {
             fixes: Vec::new(),
             prescribes: Vec::new(),
             loads: Vec::new(),
+            pressures: Vec::new(),
             velocity: None,
             contact: false,
             self_contact: false,

@@ -211,7 +211,7 @@ pub fn set(deck: &mut Deck, c: &mut Cards<'_>, name: &str) -> Result<(), DeckErr
         loc: head.loc,
     };
     while let Some(row) = c.next(IDS8)? {
-        if name == "SET_NODE_LIST_GENERATE" {
+        if name.ends_with("_GENERATE") {
             for k in (0..8).step_by(2) {
                 let (a, b) = (row.int_or(k, 0)?, row.int_or(k + 1, 0)?);
                 if a == 0 && b == 0 {
@@ -226,10 +226,10 @@ pub fn set(deck: &mut Deck, c: &mut Cards<'_>, name: &str) -> Result<(), DeckErr
             ids(&row, &mut s.items)?;
         }
     }
-    let (map, what) = if name == "SET_PART_LIST" {
-        (&mut deck.part_sets, "part set")
-    } else {
-        (&mut deck.node_sets, "node set")
+    let (map, what) = match name {
+        "SET_PART_LIST" => (&mut deck.part_sets, "part set"),
+        "SET_SHELL_LIST" | "SET_SHELL_LIST_GENERATE" => (&mut deck.shell_sets, "shell set"),
+        _ => (&mut deck.node_sets, "node set"),
     };
     insert_unique(c.lx, map, id, s, name, what)
 }

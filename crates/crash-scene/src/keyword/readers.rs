@@ -27,6 +27,8 @@ pub const SUPPORTED: &[&str] = &[
     "SET_NODE_LIST",
     "SET_NODE_LIST_GENERATE",
     "SET_PART_LIST",
+    "SET_SHELL_LIST",
+    "SET_SHELL_LIST_GENERATE",
     "BOUNDARY_SPC_NODE",
     "BOUNDARY_SPC_SET",
     "BOUNDARY_PRESCRIBED_MOTION_NODE",
@@ -34,6 +36,8 @@ pub const SUPPORTED: &[&str] = &[
     "BOUNDARY_PRESCRIBED_MOTION_RIGID",
     "LOAD_NODE_POINT",
     "LOAD_NODE_SET",
+    "LOAD_SHELL_ELEMENT",
+    "LOAD_SHELL_SET",
     "DEFINE_CURVE",
     "INITIAL_VELOCITY",
     "INITIAL_VELOCITY_GENERATION",
@@ -60,6 +64,8 @@ const TITLED: &[&str] = &[
     "SET_NODE_LIST",
     "SET_NODE_LIST_GENERATE",
     "SET_PART_LIST",
+    "SET_SHELL_LIST",
+    "SET_SHELL_LIST_GENERATE",
     "DEFINE_CURVE",
 ];
 
@@ -88,9 +94,11 @@ pub fn block(deck: &mut Deck, lx: &Lexed, b: &Block) -> Result<(), DeckError> {
         "SECTION_SHELL" => props::sections(deck, &mut c),
         "MAT_ELASTIC" | "MAT_001" => props::elastic(deck, &mut c),
         "MAT_RIGID" | "MAT_020" => props::rigid(deck, &mut c),
-        "SET_NODE_LIST" | "SET_NODE_LIST_GENERATE" | "SET_PART_LIST" => {
-            props::set(deck, &mut c, name)
-        }
+        "SET_NODE_LIST"
+        | "SET_NODE_LIST_GENERATE"
+        | "SET_PART_LIST"
+        | "SET_SHELL_LIST"
+        | "SET_SHELL_LIST_GENERATE" => props::set(deck, &mut c, name),
         "DEFINE_CURVE" => props::curve(deck, &mut c),
         _ => control::block(deck, &mut c, name).unwrap_or_else(|| Err(unsupported(lx, b))),
     }
