@@ -37,6 +37,7 @@ fn evolved_bodies() -> Vec<Body> {
     p.prescribe(
         &[6, 13],
         VelocityProgram {
+            displacement: false,
             velocity: Vec3::new(0.0, 0.0, 1.5),
             angular: Vec3::new(0.1, 0.0, 0.0),
             ramp: 1e-5,
@@ -68,7 +69,9 @@ fn evolved_bodies() -> Vec<Body> {
     p.prescribe(
         &[17],
         VelocityProgram {
-            velocity: Vec3::new(0.5, 0.0, 0.0),
+            // a displacement program: the wire carries its kind
+            displacement: true,
+            velocity: Vec3::new(0.5e-3, 0.0, 0.0),
             angular: Vec3::zeros(),
             ramp: 0.0,
             curve: c,

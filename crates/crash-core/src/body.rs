@@ -27,7 +27,9 @@ pub const NO_PROGRAM: u16 = u16::MAX;
 
 /// Prescribed (kinematic) nodal velocity, ramped linearly from zero over `ramp` seconds
 /// (ramp = 0: applied from the start, including the initial velocity), or scaled by
-/// the body's load curve `curve` (then `ramp` is not used).
+/// the body's load curve `curve` (then `ramp` is not used). With `displacement` the
+/// vectors are a displacement [m] and a rotation [rad] scaled by the curve (or ramp):
+/// d(t) = velocity * f(t), and each step moves the node by d(t_{n+1}) - d(t_n).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct VelocityProgram {
     pub velocity: Vec3,
@@ -35,6 +37,9 @@ pub struct VelocityProgram {
     pub ramp: f64,
     /// Index into `BodyDef::curves`, or `NO_CURVE`.
     pub curve: u32,
+    /// A prescribed displacement (LS-DYNA VAD = 2) rather than a velocity.
+    #[serde(default)]
+    pub displacement: bool,
 }
 
 impl VelocityProgram {
@@ -45,13 +50,36 @@ impl VelocityProgram {
             angular,
             ramp,
             curve: NO_CURVE,
+            displacement: false,
         }
     }
 
-    /// Velocity and angular velocity at t (`curves`: the body's).
+    /// Velocity and angular velocity at t (`curves`: the body's); for a displacement,
+    /// the rate of its curve (or ramp) just after t.
     pub fn at(&self, t: f64, curves: &[TimeCurve]) -> (Vec3, Vec3) {
-        let s = scale(t, 0.0, self.ramp, self.curve, curves);
+        let s = if self.displacement {
+            match curves.get(self.curve as usize) {
+                Some(c) if self.curve != NO_CURVE => c.slope(t),
+                _ if self.ramp > 0.0 && t < self.ramp && t >= 0.0 => 1.0 / self.ramp,
+                _ => 0.0,
+            }
+        } else {
+            scale(t, 0.0, self.ramp, self.curve, curves)
+        };
         (self.velocity * s, self.angular * s)
+    }
+
+    /// The half-step velocity of the step of length h from t: a velocity program's
+    /// value at t + h/2; a displacement's change over the step divided by h, so that
+    /// the central-difference positions follow d(t_n) at every step without drift.
+    pub fn over_step(&self, t: f64, h: f64, curves: &[TimeCurve]) -> (Vec3, Vec3) {
+        if self.displacement {
+            let f = |t: f64| scale(t, 0.0, self.ramp, self.curve, curves);
+            let s = (f(t + h) - f(t)) / h;
+            (self.velocity * s, self.angular * s)
+        } else {
+            self.at(t + 0.5 * h, curves)
+        }
     }
 }
 

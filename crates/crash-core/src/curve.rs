@@ -29,6 +29,18 @@ impl TimeCurve {
         a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)
     }
 
+    /// The slope of the piece that starts at or before t and ends after it (0 before
+    /// the first point and from the last point on, where the value is held).
+    pub fn slope(&self, t: f64) -> f64 {
+        let p = &self.points;
+        let i = p.partition_point(|q| q.0 <= t);
+        if i == 0 || i == p.len() {
+            return 0.0;
+        }
+        let (a, b) = (p[i - 1], p[i]);
+        (b.1 - a.1) / (b.0 - a.0)
+    }
+
     /// Whether the table is usable: a point at least, finite, times increasing.
     pub fn is_valid(&self) -> bool {
         !self.points.is_empty()

@@ -146,10 +146,9 @@ impl KinematicWork {
     }
 
     /// The work of the last pass's loads over the step of length `h` from `clock`: the
-    /// velocity after it is the prescribed one at its middle.
+    /// velocity after it is the prescribed one of that step (`VelocityProgram::over_step`).
     pub fn settle(&mut self, clock: &Clock, h: f64) {
         let hbar = 0.5 * (clock.last_dt + h);
-        let t_half = clock.time + 0.5 * h;
         for (id, load) in &self.pending {
             let Ok(k) = self.work.binary_search_by_key(id, |w| w.0) else {
                 continue;
@@ -158,7 +157,7 @@ impl KinematicWork {
             for (prog, f) in &load.by_program {
                 if let Some(vp) = self.programs[k].get(*prog as usize) {
                     let curves = self.curves.get(k).map_or(&[][..], |c| &c[..]);
-                    p_new += f.dot(&vp.at(t_half, curves).0);
+                    p_new += f.dot(&vp.over_step(clock.time, h, curves).0);
                 }
             }
             self.work[k].1 += hbar * (0.5 * (load.power + p_new));

@@ -109,7 +109,6 @@ impl Body {
     pub fn integrate(&mut self, clock: &StepClock, gravity: Vec3) -> Result<NodeSums, Fault> {
         let h = clock.h;
         let hbar = 0.5 * (clock.h_prev + h);
-        let t_half = clock.t + 0.5 * h;
         let c = self.def.mass_damping;
         let (dn, dd) = (1.0 - 0.5 * c * hbar, 1.0 / (1.0 + 0.5 * c * hbar));
         let kinematic = self.def.kinematic;
@@ -194,7 +193,7 @@ impl Body {
                     if fx != 0 {
                         let (pv, pw) = match program[i] {
                             NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
-                            p => programs[p as usize].at(t_half, curves),
+                            p => programs[p as usize].over_step(t, h, curves),
                         };
                         for d in 0..3 {
                             if fx & (1 << d) != 0 {

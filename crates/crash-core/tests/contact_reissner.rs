@@ -26,6 +26,7 @@ fn force_approach_slope_matches_reissner_stiffness() {
     p.prescribe(
         &all,
         VelocityProgram {
+            displacement: false,
             velocity: Vec3::new(0.0, 0.0, vp),
             angular: Vec3::zeros(),
             ramp: 2e-4,

@@ -89,6 +89,7 @@ fn prescribed_velocity_curve_moves_by_its_integral() {
         b.prescribe(
             &[0, 7],
             VelocityProgram {
+                displacement: false,
                 velocity: dir,
                 angular: Vec3::zeros(),
                 ramp: 0.0,

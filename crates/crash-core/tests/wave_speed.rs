@@ -30,6 +30,7 @@ fn membrane_wave_speed_matches_plate_theory() {
         b.prescribe(
             &end,
             VelocityProgram {
+                displacement: false,
                 velocity: Vec3::new(1.0, 0.0, 0.0),
                 angular: Vec3::zeros(),
                 ramp: 0.0,

@@ -14,7 +14,8 @@ use thiserror::Error;
 /// v7: load curves in body definitions, support reactions and history nodes (Setup asks,
 /// reports carry them) for spcforc.csv and nodout.csv. v8: a reaction carries its
 /// resultant moment about the origin too (stride 9); Step says whether reactions and
-/// history nodes are due (sent only for steps whose result rows are written).
+/// history nodes are due (sent only for steps whose result rows are written); velocity
+/// programs carry their kind (prescribed displacement, stride 8).
 pub const PROTOCOL_VERSION: u32 = 8;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

@@ -18,7 +18,8 @@ use crash_core::{
 
 const TRI_REF: usize = 7;
 const QUAD_REF: usize = 19;
-const PROGRAM: usize = 7;
+/// velocity[3], angular[3], ramp, kind (0 velocity, 1 displacement).
+const PROGRAM: usize = 8;
 const LOAD: usize = 8;
 
 pub(crate) fn pack3(v: &[Vec3]) -> Vec<f64> {
@@ -107,6 +108,7 @@ pub fn def_to_pb(b: &BodyDef) -> pb::BodyDef {
         programs.extend_from_slice(&[p.velocity.x, p.velocity.y, p.velocity.z]);
         programs.extend_from_slice(&[p.angular.x, p.angular.y, p.angular.z]);
         programs.push(p.ramp);
+        programs.push(if p.displacement { 1.0 } else { 0.0 });
     }
     let mut load_values = Vec::with_capacity(LOAD * b.loads.len());
     for l in &b.loads {
@@ -366,13 +368,25 @@ pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
         .programs
         .chunks_exact(PROGRAM)
         .zip(&d.program_curve)
-        .map(|(c, &curve)| VelocityProgram {
-            velocity: vec3(&c[0..3]),
-            angular: vec3(&c[3..6]),
-            ramp: c[6],
-            curve,
+        .map(|(c, &curve)| {
+            let displacement = match c[7] {
+                0.0 => false,
+                1.0 => true,
+                k => {
+                    return Err(ProtoError::Invalid(format!(
+                        "body {id}: program kind {k} (0: velocity, 1: displacement)"
+                    )))
+                }
+            };
+            Ok(VelocityProgram {
+                velocity: vec3(&c[0..3]),
+                angular: vec3(&c[3..6]),
+                ramp: c[6],
+                curve,
+                displacement,
+            })
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     b.def_mut().loads = d
         .load_nodes
         .iter()

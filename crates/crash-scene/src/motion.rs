@@ -91,7 +91,33 @@ pub fn apply(
     for (k, p) in b.prescribe.iter().enumerate() {
         let pk = format!("{key}.prescribe[{k}]");
         let picked = pick(&format!("{pk}.select"), &p.select)?;
-        let velocity = finite_vec(ctx, &format!("{pk}.velocity"), Some(p.velocity))?;
+        let (velocity, displacement) = match (p.velocity, p.displacement) {
+            (Some(v), None) => (finite_vec(ctx, &format!("{pk}.velocity"), Some(v))?, false),
+            (None, Some(d)) => (
+                finite_vec(ctx, &format!("{pk}.displacement"), Some(d))?,
+                true,
+            ),
+            (Some(_), Some(_)) => {
+                return Err(ctx.key_error(
+                    ErrorKind::Invalid,
+                    &format!("{pk}.displacement"),
+                    "give either velocity or displacement, not both",
+                ))
+            }
+            (None, None) => {
+                return Err(ctx.missing(
+                    &format!("{pk}.velocity"),
+                    "a prescribed motion needs velocity (m/s) or displacement (m)",
+                ))
+            }
+        };
+        if displacement && p.angular_velocity.is_some() {
+            return Err(ctx.key_error(
+                ErrorKind::Invalid,
+                &format!("{pk}.angular_velocity"),
+                "a prescribed displacement holds the rotations: prescribed rotation angles are not supported",
+            ));
+        }
         let angular = finite_vec(ctx, &format!("{pk}.angular_velocity"), p.angular_velocity)?;
         let (scale, ramp, cid) = match (&p.curve, p.ramp) {
             (Some(_), Some(_)) => {
@@ -115,6 +141,21 @@ pub fn apply(
                 NO_CURVE,
             ),
         };
+        if displacement {
+            // the nodes start at x0: the displacement must be 0 at t = 0
+            let f0 = match &p.curve {
+                Some(name) => curve(ctx, &format!("{pk}.curve"), name, curves)?.value(0.0),
+                None if ramp > 0.0 => 0.0,
+                None => 1.0,
+            };
+            if f0 != 0.0 {
+                let k = if p.curve.is_some() { "curve" } else { "ramp" };
+                return Err(ctx.invalid(
+                    &format!("{pk}.{k}"),
+                    "a prescribed displacement starts from the mesh: its curve must be 0 at t = 0 (or give a ramp > 0)",
+                ));
+            }
+        }
         body.prescribe(
             &picked,
             VelocityProgram {
@@ -122,6 +163,7 @@ pub fn apply(
                 angular: angular * scale,
                 ramp,
                 curve: cid,
+                displacement,
             },
         );
     }

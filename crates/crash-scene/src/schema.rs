@@ -240,9 +240,13 @@ pub struct FixSpec {
 #[serde(deny_unknown_fields)]
 pub struct PrescribeSpec {
     pub select: toml::Value,
-    /// Prescribed velocity [m/s].
-    #[serde(deserialize_with = "exact::array")]
-    pub velocity: V3,
+    /// Prescribed velocity [m/s] (this or `displacement`).
+    #[serde(default, deserialize_with = "exact::option")]
+    pub velocity: Option<V3>,
+    /// Prescribed displacement [m] scaled by `curve` (or `ramp`): the nodes are at
+    /// x0 + displacement * f(t) at every step (LS-DYNA VAD = 2).
+    #[serde(default, deserialize_with = "exact::option")]
+    pub displacement: Option<V3>,
     /// Prescribed angular velocity [rad/s] of each selected node (default: rotations
     /// held).
     #[serde(default, deserialize_with = "exact::option")]

@@ -43,6 +43,7 @@ pub fn reissner(level: Level) -> Result<Measurement, CaseError> {
         p.prescribe(
             &all,
             VelocityProgram {
+                displacement: false,
                 velocity: Vec3::new(0.0, 0.0, vp),
                 angular: Vec3::zeros(),
                 ramp: 2e-4,

@@ -177,6 +177,7 @@ pub fn wave_speed(kind: ElementKind, level: Level) -> Result<Measurement, CaseEr
         b.prescribe(
             &end,
             VelocityProgram {
+                displacement: false,
                 velocity: Vec3::new(1.0, 0.0, 0.0),
                 angular: Vec3::zeros(),
                 ramp: 0.0,

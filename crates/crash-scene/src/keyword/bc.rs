@@ -16,8 +16,8 @@ use super::{DeckError, DeckOptions};
 use crate::curves::Curve;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 
-/// A node's prescribed DOFs: (DOF, curve, scale factor bits), sorted.
-type Signature = Vec<(i64, i64, u64)>;
+/// A node's prescribed DOFs: (DOF, VAD, curve, scale factor bits), sorted.
+type Signature = Vec<(i64, i64, i64, u64)>;
 
 fn curve(ix: &Index<'_>, d: &Driven) -> Result<Curve, DeckError> {
     ix.deck
@@ -40,6 +40,16 @@ fn combine(ix: &Index<'_>, list: &[&Driven], sel: Sel) -> Result<Prescribe, Deck
     let first = list[0];
     let (mut v, mut w) = ([0.0; 3], [0.0; 3]);
     let same = list.iter().all(|d| d.lcid == first.lcid);
+    let displacement = first.vad == 2;
+    if let Some(d) = list
+        .iter()
+        .find(|d| d.vad != first.vad || (displacement && !same))
+    {
+        return Err(ix.err(d.loc, &d.keyword, format!(
+            "DOF {} (VAD {}, LCID {}) differs from DOF {} (VAD {}, LCID {}) of the same node: crash prescribes a node's DOFs with one program, so a prescribed displacement needs the same VAD and curve on every DOF",
+            d.dof, d.vad, d.lcid, first.dof, first.vad, first.lcid
+        )));
+    }
     let mut ramp = None;
     for d in list {
         let c = curve(ix, d)?;
@@ -73,6 +83,7 @@ fn combine(ix: &Index<'_>, list: &[&Driven], sel: Sel) -> Result<Prescribe, Deck
         w,
         curve: same.then_some(first.lcid),
         ramp,
+        displacement,
         loc: first.loc,
         what: format!("*{}", first.keyword),
     })
@@ -198,7 +209,7 @@ pub(super) fn supports_and_motion(ix: &Index<'_>, m: &mut Model) -> Result<(), D
         }
         let mut sig: Signature = list
             .iter()
-            .map(|x| (x.dof, x.lcid, x.sf.to_bits()))
+            .map(|x| (x.dof, x.vad, x.lcid, x.sf.to_bits()))
             .collect();
         sig.sort_unstable();
         let b = ix.owner[*k].map_or(0, |o| o.0);

@@ -91,11 +91,15 @@ pub fn driven(deck: &mut Deck, c: &mut Cards<'_>, kind: Kind) -> Result<(), Deck
             Kind::MotionSet | Kind::LoadSet => Target::NodeSet(id),
             Kind::MotionRigid => Target::Part(id),
         };
+        let mut vad = 0;
         let d = if motion {
             let d = dof(&row, 1, "prescribed motion")?;
-            match row.int_or(2, 0)? {
-                0 => {}
-                v => return Err(row.err(2, format!("{v}: only prescribed velocities (VAD = 0) are supported (1: acceleration, 2: displacement)"))),
+            vad = match row.int_or(2, 0)? {
+                v @ (0 | 2) => v,
+                v => return Err(row.err(2, format!("{v}: only prescribed velocities (VAD = 0) and displacements (VAD = 2) are supported (1: acceleration)"))),
+            };
+            if vad == 2 && d > 3 {
+                return Err(row.err(1, format!("{d}: a prescribed rotation angle (VAD = 2 on a rotational DOF) is not supported")));
             }
             row.unsupported(5, "a direction vector (VID)")?;
             row.unsupported(7, "a birth time (BIRTH)")?;
@@ -120,6 +124,7 @@ pub fn driven(deck: &mut Deck, c: &mut Cards<'_>, kind: Kind) -> Result<(), Deck
         let rec = Driven {
             target,
             dof: d,
+            vad,
             lcid,
             sf: sf(&row, if motion { 4 } else { 3 })?,
             death,

@@ -27,6 +27,8 @@ pub struct Prescribe {
     pub w: [f64; 3],
     pub curve: Option<i64>,
     pub ramp: Option<f64>,
+    /// `v` is a displacement [m] (VAD = 2), not a velocity.
+    pub displacement: bool,
     pub loc: Loc,
     pub what: String,
 }

@@ -102,6 +102,8 @@ pub struct Spc {
 pub struct Driven {
     pub target: Target,
     pub dof: i64,
+    /// Prescribed motion: 0 velocity, 2 displacement (loads: 0).
+    pub vad: i64,
     pub lcid: i64,
     pub sf: f64,
     /// DEATH of a prescribed motion (None: never).

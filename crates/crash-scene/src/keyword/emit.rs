@@ -261,7 +261,12 @@ pub fn emit(deck: &Deck, m: Model, name: &str, mesh_prefix: &str) -> Converted {
             o.line("");
             o.line(format!("[[bodies.prescribe]]  {}", o.at(&p.what, p.loc)));
             select(&mut o, &p.sel);
-            o.line(format!("velocity = {}", v3(p.v)));
+            let kind = if p.displacement {
+                "displacement"
+            } else {
+                "velocity"
+            };
+            o.line(format!("{kind} = {}", v3(p.v)));
             if p.w != [0.0; 3] {
                 o.line(format!("angular_velocity = {}", v3(p.w)));
             }
