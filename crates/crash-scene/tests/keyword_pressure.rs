@@ -191,8 +191,8 @@ fn arrival_time_and_unknown_shells_stop_at_their_card() {
         let n = text.lines().position(|l| l == line).expect("keyword line") + 2;
         let p = write(&dir, &text);
         let e = crash_scene::load_input(&p, &DeckOptions::default())
-            .err()
-            .expect("refused")
+            .map(|_| ())
+            .expect_err("refused")
             .to_string();
         assert!(
             e.contains(&format!("plate.k:{n}")) && e.contains(line) && e.contains(what),
@@ -210,8 +210,8 @@ fn scene_pressure_on_an_element_the_mesh_lacks_is_refused_at_its_key() {
     std::fs::write(&scene, text).expect("write scene");
     let e = crash_scene::load(&scene)
         .and_then(|s| s.build())
-        .err()
-        .expect("refused")
+        .map(|_| ())
+        .expect_err("refused")
         .to_string();
     assert!(
         e.contains("bodies[0].pressure[0].elements") && e.contains("no element 77"),
