@@ -75,7 +75,7 @@ fn unknown_key_inside_a_shape_table_lists_that_shapes_keys() {
         22,
         26,
         "bodies[1].sphere.lvl",
-        &["unknown key `lvl`", "radius, level, element_size"],
+        &["unknown key `lvl`", "radius, level, cubed, element_size"],
     );
 }
 
