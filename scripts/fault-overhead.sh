@@ -3,11 +3,13 @@
 # of ten-spheres-three-plates-small to 4 ms on crash-master + 2 crash-worker (1 thread
 # each, loopback), printing wall time, summed user+sys CPU time and the output stage
 # (checkpoints + frames). Needs `cargo build --release -p crash-master -p crash-worker`.
-# Usage: scripts/fault-overhead.sh [ROUNDS]
+# Usage: [END=seconds] [SHORT=1] scripts/fault-overhead.sh [ROUNDS]
+# (END: the run's end time, default 0.004; SHORT: only off, default and every1s)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 T=target/release
 ROUNDS=${1:-5}
+END=${END:-0.004}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 
@@ -16,7 +18,7 @@ one() { # TAG master-args...
   shift
   rm -rf "$out"; mkdir -p "$out"
   /usr/bin/time -f "%U %S" -o "$out/tm" $T/crash-master scenes/ten-spheres-three-plates-small.toml \
-    --listen 127.0.0.1:0 --workers 2 --out "$out/run" --end-time 0.004 --estimated-costs "$@" 2>"$out/m.log" &
+    --listen 127.0.0.1:0 --workers 2 --out "$out/run" --end-time "$END" --estimated-costs "$@" 2>"$out/m.log" &
   for _ in $(seq 100); do grep -q "listening on" "$out/m.log" && break; sleep 0.1; done
   local addr
   addr=$(grep -o "listening on .*" "$out/m.log" | awk '{print $3}')
@@ -37,7 +39,9 @@ for _ in $(seq "$ROUNDS"); do
   one off --checkpoint-seconds 0 --heartbeat-timeout 0
   one default
   one every1s --checkpoint-seconds 1
-  # the cost of one checkpoint: many of them, frames only at the start and end
-  one frameless --checkpoint-seconds 0 --heartbeat-timeout 0 --output-interval 1
-  one ck0.2 --checkpoint-seconds 0.2 --output-interval 1
+  if [ -z "${SHORT:-}" ]; then
+    # the cost of one checkpoint: many of them, frames only at the start and end
+    one frameless --checkpoint-seconds 0 --heartbeat-timeout 0 --output-interval 1
+    one ck0.2 --checkpoint-seconds 0.2 --output-interval 1
+  fi
 done
