@@ -41,20 +41,27 @@ fn mean_velocity(b: &Body) -> Vec3 {
     }
 }
 
-/// Largest |v - u| over the nodes (a max: the same bits in any order, so on the pool).
-fn max_speed_rel(b: &Body, u: &Vec3) -> f64 {
+/// Largest |v - u1| and |v - u2| over the nodes, in one pass (maxima: the same bits in
+/// any order, so on the pool).
+fn max_speeds_rel(b: &Body, u1: &Vec3, u2: &Vec3) -> (f64, f64) {
     b.state
         .v
         .par_chunks(super::stage::PAR_CHUNK)
-        .map(|vs| vs.iter().map(|v| (v - u).norm()).fold(0.0, f64::max))
-        .reduce(|| 0.0, f64::max)
+        .map(|vs| {
+            vs.iter().fold((0.0, 0.0), |(m1, m2): (f64, f64), v| {
+                (m1.max((v - u1).norm()), m2.max((v - u2).norm()))
+            })
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)))
 }
 
 /// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
 pub fn closing_speed(a: &Body, b: &Body) -> f64 {
     let (ua, ub) = (mean_velocity(a), mean_velocity(b));
-    let with_a = max_speed_rel(a, &ua) + max_speed_rel(b, &ua);
-    let with_b = max_speed_rel(a, &ub) + max_speed_rel(b, &ub);
+    let (a_ua, a_ub) = max_speeds_rel(a, &ua, &ub);
+    let (b_ua, b_ub) = max_speeds_rel(b, &ua, &ub);
+    let with_a = a_ua + b_ua;
+    let with_b = a_ub + b_ub;
     with_a.min(with_b)
 }
 
