@@ -12,7 +12,7 @@ use super::config::{ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REF
 use super::narrow::{forces, search, Hit, Normals, Push};
 use super::segment::Segment;
 use super::surface::Surface;
-use super::sweep::{closing_speed, first_crossing};
+use super::sweep::{closing_speed, first_crossing, mean_velocity};
 use crate::body::{Body, NO_PROGRAM};
 use crate::error::Fault;
 use crate::Vec3;
@@ -279,10 +279,17 @@ pub fn contact_forces(
         return Ok(dt);
     }
     let pairs = pairs_of(bodies, cfg, bounds);
-    for &(ia, ib) in &pairs {
-        for k in [ia, ib] {
-            let skin = cfg.margin_for(&bodies[k]);
-            ensure_surface(&mut state.surfaces, &bodies[k], skin, bounds[k]);
+    // each body of a pair once per pass, however many pairs it is in (a floor under many
+    // bodies): its surface, and its mean velocity when the closing speed is needed
+    let mut in_pairs: Vec<usize> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+    in_pairs.sort_unstable();
+    in_pairs.dedup();
+    let mut mean_v = vec![Vec3::zeros(); bodies.len()];
+    for &k in &in_pairs {
+        let skin = cfg.margin_for(&bodies[k]);
+        ensure_surface(&mut state.surfaces, &bodies[k], skin, bounds[k]);
+        if cfg.speed_rule == SpeedRule::LimitDt {
+            mean_v[k] = mean_velocity(&bodies[k]);
         }
     }
     for &(ia, ib) in &pairs {
@@ -304,7 +311,7 @@ pub fn contact_forces(
         }
         if cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
             let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-            let v = closing_speed(a, b);
+            let v = closing_speed(a, b, mean_v[ia], mean_v[ib]);
             if v > 0.0 {
                 let d = CLOSING_FRACTION * c / v;
                 dt[ia] = dt[ia].min(d);

@@ -27,7 +27,7 @@ use rayon::prelude::*;
 pub const CROSSING_TOLERANCE: f64 = 0.25;
 
 /// Centre-of-mass velocity of a body (mass-weighted mean of v).
-fn mean_velocity(b: &Body) -> Vec3 {
+pub fn mean_velocity(b: &Body) -> Vec3 {
     let mut p = Vec3::zeros();
     let mut m = 0.0;
     for (v, mi) in b.state.v.iter().zip(&b.def.mass) {
@@ -56,8 +56,8 @@ fn max_speeds_rel(b: &Body, u1: &Vec3, u2: &Vec3) -> (f64, f64) {
 }
 
 /// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
-pub fn closing_speed(a: &Body, b: &Body) -> f64 {
-    let (ua, ub) = (mean_velocity(a), mean_velocity(b));
+/// `ua`, `ub`: their `mean_velocity` (a body in many pairs computes it once per pass).
+pub fn closing_speed(a: &Body, b: &Body, ua: Vec3, ub: Vec3) -> f64 {
     let (a_ua, a_ub) = max_speeds_rel(a, &ua, &ub);
     let (b_ua, b_ub) = max_speeds_rel(b, &ua, &ub);
     let with_a = a_ua + b_ua;
