@@ -274,6 +274,18 @@ fn losing_every_worker_stops_with_the_checkpoint_on_disk_and_a_resume_finishes_t
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// The master's URL, from its "listening on" line (for workers started later).
+fn master_url(m: &Proc) -> String {
+    m.log()
+        .lines()
+        .find_map(|l| {
+            l.split("listening on ")
+                .nth(1)
+                .map(|a| format!("http://{}", a.trim()))
+        })
+        .unwrap()
+}
+
 /// The newcomer's lines of the master's log: it joined, and it received bodies.
 fn assert_newcomer_took_bodies(log: &str, index: usize) {
     assert!(
@@ -297,15 +309,7 @@ fn a_worker_joining_after_a_loss_takes_the_lost_groups_and_the_run_ends_with_the
     w[1].kill();
     m.expect_line(&format!("(pid {pid} on"), Duration::from_secs(60));
     // a third worker, started after the loss
-    let url = m
-        .log()
-        .lines()
-        .find_map(|l| {
-            l.split("listening on ")
-                .nth(1)
-                .map(|a| format!("http://{}", a.trim()))
-        })
-        .unwrap();
+    let url = master_url(&m);
     let mut newcomer = worker(&url, 1, &["--step-delay-ms", "2"]);
     assert!(m.wait(TIMEOUT).success(), "{}", m.log());
     let log = m.log();
@@ -331,15 +335,7 @@ fn losing_every_worker_waits_for_a_newcomer_and_ends_with_the_fault_free_hash() 
         "every worker was lost; waiting up to 60 s",
         Duration::from_secs(60),
     );
-    let url = m
-        .log()
-        .lines()
-        .find_map(|l| {
-            l.split("listening on ")
-                .nth(1)
-                .map(|a| format!("http://{}", a.trim()))
-        })
-        .unwrap();
+    let url = master_url(&m);
     let mut newcomer = worker(&url, 1, &[]);
     assert!(m.wait(TIMEOUT).success(), "{}", m.log());
     let log = m.log();

@@ -27,9 +27,9 @@ pub struct Hit {
 }
 
 /// Box (lo, hi) beyond which a node cannot touch the segment body: its node box
-/// (`surf.bounds`, fresh) grown by both half-thicknesses.
+/// (`surf.bounds()`, fresh) grown by both half-thicknesses.
 pub fn reach_box(surf: &Surface, seg_body: &Body, node_body: &Body) -> (Vec3, Vec3) {
-    let (lo, hi) = surf.bounds;
+    let (lo, hi) = surf.bounds();
     let c = 0.5 * (seg_body.def.section.thickness + node_body.def.section.thickness);
     (lo.add_scalar(-c), hi.add_scalar(c))
 }

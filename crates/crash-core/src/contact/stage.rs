@@ -177,7 +177,6 @@ fn ensure_surface<'s>(
     surfaces: &'s mut BTreeMap<u32, Surface>,
     body: &Body,
     skin: f64,
-    bounds: (Vec3, Vec3),
 ) -> &'s mut Surface {
     let s = surfaces
         .entry(body.def.id)
@@ -186,7 +185,6 @@ fn ensure_surface<'s>(
         *s = Surface::new(body);
     }
     s.refresh(body, skin);
-    s.bounds = bounds;
     s.chunks = super::surface::node_chunks(body);
     s
 }
@@ -287,7 +285,7 @@ pub fn contact_forces(
     let mut mean_v = vec![Vec3::zeros(); bodies.len()];
     for &k in &in_pairs {
         let skin = cfg.margin_for(&bodies[k]);
-        ensure_surface(&mut state.surfaces, &bodies[k], skin, bounds[k]);
+        ensure_surface(&mut state.surfaces, &bodies[k], skin);
         if cfg.speed_rule == SpeedRule::LimitDt {
             mean_v[k] = mean_velocity(&bodies[k]);
         }
@@ -331,16 +329,20 @@ pub fn contact_forces(
         };
         // nodal normals where the passes read them: the hit nodes and the corners of
         // their segments (stale values elsewhere are never read)
+        for b_ in [a, b] {
+            let buf = state.normals.entry(b_.def.id).or_default();
+            buf.resize(b_.state.x.len(), Vec3::zeros());
+        }
         for (hits, nb, sb_, surf_n, surf_s) in [(&hits_a, a, b, sa, sb), (&hits_b, b, a, sb, sa)] {
             for h in hits {
-                let own = state.normals.entry(nb.def.id).or_default();
-                own.resize(nb.state.x.len(), Vec3::zeros());
-                own[h.node as usize] = surf_n.nodal_normal(h.node, &nb.state.x);
+                if let Some(own) = state.normals.get_mut(&nb.def.id) {
+                    own[h.node as usize] = surf_n.nodal_normal(h.node, &nb.state.x);
+                }
                 let seg = surf_s.segments[h.segment as usize];
-                let other = state.normals.entry(sb_.def.id).or_default();
-                other.resize(sb_.state.x.len(), Vec3::zeros());
-                for &n in seg.nodes() {
-                    other[n as usize] = surf_s.nodal_normal(n, &sb_.state.x);
+                if let Some(other) = state.normals.get_mut(&sb_.def.id) {
+                    for &n in seg.nodes() {
+                        other[n as usize] = surf_s.nodal_normal(n, &sb_.state.x);
+                    }
                 }
             }
         }
@@ -506,7 +508,7 @@ pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetra
         for (n, s) in [(ia, ib), (ib, ia)] {
             let (nb, sb) = (&bodies[n], &bodies[s]);
             let chunks = super::surface::node_chunks(nb);
-            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb), bounds[s]);
+            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb));
             let hits = search(nb, &chunks, sb, surf, false);
             let deepest = hits.iter().fold(None::<&Hit>, |d, h| match d {
                 Some(d) if d.depth >= h.depth => Some(d),

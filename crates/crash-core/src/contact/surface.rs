@@ -71,9 +71,6 @@ pub struct Surface {
     /// `smooth::nodal_normals`: triangles before quads, then corner slot, then segment.
     inc_start: Vec<u32>,
     inc: Vec<u32>,
-    /// Box of the body's nodes at the current pass (set by the contact stage once per
-    /// pass, shared by every use of it).
-    pub bounds: (Vec3, Vec3),
     /// Chunk boxes and speeds of the body's nodes at the current pass (idem).
     pub chunks: Vec<NodeChunk>,
     tree: RTree<Entry>,
@@ -183,7 +180,6 @@ impl Surface {
             adj,
             inc_start,
             inc,
-            bounds: crate::mesh::bounds(&body.state.x),
             chunks: node_chunks(body),
             tree: RTree::new(),
             reference: Vec::new(),
@@ -258,6 +254,16 @@ impl Surface {
                 .locate_in_envelope_intersecting(&q)
                 .map(|e| e.data),
         );
+    }
+
+    /// Box of the body's nodes at the current pass: the union of its chunk boxes (min
+    /// and max: the bits of `mesh::bounds`).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.chunks
+            .iter()
+            .fold(crate::mesh::bounds(&[]), |(lo, hi), k| {
+                (lo.inf(&k.lo), hi.sup(&k.hi))
+            })
     }
 
     /// Unit normal of node `n` at positions `x`: the area-weighted mean of its
