@@ -8,16 +8,17 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 END=${1:-5e-3}; EVERY=${2:-50}; REPS=${3:-3}; PREC=${4:-f64}
 SCENE=scenes/sphere-on-plate.toml
+CRASH=${CRASH:-target/release/crash}   # another build to compare: CRASH=/path/to/crash
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 # the first step's dt, from crash check (the step hardly changes in this run)
-DT=$(target/release/crash check "$SCENE" | sed -n 's/^time step estimate \([0-9.e+-]*\) s.*/\1/p')
+DT=$("$CRASH" check "$SCENE" | sed -n 's/^time step estimate \([0-9.e+-]*\) s.*/\1/p')
 INTERVAL=$(python3 -c "print($DT * $EVERY)")
 SCENE_P="$OUT/scene.toml"
 { cat "$SCENE"; printf '\n[outputs]\nprecision = "%s"\n' "$PREC"; } > "$SCENE_P"
 run() { # $1 label, $2 interval
   rm -rf "$OUT/run"
-  target/release/crash run "$SCENE_P" --end-time "$END" --output-interval "$2" --threads 1 \
+  "$CRASH" run "$SCENE_P" --end-time "$END" --output-interval "$2" --threads 1 \
     --no-pictures --quiet --out "$OUT/run" >/dev/null 2>&1
   python3 - "$OUT/run/summary.json" "$1" <<'PY' >> "$OUT/rows"
 import json, sys, pathlib

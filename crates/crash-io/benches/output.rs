@@ -3,7 +3,9 @@
 
 use crash_core::shapes::{icosphere, plate, ElementKind};
 use crash_core::{Body, Material, Section, Stabilization, Vec3};
+use crash_io::block_cache::BlockCache;
 use crash_io::vtu::write_vtu;
+use crash_io::vtu_encode::{FrameEncoder, Spill};
 use crash_io::{render_frame, Colouring, Frame, Precision, RenderOptions, VtuFormat};
 use criterion::{criterion_group, criterion_main, Criterion};
 
@@ -52,6 +54,28 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 buf.clear();
                 write_vtu(&mut buf, &f, fmt).expect("write");
+                buf.len()
+            })
+        });
+        // a frame of a series: the bodies have moved since the last one (the moving
+        // arrays are encoded again), their mesh and ids have not (the block cache)
+        g.bench_function(format!("series_frame_{name}"), |b| {
+            let mut buf = Vec::with_capacity(1 << 24);
+            let mut cache = BlockCache::default();
+            let mut moved = f.clone();
+            b.iter(|| {
+                for body in &mut moved.bodies {
+                    for x in &mut body.x {
+                        x.z += 1e-6;
+                    }
+                }
+                buf.clear();
+                let mut enc =
+                    FrameEncoder::new(0.0, 0, fmt, Spill::in_memory(), std::mem::take(&mut cache));
+                for body in &moved.bodies {
+                    enc.body(body).expect("body");
+                }
+                cache = enc.finish(&mut buf).expect("write");
                 buf.len()
             })
         });

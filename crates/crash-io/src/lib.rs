@@ -3,6 +3,7 @@
 //! and exact binary checkpoints. docs/output.md describes every file.
 
 pub mod atomic;
+pub mod block_cache;
 pub mod checkpoint;
 pub mod error;
 pub mod frame;

@@ -4,11 +4,13 @@
 //! continues the numbering.
 
 use crate::atomic::{write_atomic, AtomicFile};
+use crate::block_cache::BlockCache;
 use crate::error::{AtPath, IoError};
 use crate::frame::{Frame, FrameBody};
 use crate::vtu::VtuFormat;
 use crate::vtu_encode::{FrameEncoder, Spill};
 use roxmltree::Document;
+use std::mem::take;
 use std::path::{Path, PathBuf};
 
 /// Name of the collection file inside the output directory.
@@ -33,6 +35,8 @@ pub struct SeriesWriter {
     next_index: u64,
     /// The frame being written body by body.
     open: Option<OpenFrame>,
+    /// Compressed blocks of the previous frame's steady arrays.
+    cache: BlockCache,
 }
 
 #[derive(Debug)]
@@ -117,6 +121,7 @@ impl SeriesWriter {
             entries: Vec::new(),
             next_index: 0,
             open: None,
+            cache: BlockCache::default(),
         })
     }
 
@@ -147,6 +152,7 @@ impl SeriesWriter {
             entries: keep,
             next_index,
             open: None,
+            cache: BlockCache::default(),
         })
     }
 
@@ -189,7 +195,7 @@ impl SeriesWriter {
             time,
             file,
             path,
-            enc: FrameEncoder::new(time, step, self.format, spill),
+            enc: FrameEncoder::new(time, step, self.format, spill, take(&mut self.cache)),
         });
         Ok(())
     }
@@ -225,11 +231,14 @@ impl SeriesWriter {
             .take()
             .ok_or_else(|| IoError::Invalid("end of a frame that was not begun".into()))?;
         let mut out = AtomicFile::create(&path)?;
-        if let Err(e) = enc.finish(out.writer()) {
-            let temp = out.temp().to_path_buf();
-            drop(out);
-            let _ = std::fs::remove_file(&temp);
-            return Err(IoError::io(&path, e));
+        match enc.finish(out.writer()) {
+            Ok(cache) => self.cache = cache,
+            Err(e) => {
+                let temp = out.temp().to_path_buf();
+                drop(out);
+                let _ = std::fs::remove_file(&temp);
+                return Err(IoError::io(&path, e));
+            }
         }
         out.commit()?;
         let mut replaced = Vec::new();

@@ -6,6 +6,7 @@
 //! VTK's block format by default (`vtu_encode`); floats are Float64 (every bit kept) or
 //! Float32 (`Precision::F32`, half the bytes), ids and connectivity stay integers.
 
+use crate::block_cache::BlockCache;
 use crate::frame::{Frame, FrameBody};
 use crate::vtu_encode::{FrameEncoder, Spill};
 use std::io::{self, Write};
@@ -118,6 +119,9 @@ pub struct ArrayDef {
     pub name: &'static str,
     pub components: usize,
     pub values: fn(&FrameBody, Base) -> Values<'_>,
+    /// Rarely changes between frames: its compressed blocks are kept for the next
+    /// frame (`BlockCache`).
+    pub steady: bool,
 }
 
 impl std::fmt::Debug for ArrayDef {
@@ -137,7 +141,13 @@ const fn def(
         name,
         components,
         values,
+        steady: false,
     }
+}
+
+/// `d`, marked as rarely changing between frames.
+const fn steady(d: ArrayDef) -> ArrayDef {
+    ArrayDef { steady: true, ..d }
 }
 
 fn f64s<'a>(it: impl Iterator<Item = f64> + 'a) -> Values<'a> {
@@ -166,9 +176,9 @@ pub const ARRAYS: &[ArrayDef] = {
         }),
         def(PointData, VELOCITY, 3, |b, _| vec3s(&b.v)),
         def(PointData, CONTACT_FORCE, 3, |b, _| vec3s(&b.f_contact)),
-        def(PointData, BODY_ID, 1, |b, _| {
+        steady(def(PointData, BODY_ID, 1, |b, _| {
             Values::I64(Box::new(std::iter::repeat_n(b.id as i64, b.x.len())))
-        }),
+        })),
         def(CellData, VM_TOP, 1, |b, _| {
             f64s(b.von_mises_top.iter().copied())
         }),
@@ -181,42 +191,42 @@ pub const ARRAYS: &[ArrayDef] = {
         def(CellData, BENDING, 3, |b, _| {
             f64s(b.m.iter().flatten().copied())
         }),
-        def(CellData, THICKNESS, 1, |b, _| {
+        steady(def(CellData, THICKNESS, 1, |b, _| {
             f64s(per_element(b, b.thickness))
-        }),
-        def(CellData, BODY_ID, 1, |b, _| {
+        })),
+        steady(def(CellData, BODY_ID, 1, |b, _| {
             Values::I64(Box::new(per_element(b, b.id as i64)))
-        }),
+        })),
         // where the element was computed (-1: not known to the writer)
-        def(CellData, "worker", 1, |b, _| {
+        steady(def(CellData, "worker", 1, |b, _| {
             let w = b.placement.map_or(-1, |p| p.worker as i64);
             Values::I64(Box::new(per_element(b, w)))
-        }),
-        def(CellData, "group", 1, |b, _| {
+        })),
+        steady(def(CellData, "group", 1, |b, _| {
             let g = b.placement.map_or(-1, |p| p.group as i64);
             Values::I64(Box::new(per_element(b, g)))
-        }),
+        })),
         def(Points, "Points", 3, |b, _| vec3s(&b.x)),
-        def(Cells, "connectivity", 1, |b, base| {
+        steady(def(Cells, "connectivity", 1, |b, base| {
             let tris = b.tris.iter().flatten();
             let quads = b.quads.iter().flatten();
             Values::I64(Box::new(
                 tris.chain(quads).map(move |&n| base.point + n as i64),
             ))
-        }),
-        def(Cells, "offsets", 1, |b, base| {
+        })),
+        steady(def(Cells, "offsets", 1, |b, base| {
             let sizes = per_element_sizes(b);
             Values::I64(Box::new(sizes.scan(base.conn, |end, k| {
                 *end += k;
                 Some(*end)
             })))
-        }),
-        def(Cells, "types", 1, |b, _| {
+        })),
+        steady(def(Cells, "types", 1, |b, _| {
             let t = std::iter::repeat_n(VTK_TRIANGLE, b.tris.len());
             Values::U8(Box::new(
                 t.chain(std::iter::repeat_n(VTK_QUAD, b.quads.len())),
             ))
-        }),
+        })),
     ]
 };
 
@@ -237,9 +247,15 @@ pub(crate) fn section_attributes(s: Section) -> &'static str {
 /// Write a whole `frame` as one .vtu document to `w` (the data staged in memory; the
 /// run's series stages large frames in a file instead, `SeriesWriter`).
 pub fn write_vtu(w: &mut dyn Write, frame: &Frame, format: VtuFormat) -> io::Result<()> {
-    let mut enc = FrameEncoder::new(frame.time, frame.step, format, Spill::in_memory());
+    let mut enc = FrameEncoder::new(
+        frame.time,
+        frame.step,
+        format,
+        Spill::in_memory(),
+        BlockCache::default(),
+    );
     for b in &frame.bodies {
         enc.body(b)?;
     }
-    enc.finish(w)
+    enc.finish(w).map(drop)
 }

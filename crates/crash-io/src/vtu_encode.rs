@@ -13,6 +13,7 @@
 //! partial last block (0 when every block is full). An uncompressed array is `[nbytes]`
 //! then the bytes.
 
+use crate::block_cache::BlockCache;
 use crate::frame::FrameBody;
 use crate::vtu::{names, section_attributes, Base, Precision, Section, Values, VtuFormat, ARRAYS};
 use flate2::{write::ZlibEncoder, Compression};
@@ -136,6 +137,9 @@ struct ArrayStream {
     raw_len: u64,
     float32: bool,
     type_name: &'static str,
+    /// Index in `ARRAYS`, and whether its blocks go through the `BlockCache`.
+    index: usize,
+    steady: bool,
 }
 
 /// A frame being encoded.
@@ -149,15 +153,18 @@ pub struct FrameEncoder {
     base: Base,
     cells: u64,
     scratch: Vec<u8>,
+    cache: BlockCache,
 }
 
 impl FrameEncoder {
-    pub fn new(time: f64, step: u64, format: VtuFormat, spill: Spill) -> Self {
+    /// `cache`: the blocks kept from the series' previous frame (`finish` gives it back).
+    pub fn new(time: f64, step: u64, format: VtuFormat, spill: Spill, cache: BlockCache) -> Self {
         // each array's type, from its values for a body without nodes or elements
         let empty = FrameBody::default();
         let streams = ARRAYS
             .iter()
-            .map(|def| {
+            .enumerate()
+            .map(|(index, def)| {
                 let (type_name, float32) =
                     match ((def.values)(&empty, Base::default()), format.precision) {
                         (Values::F64(_), Precision::F64) => ("Float64", false),
@@ -171,6 +178,8 @@ impl FrameEncoder {
                     raw_len: 0,
                     float32,
                     type_name,
+                    index,
+                    steady: def.steady,
                 }
             })
             .collect();
@@ -183,6 +192,7 @@ impl FrameEncoder {
             base: Base::default(),
             cells: 0,
             scratch: Vec::new(),
+            cache,
         }
     }
 
@@ -190,12 +200,16 @@ impl FrameEncoder {
     pub fn body(&mut self, b: &FrameBody) -> io::Result<()> {
         for (def, s) in ARRAYS.iter().zip(&mut self.streams) {
             let values = (def.values)(b, self.base);
-            let (spill, scratch, compress) =
-                (&mut self.spill, &mut self.scratch, self.format.compress);
+            let mut out = Out {
+                spill: &mut self.spill,
+                scratch: &mut self.scratch,
+                cache: &mut self.cache,
+                compress: self.format.compress,
+            };
             let mut put = |s: &mut ArrayStream, bytes: &[u8]| -> io::Result<()> {
                 s.buf.extend_from_slice(bytes);
                 if s.buf.len() >= BLOCK {
-                    store_block(s, spill, scratch, compress)?;
+                    out.store_block(s)?;
                 }
                 Ok(())
             };
@@ -230,10 +244,17 @@ impl FrameEncoder {
     }
 
     /// Write the whole .vtu to `out`: XML, then the appended data from the spill.
-    pub fn finish(mut self, out: &mut dyn Write) -> io::Result<()> {
+    /// Gives back the block cache for the series' next frame.
+    pub fn finish(mut self, out: &mut dyn Write) -> io::Result<BlockCache> {
+        let mut o = Out {
+            spill: &mut self.spill,
+            scratch: &mut self.scratch,
+            cache: &mut self.cache,
+            compress: self.format.compress,
+        };
         for s in &mut self.streams {
             if !s.buf.is_empty() {
-                store_block(s, &mut self.spill, &mut self.scratch, self.format.compress)?;
+                o.store_block(s)?;
             }
         }
         let headers: Vec<Vec<u8>> = self
@@ -253,7 +274,9 @@ impl FrameEncoder {
         }
         writeln!(out)?;
         writeln!(out, "  </AppendedData>")?;
-        writeln!(out, "</VTKFile>")
+        writeln!(out, "</VTKFile>")?;
+        self.cache.end_frame();
+        Ok(self.cache)
     }
 
     fn write_xml(&self, w: &mut dyn Write, headers: &[Vec<u8>]) -> io::Result<()> {
@@ -326,27 +349,47 @@ impl FrameEncoder {
     }
 }
 
-/// Move the stream's buffered bytes to the spill as one block.
-fn store_block(
-    s: &mut ArrayStream,
-    spill: &mut Spill,
-    scratch: &mut Vec<u8>,
+/// Where full blocks go: compressed (or taken from the cache) into the spill.
+struct Out<'a> {
+    spill: &'a mut Spill,
+    scratch: &'a mut Vec<u8>,
+    cache: &'a mut BlockCache,
     compress: bool,
-) -> io::Result<()> {
-    let stored = if compress {
-        scratch.clear();
-        let mut z = ZlibEncoder::new(std::mem::take(scratch), Compression::new(LEVEL));
-        z.write_all(&s.buf)?;
-        *scratch = z.finish()?;
-        &scratch[..]
-    } else {
-        &s.buf[..]
-    };
-    let at = spill.append(stored)?;
-    s.blocks.push((at, stored.len() as u64));
-    s.raw_len += s.buf.len() as u64;
-    s.buf.clear();
-    Ok(())
+}
+
+impl Out<'_> {
+    /// Move the stream's buffered bytes to the spill as one block.
+    fn store_block(&mut self, s: &mut ArrayStream) -> io::Result<()> {
+        let k = s.blocks.len();
+        let cached = match (self.compress && s.steady, &*self.cache) {
+            (true, c) => c.get(s.index, k, &s.buf),
+            _ => None,
+        };
+        let stored = match cached {
+            Some(z) => z,
+            None if self.compress => {
+                self.scratch.clear();
+                let level = self.cache.level(s.index, LEVEL);
+                let mut z = ZlibEncoder::new(std::mem::take(self.scratch), Compression::new(level));
+                z.write_all(&s.buf)?;
+                *self.scratch = z.finish()?;
+                if level == LEVEL {
+                    self.cache
+                        .measured(s.index, s.buf.len(), self.scratch.len());
+                }
+                if s.steady {
+                    self.cache.put(s.index, k, &s.buf, self.scratch);
+                }
+                &self.scratch[..]
+            }
+            None => &s.buf[..],
+        };
+        let at = self.spill.append(stored)?;
+        s.blocks.push((at, stored.len() as u64));
+        s.raw_len += s.buf.len() as u64;
+        s.buf.clear();
+        Ok(())
+    }
 }
 
 /// The array's header (UInt64 values, little endian).

@@ -8,6 +8,7 @@ mod common;
 use common::{stepped_group, test_dir};
 use crash_core::shapes::{plate, ElementKind};
 use crash_core::{Body, Material, Section, Stabilization};
+use crash_io::block_cache::{BlockCache, REMEASURE};
 use crash_io::vtu::write_vtu;
 use crash_io::vtu_encode::{FrameEncoder, Spill, BLOCK};
 use crash_io::{read_pvd, read_vtu, BackgroundSeries, Frame, Precision, SeriesWriter, VtuFormat};
@@ -210,6 +211,66 @@ fn compressed_arrays_follow_vtk_block_format_and_decode_independently() {
     assert!(small.len() < bytes.len() && bytes.len() < plain.len());
 }
 
+/// The compressed size of array `name` in the .vtu file `bytes`, and its raw size.
+fn sizes_of(bytes: &[u8], name: &str) -> (u64, u64) {
+    let at = bytes
+        .windows(13)
+        .position(|w| w == b"<AppendedData")
+        .expect("appended");
+    let xml = std::str::from_utf8(&bytes[..at]).expect("utf8");
+    let mark = at + bytes[at..].iter().position(|&c| c == b'_').expect("_") + 1;
+    let off: usize = attr_of(xml, name, "offset").parse().expect("offset");
+    let h = words(&bytes[mark..], off, 3);
+    let raw = (h[0] - 1) * h[1] + if h[2] == 0 { h[1] } else { h[2] };
+    (
+        words(&bytes[mark..], off + 24, h[0] as usize).iter().sum(),
+        raw,
+    )
+}
+
+#[test]
+fn a_series_through_the_block_cache_reads_back_every_value_and_stores_noisy_arrays() {
+    let mut frame = big_frame();
+    let dir = test_dir("block_cache");
+    let mut w = SeriesWriter::create(&dir).expect("create");
+    let mut stored_seen = false;
+    for k in 0..REMEASURE + 3 {
+        // velocities like a vibrating plate's: their low bits do not compress
+        for (i, v) in frame.bodies[0].v.iter_mut().enumerate() {
+            let s = |c: f64| ((i as f64 + c) * (k as f64 + 1.3)).sin() * 1e-3;
+            *v = crash_core::Vec3::new(s(0.1), s(0.2), s(0.3));
+        }
+        for x in &mut frame.bodies[0].x {
+            x.z += 1e-7;
+        }
+        frame.step = k;
+        frame.time = k as f64 * 1e-6;
+        let path = w.write(&frame).expect("write");
+        let back = read_vtu(&path).expect("read");
+        let (a, b) = (&back.bodies[0], &frame.bodies[0]);
+        let bits = |v: &[crash_core::Vec3]| -> Vec<u64> {
+            v.iter()
+                .flat_map(|q| [q.x, q.y, q.z])
+                .map(f64::to_bits)
+                .collect()
+        };
+        assert_eq!(bits(&a.x), bits(&b.x), "frame {k}: positions");
+        assert_eq!(bits(&a.v), bits(&b.v), "frame {k}: velocities");
+        assert_eq!((&a.tris, &a.quads), (&b.tris, &b.quads), "frame {k}: cells");
+        let (z, raw) = sizes_of(&std::fs::read(&path).expect("read"), "velocity");
+        // from the second frame on, the noisy velocities are stored (raw plus the zlib
+        // framing: a few bytes per block; level 1 makes them 5% larger than raw),
+        // except in the frame after every REMEASURE-th
+        let stored = raw <= z && z <= raw + 16 * raw.div_ceil(BLOCK as u64);
+        assert_eq!(stored, k > 0 && k != REMEASURE, "frame {k}: {z} of {raw}");
+        stored_seen |= stored;
+        // the connectivity, from the cache after the first frame, compresses as ever
+        let (cz, craw) = sizes_of(&std::fs::read(&path).expect("read"), "connectivity");
+        assert!(cz * 3 < craw, "frame {k}: connectivity {cz} of {craw}");
+    }
+    assert!(stored_seen);
+}
+
 #[test]
 fn a_spill_file_gives_the_same_bytes_as_memory_and_is_removed() {
     let frame = big_frame();
@@ -223,6 +284,7 @@ fn a_spill_file_gives_the_same_bytes_as_memory_and_is_removed() {
             frame.step,
             fmt,
             Spill::with_file_after(spill_path.clone(), 1000),
+            BlockCache::default(),
         );
         for b in &frame.bodies {
             enc.body(b).expect("body");
