@@ -59,7 +59,7 @@ impl BlockCache {
     /// The frame is written: decide which arrays the next frame stores.
     pub fn end_frame(&mut self) {
         self.frames += 1;
-        let remeasure = self.frames % REMEASURE == 0;
+        let remeasure = self.frames.is_multiple_of(REMEASURE);
         self.stored
             .resize(self.sizes.len().max(self.stored.len()), false);
         for (k, &(raw, z)) in self.sizes.iter().enumerate() {
