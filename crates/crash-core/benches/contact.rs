@@ -15,6 +15,7 @@
 
 use crash_core::contact::narrow::search;
 use crash_core::contact::surface::{node_chunks, Surface};
+use crash_core::contact::verlet::NodeLists;
 use crash_core::contact::{
     body_bounds, contact_forces, project, segments, ContactConfig, ContactState,
 };
@@ -122,7 +123,15 @@ fn search_bench(c: &mut Criterion) {
         let segs = segments(&s);
         let mut surf = Surface::new(&s);
         surf.refresh(&s, 1e-3);
-        let hits = search(&q, &node_chunks(&q), &s, &surf, false).len();
+        let hits = search(
+            &q,
+            &node_chunks(&q),
+            &s,
+            &surf,
+            false,
+            &mut NodeLists::default(),
+        )
+        .len();
         println!(
             "{label}: {} segments, {} query nodes, {hits} hits",
             segs.len(),
@@ -134,7 +143,16 @@ fn search_bench(c: &mut Criterion) {
             .warm_up_time(Duration::from_millis(500));
         g.throughput(Throughput::Elements(q.state.x.len() as u64));
         g.bench_function("rtree", |b| {
-            b.iter(|| black_box(search(&q, &node_chunks(&q), &s, &surf, false)))
+            b.iter(|| {
+                black_box(search(
+                    &q,
+                    &node_chunks(&q),
+                    &s,
+                    &surf,
+                    false,
+                    &mut NodeLists::default(),
+                ))
+            })
         });
         g.throughput(Throughput::Elements(brute_nodes as u64));
         g.bench_function(format!("brute_{brute_nodes}_nodes"), |b| {

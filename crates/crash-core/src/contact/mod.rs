@@ -10,6 +10,7 @@ pub mod smooth;
 pub mod stage;
 pub mod surface;
 pub mod sweep;
+pub mod verlet;
 
 pub use broad::{candidate_pairs, BodyBox};
 pub use config::{

@@ -8,6 +8,7 @@ use super::config::{ContactConfig, PenaltyKind};
 use super::segment::{project, Projection};
 use super::smooth::smoothed;
 use super::surface::{NodeChunk, Surface, NODE_CHUNK};
+use super::verlet::{candidates, NodeLists};
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -50,12 +51,14 @@ fn box_distance(p: &Vec3, nodes: &[u32], x: &[Vec3]) -> f64 {
 /// `self_pass`: nb and sb are the same body; segments holding the node or a neighbour,
 /// and segments already within contact distance in the reference configuration, are
 /// excluded. `chunks`: `node_chunks(nb)` at this pass (chunks out of reach are skipped).
+/// `lists`: the pass's node lists (`verlet.rs`; any lists of this pass, or new ones).
 pub fn search(
     nb: &Body,
     chunks: &[NodeChunk],
     sb: &Body,
     surf: &Surface,
     self_pass: bool,
+    lists: &mut NodeLists,
 ) -> Vec<Hit> {
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
     let r = 0.5 * nb.def.section.thickness;
@@ -66,8 +69,9 @@ pub fn search(
         .state
         .x
         .par_chunks(NODE_CHUNK)
+        .zip(lists.fit(nb.state.x.len()).par_chunks_mut(NODE_CHUNK))
         .enumerate()
-        .map(|(ci, xs)| {
+        .map(|(ci, (xs, lists))| {
             let mut out = Vec::new();
             if chunks.get(ci).is_some_and(|k| !k.meets(&lo, &hi, 0.0)) {
                 return out;
@@ -79,7 +83,7 @@ pub fn search(
                     continue;
                 }
                 let i = (ci * NODE_CHUNK + k) as u32;
-                surf.candidates(p, r, &mut cand);
+                candidates(&mut lists[k], surf, p, r, r, &mut cand);
                 // every candidate within the tie tolerance of the closest one, then the
                 // lowest index among them: a function of the geometry, not of the
                 // candidates' order, and the same for distances equal up to round-off

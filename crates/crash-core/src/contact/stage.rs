@@ -13,6 +13,7 @@ use super::narrow::{forces, search, Hit, Normals, Push};
 use super::segment::Segment;
 use super::surface::Surface;
 use super::sweep::{closing_speed, first_crossing, mean_velocity};
+use super::verlet::NodeLists;
 use crate::body::{Body, NO_PROGRAM};
 use crate::error::Fault;
 use crate::Vec3;
@@ -128,6 +129,8 @@ pub struct ContactState {
     surfaces: BTreeMap<u32, Surface>,
     /// Nodal normals per body, valid at the nodes the current pass reads.
     normals: BTreeMap<u32, Vec<Vec3>>,
+    /// Node candidate lists per pass (node body, segment body).
+    lists: BTreeMap<(u32, u32), NodeLists>,
     stats: Vec<PairStats>,
 }
 
@@ -220,6 +223,7 @@ fn check_crossing(
     b: &Body,
     sa: &Surface,
     sb: &Surface,
+    lists: &mut BTreeMap<(u32, u32), NodeLists>,
     h: f64,
     step: u64,
 ) -> Result<(), Fault> {
@@ -229,7 +233,8 @@ fn check_crossing(
         passes.push((b, sb, a, sa));
     }
     for (nb, ns, segb, surf) in passes {
-        if let Some(c) = first_crossing(nb, &ns.chunks, segb, surf, self_pair, h) {
+        let l = lists.entry((nb.def.id, segb.def.id)).or_default();
+        if let Some(c) = first_crossing(nb, &ns.chunks, segb, surf, self_pair, h, l) {
             return Err(Fault::PassThrough {
                 step,
                 body: nb.def.id,
@@ -296,7 +301,7 @@ pub fn contact_forces(
         else {
             continue;
         };
-        check_crossing(a, b, sa, sb, h, step)?;
+        check_crossing(a, b, sa, sb, &mut state.lists, h, step)?;
         if cfg.penalty == PenaltyKind::Element {
             let d = element_form_dt(cfg, sa, sb).min(element_form_dt(cfg, sb, sa));
             dt[ia] = dt[ia].min(d);
@@ -321,11 +326,13 @@ pub fn contact_forces(
         if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
             continue;
         }
-        let hits_a = search(a, &sa.chunks, b, sb, self_pair);
+        let lists_a = state.lists.entry((a.def.id, b.def.id)).or_default();
+        let hits_a = search(a, &sa.chunks, b, sb, self_pair, lists_a);
         let hits_b = if self_pair {
             Vec::new()
         } else {
-            search(b, &sb.chunks, a, sa, false)
+            let lists_b = state.lists.entry((b.def.id, a.def.id)).or_default();
+            search(b, &sb.chunks, a, sa, false, lists_b)
         };
         // nodal normals where the passes read them: the hit nodes and the corners of
         // their segments (stale values elsewhere are never read)
@@ -509,7 +516,7 @@ pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetra
             let (nb, sb) = (&bodies[n], &bodies[s]);
             let chunks = super::surface::node_chunks(nb);
             let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb));
-            let hits = search(nb, &chunks, sb, surf, false);
+            let hits = search(nb, &chunks, sb, surf, false, &mut NodeLists::default());
             let deepest = hits.iter().fold(None::<&Hit>, |d, h| match d {
                 Some(d) if d.depth >= h.depth => Some(d),
                 _ => Some(h),

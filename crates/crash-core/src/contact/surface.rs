@@ -9,7 +9,11 @@ use super::segment::{segments, Segment};
 use crate::body::Body;
 use crate::Vec3;
 use rstar::primitives::{GeomWithData, Rectangle};
-use rstar::{RTree, AABB};
+use rstar::{RTree, RTreeObject, AABB};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Ids of the trees built in this process (`Surface::tree_id`).
+static NEXT_TREE: AtomicU64 = AtomicU64::new(0);
 
 type Entry = GeomWithData<Rectangle<[f64; 3]>, u32>;
 
@@ -74,6 +78,10 @@ pub struct Surface {
     /// Chunk boxes and speeds of the body's nodes at the current pass (idem).
     pub chunks: Vec<NodeChunk>,
     tree: RTree<Entry>,
+    /// Each segment's stored box (the tree's entries, by segment index).
+    boxes: Vec<([f64; 3], [f64; 3])>,
+    /// `tree_id()`.
+    tree_id: u64,
     reference: Vec<Vec3>,
     skin: f64,
     built: bool,
@@ -182,6 +190,8 @@ impl Surface {
             inc,
             chunks: node_chunks(body),
             tree: RTree::new(),
+            boxes: Vec::new(),
+            tree_id: u64::MAX - 1,
             reference: Vec::new(),
             skin: 0.0,
             built: false,
@@ -236,7 +246,15 @@ impl Surface {
                 GeomWithData::new(r, j as u32)
             })
             .collect();
+        self.boxes = entries
+            .iter()
+            .map(|e| {
+                let env = e.geom().envelope();
+                (env.lower(), env.upper())
+            })
+            .collect();
         self.tree = RTree::bulk_load(entries);
+        self.tree_id = NEXT_TREE.fetch_add(1, Ordering::Relaxed);
         self.reference.clear();
         self.reference.extend_from_slice(x);
         self.skin = skin;
@@ -247,13 +265,40 @@ impl Surface {
 
     /// Segments whose stored box meets the cube of half-size `r` around `p`.
     pub fn candidates(&self, p: &Vec3, r: f64, out: &mut Vec<u32>) {
+        self.query(
+            [p.x - r, p.y - r, p.z - r],
+            [p.x + r, p.y + r, p.z + r],
+            out,
+        );
+    }
+
+    /// Segments whose stored box meets the box `lo`..`hi` (lo <= hi), into `out`.
+    pub fn query(&self, lo: [f64; 3], hi: [f64; 3], out: &mut Vec<u32>) {
         out.clear();
-        let q = AABB::from_corners([p.x - r, p.y - r, p.z - r], [p.x + r, p.y + r, p.z + r]);
+        let q = AABB::from_corners(lo, hi);
         out.extend(
             self.tree
                 .locate_in_envelope_intersecting(&q)
                 .map(|e| e.data),
         );
+    }
+
+    /// Whether segment `j`'s stored box meets the box `lo`..`hi`: the tree's own test
+    /// (rstar's `AABB::intersects`, bounds included) on the same corners.
+    pub fn box_meets(&self, j: u32, lo: &[f64; 3], hi: &[f64; 3]) -> bool {
+        let (blo, bhi) = &self.boxes[j as usize];
+        (0..3).all(|d| blo[d] <= hi[d]) && (0..3).all(|d| bhi[d] >= lo[d])
+    }
+
+    /// Identity of the current tree (unique in the process, never reused): node lists
+    /// made from another tree are stale.
+    pub fn tree_id(&self) -> u64 {
+        self.tree_id
+    }
+
+    /// The Verlet skin of the current tree [m].
+    pub fn skin(&self) -> f64 {
+        self.skin
     }
 
     /// Box of the body's nodes at the current pass: the union of its chunk boxes (min

@@ -16,6 +16,7 @@
 
 use super::segment::{triangle_weights, Segment};
 use super::surface::{NodeChunk, Surface, NODE_CHUNK};
+use super::verlet::{candidates, NodeLists};
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -145,11 +146,14 @@ pub fn first_crossing(
     surf: &Surface,
     self_pass: bool,
     h: f64,
+    lists: &mut NodeLists,
 ) -> Option<Crossing> {
     if h <= 0.0 {
         return None;
     }
     let c = 0.5 * (nb.def.section.thickness + sb.def.section.thickness);
+    // the search's query half-size (narrow::search): the lists serve both
+    let reach = 0.5 * nb.def.section.thickness;
     let xb1 = &sb.state.x;
     // positions before the step, of the corners a candidate needs only
     let before = |n: u32| xb1[n as usize] - sb.state.v[n as usize] * h;
@@ -160,8 +164,9 @@ pub fn first_crossing(
         .state
         .x
         .par_chunks(NODE_CHUNK)
+        .zip(lists.fit(nb.state.x.len()).par_chunks_mut(NODE_CHUNK))
         .enumerate()
-        .map(|(ci, xs)| {
+        .map(|(ci, (xs, lists))| {
             // each node's reach below is at most the chunk's: skip what none can meet
             if chunks
                 .get(ci)
@@ -179,7 +184,7 @@ pub fn first_crossing(
                 if !(0..3).all(grown) {
                     continue;
                 }
-                surf.candidates(p1, r, &mut cand);
+                candidates(&mut lists[k], surf, p1, r, reach, &mut cand);
                 cand.sort_unstable();
                 for &j in &cand {
                     if self_pass && surf.near_in_topology(i as u32, j) {
