@@ -181,7 +181,7 @@ fn tri_gather<S: Lanes>(
 /// Resultants and force slots back; the Kelvin part into `damped` unless it is empty
 /// (a body without Kelvin damping).
 #[inline(always)]
-fn tri_scatter<S: Lanes>(
+fn tri_scatter<S: Lanes, const KELVIN: bool>(
     l: &TriLanes<S>,
     sts: &mut [ShellState],
     slots: &mut [Slot],
@@ -191,7 +191,7 @@ fn tri_scatter<S: Lanes>(
     for i in 0..3 {
         S::scatter_rows6(&l.out[i], slots, i, 3);
     }
-    if !damped.is_empty() {
+    if KELVIN {
         for i in 0..3 {
             S::scatter_rows6(&l.out_d[i], damped, i, 3);
         }
@@ -199,7 +199,7 @@ fn tri_scatter<S: Lanes>(
 }
 
 #[inline(always)]
-fn tri_compute<S: Lanes>(
+fn tri_compute<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     e0: usize,
@@ -207,14 +207,14 @@ fn tri_compute<S: Lanes>(
     l: &mut TriLanes<S>,
     sums: &mut ForceSums,
 ) -> Result<(), (usize, ElemFailure)> {
-    let r = tri_kernel(k, &l.input, h, &mut l.st, &mut l.out, &mut l.out_d);
+    let r = tri_kernel::<S, KELVIN>(k, &l.input, h, &mut l.st, &mut l.out, &mut l.out_d);
     book(sec, &r, S::splat(0.0), l.input.area0, e0, sums)
 }
 
 /// Triangles `els` (at least S::W of them; the first S::W) from element index `e0`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn tri_batch<S: Lanes>(
+fn tri_batch<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     els: &[TriElem],
@@ -227,8 +227,8 @@ fn tri_batch<S: Lanes>(
     buf: &mut TriLanes<S>,
 ) -> Result<(), (usize, ElemFailure)> {
     tri_gather(els, nodes, sts, buf);
-    tri_compute(k, sec, e0, h, buf, sums)?;
-    tri_scatter(buf, sts, slots, damped);
+    tri_compute::<S, KELVIN>(k, sec, e0, h, buf, sums)?;
+    tri_scatter::<S, KELVIN>(buf, sts, slots, damped);
     Ok(())
 }
 
@@ -321,7 +321,7 @@ fn quad_gather<S: Lanes>(
 
 /// Resultants and force slots back; the Kelvin part into `damped` unless it is empty.
 #[inline(always)]
-fn quad_scatter<S: Lanes>(
+fn quad_scatter<S: Lanes, const KELVIN: bool>(
     l: &QuadLanes<S>,
     sts: &mut [ShellState],
     hgs: &mut [HourglassState],
@@ -340,7 +340,7 @@ fn quad_scatter<S: Lanes>(
     for i in 0..4 {
         S::scatter_rows6(&l.out[i], slots, i, 4);
     }
-    if !damped.is_empty() {
+    if KELVIN {
         for i in 0..4 {
             S::scatter_rows6(&l.out_d[i], damped, i, 4);
         }
@@ -348,7 +348,7 @@ fn quad_scatter<S: Lanes>(
 }
 
 #[inline(always)]
-fn quad_compute<S: Lanes>(
+fn quad_compute<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     e0: usize,
@@ -356,7 +356,7 @@ fn quad_compute<S: Lanes>(
     l: &mut QuadLanes<S>,
     sums: &mut ForceSums,
 ) -> Result<(), (usize, ElemFailure)> {
-    let (r, extra) = quad_kernel(
+    let (r, extra) = quad_kernel::<S, KELVIN>(
         k,
         &l.input,
         h,
@@ -386,7 +386,7 @@ fn quad_compute<S: Lanes>(
 /// Quads `els` (at least S::W of them; the first S::W) from element index `e0`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn quad_batch<S: Lanes>(
+fn quad_batch<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     els: &[QuadElem],
@@ -400,8 +400,8 @@ fn quad_batch<S: Lanes>(
     buf: &mut QuadLanes<S>,
 ) -> Result<(), (usize, ElemFailure)> {
     quad_gather(els, nodes, sts, hgs, buf);
-    quad_compute(k, sec, e0, h, buf, sums)?;
-    quad_scatter(buf, sts, hgs, slots);
+    quad_compute::<S, KELVIN>(k, sec, e0, h, buf, sums)?;
+    quad_scatter::<S, KELVIN>(buf, sts, hgs, slots);
     Ok(())
 }
 
@@ -434,6 +434,18 @@ impl Lanewise for TriChunk<'_> {
 
     #[inline(always)]
     fn run<S: Lanes>(self) -> ChunkResult {
+        // two instances: an undamped body never sees the Kelvin slots' code
+        if self.damped.is_empty() {
+            self.run_with::<S, false>()
+        } else {
+            self.run_with::<S, true>()
+        }
+    }
+}
+
+impl TriChunk<'_> {
+    #[inline(always)]
+    fn run_with<S: Lanes, const KELVIN: bool>(self) -> ChunkResult {
         let (kw, k1) = (
             Consts::<S>::new(self.sec, self.stab),
             Consts::<f64>::new(self.sec, self.stab),
@@ -445,7 +457,7 @@ impl Lanewise for TriChunk<'_> {
         let full = els.len() - els.len() % w;
         let mut j = 0;
         while j < full {
-            tri_batch(
+            tri_batch::<_, KELVIN>(
                 &kw,
                 self.sec,
                 &els[j..],
@@ -460,7 +472,7 @@ impl Lanewise for TriChunk<'_> {
             j += w;
         }
         while j < els.len() {
-            tri_batch(
+            tri_batch::<_, KELVIN>(
                 &k1,
                 self.sec,
                 &els[j..],
@@ -501,6 +513,17 @@ impl Lanewise for QuadChunk<'_> {
 
     #[inline(always)]
     fn run<S: Lanes>(self) -> ChunkResult {
+        if self.damped.is_empty() {
+            self.run_with::<S, false>()
+        } else {
+            self.run_with::<S, true>()
+        }
+    }
+}
+
+impl QuadChunk<'_> {
+    #[inline(always)]
+    fn run_with<S: Lanes, const KELVIN: bool>(self) -> ChunkResult {
         let (kw, k1) = (
             Consts::<S>::new(self.sec, self.stab),
             Consts::<f64>::new(self.sec, self.stab),
@@ -513,7 +536,7 @@ impl Lanewise for QuadChunk<'_> {
         let full = els.len() - els.len() % w;
         let mut j = 0;
         while j < full {
-            quad_batch(
+            quad_batch::<_, KELVIN>(
                 &kw,
                 self.sec,
                 &els[j..],
@@ -529,7 +552,7 @@ impl Lanewise for QuadChunk<'_> {
             j += w;
         }
         while j < els.len() {
-            quad_batch(
+            quad_batch::<_, KELVIN>(
                 &k1,
                 self.sec,
                 &els[j..],

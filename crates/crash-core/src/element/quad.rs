@@ -108,9 +108,10 @@ pub struct QuadExtra<S> {
 
 /// Internal forces of a quad: writes its four slots (global force, moment) to `out`
 /// and, when the material has Kelvin damping, the Kelvin part of the same forces to
-/// `out_d` (for the energy ledger: docs/theory.md section 6; untouched otherwise).
+/// `out_d` (for the energy ledger: docs/theory.md section 6; untouched otherwise);
+/// `KELVIN` false compiles that part out (as `tri_kernel`).
 #[inline(always)]
-pub fn quad_kernel<S: Real>(
+pub fn quad_kernel<S: Real, const KELVIN: bool>(
     k: &Consts<S>,
     e: &QuadIn<S>,
     h: S,
@@ -268,7 +269,7 @@ pub fn quad_kernel<S: Real>(
         let (f, m) = (fs[i], ms[i].plus(hh.scale(gm[i])));
         out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
     }
-    if k.alpha > 0.0 {
+    if KELVIN && k.alpha > 0.0 {
         // the same combinations of the Kelvin resultants alone (drilling and hourglass
         // are not damped: no tau, no gamma terms)
         let p1 = f1.scale(sd[0]).plus(f2.scale(sd[2])).scale(e.area0);

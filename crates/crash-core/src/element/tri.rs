@@ -152,12 +152,14 @@ pub struct KernelOut<S> {
 /// Internal forces of a triangle: writes its three slots (global force, moment) to
 /// `out` and, when the material has Kelvin damping, the Kelvin part of the same forces
 /// to `out_d` (for the energy ledger: docs/theory.md section 6; untouched otherwise).
+/// `KELVIN` false (a chunk that has no Kelvin slots) compiles that part out, so an
+/// undamped body runs the same code as before the Kelvin slots existed.
 ///
 /// Straight-line code, no per-node accumulation arrays: the compiler keeps everything in
 /// registers (with AVX-512 enabled it otherwise turns such loops into masked
 /// gathers/scatters on the stack).
 #[inline(always)]
-pub fn tri_kernel<S: Real>(
+pub fn tri_kernel<S: Real, const KELVIN: bool>(
     k: &Consts<S>,
     e: &TriIn<S>,
     h: S,
@@ -260,7 +262,7 @@ pub fn tri_kernel<S: Real>(
     out[0] = g.at((e.bx0[0], e.by0[0], bx[0], by[0], cw[0], cx[0], cy[0]));
     out[1] = g.at((e.bx0[1], e.by0[1], bx[1], by[1], cw[1], cx[1], cy[1]));
     out[2] = g.at((e.bx0[2], e.by0[2], bx[2], by[2], cw[2], cx[2], cy[2]));
-    if k.alpha > 0.0 {
+    if KELVIN && k.alpha > 0.0 {
         // the same combination of the Kelvin resultants alone (drilling is not damped)
         let z3 = V3::zero();
         let gd = NodeForce {
