@@ -202,6 +202,10 @@ pub struct BodyState {
     pub shell: Vec<ShellState>,
     pub hourglass: Vec<HourglassState>,
     /// Per-element force slots (tri: 3, quad: 4), gathered per node in a fixed order.
+    /// With Kelvin damping a second set of as many follows (`BodyDef::slot_count`): the
+    /// Kelvin part of each slot's force, which the integration books as dissipation
+    /// with the time levels of the other work terms (docs/theory.md section 6). Kept in
+    /// this vector so that snapshots, migrations and checkpoints carry it unchanged.
     pub slots: Vec<Slot>,
     /// Contact forces on nodes (written by the contact stage, zero otherwise).
     pub f_contact: Vec<Vec3>,
@@ -294,7 +298,7 @@ impl Body {
             }
         }
         let ne = tris.len() + quads.len();
-        let nslots = slot_nodes.len();
+        let nslots = slot_nodes.len() * if section.material.kelvin > 0.0 { 2 } else { 1 };
         Ok(Self {
             state: BodyState {
                 v: vec![Vec3::zeros(); nn],
@@ -350,12 +354,14 @@ impl Body {
         let nn = def.x0.len();
         let ne = def.tris.len() + def.quads.len();
         let nslots = 3 * def.tris.len() + 4 * def.quads.len();
+        // the Kelvin half may be missing (Kelvin damping given after the body was built:
+        // the next force pass adds it) or stale (damping taken away, e.g. `modal`)
         let fits = state.x.len() == nn
             && state.v.len() == nn
             && state.w.len() == nn
             && state.shell.len() == ne
             && state.hourglass.len() == def.quads.len()
-            && state.slots.len() == nslots
+            && (state.slots.len() == nslots || state.slots.len() == 2 * nslots)
             && (state.f_contact.is_empty() || state.f_contact.len() == nn);
         if !fits {
             return Err(CoreError::Other {
@@ -515,6 +521,17 @@ impl BodyDef {
 
     pub fn total_mass(&self) -> f64 {
         self.mass.iter().sum()
+    }
+
+    /// Length of `BodyState::slots`: one slot per element node, twice that with Kelvin
+    /// damping (the second half holds the Kelvin part of the forces).
+    pub fn slot_count(&self) -> usize {
+        let n = self.gather_slot.len();
+        if self.section.material.kelvin > 0.0 {
+            2 * n
+        } else {
+            n
+        }
     }
 
     fn refresh_kinematic(&mut self) {

@@ -4,7 +4,9 @@
 use crate::body::Body;
 use crate::element::batch::{ChunkResult, QuadChunk, TriChunk};
 use crate::element::simd::dispatch;
-use crate::element::{ElemEnergy, ElemFailure};
+use crate::element::{
+    ElemEnergy, ElemFailure, HourglassState, QuadElem, ShellState, Slot, TriElem,
+};
 use crate::error::Fault;
 use crate::material::Section;
 use rayon::prelude::*;
@@ -54,18 +56,9 @@ impl ForceSums {
     /// Add element `e`: its energies, its strain energy per unit initial area
     /// (internal + hourglass) / area0 and its critical time step.
     #[inline(always)]
-    pub(crate) fn add(
-        &mut self,
-        e: usize,
-        internal: f64,
-        hourglass: f64,
-        damping: f64,
-        density: f64,
-        dt: f64,
-    ) {
+    pub(crate) fn add(&mut self, e: usize, internal: f64, hourglass: f64, density: f64, dt: f64) {
         self.energy.internal += internal;
         self.energy.hourglass += hourglass;
-        self.energy.damping += damping;
         let mut dens = density;
         if dens.is_nan() {
             dens = f64::INFINITY;
@@ -83,7 +76,6 @@ impl ForceSums {
     fn merge(mut self, o: &ForceSums) -> Self {
         self.energy.internal += o.energy.internal;
         self.energy.hourglass += o.energy.hourglass;
-        self.energy.damping += o.energy.damping;
         if o.hot_density > self.hot_density {
             self.hot_density = o.hot_density;
             self.hot_element = o.hot_element;
@@ -116,7 +108,9 @@ fn to_fault(body: u32, step: u64, e: usize, f: ElemFailure) -> Fault {
 impl Body {
     /// Internal forces at the current positions, updating the rate-form resultants with
     /// the half-step velocities over `h` (h = 0 at the start). Fixed/kinematic bodies
-    /// compute nothing.
+    /// compute nothing. With Kelvin damping the kernels also write the Kelvin part of
+    /// every slot into the second half of `slots` (`BodyDef::slot_count`), which the
+    /// integration books as dissipation.
     pub fn internal_forces(&mut self, h: f64, step: u64) -> Result<ForceSums, Fault> {
         if self.def.kinematic {
             self.state.internal_now = 0.0;
@@ -124,55 +118,94 @@ impl Body {
             return Ok(ForceSums::default());
         }
         let (sec, stab) = (self.def.section, self.def.stab);
-        let nodes = (&self.state.x[..], &self.state.v[..], &self.state.w[..]);
         let nt = self.def.tris.len();
-        let (tri_slots, quad_slots) = self.state.slots.split_at_mut(3 * nt);
+        let ns = self.def.gather_slot.len();
+        let want = self.def.slot_count();
+        if self.state.slots.len() < want {
+            // Kelvin damping given after the body was built
+            self.state.slots.resize(want, [0.0; 6]);
+        }
+        let nodes = (&self.state.x[..], &self.state.v[..], &self.state.w[..]);
+        let (slots, kelvin) = self.state.slots.split_at_mut(ns);
+        let (tri_slots, quad_slots) = slots.split_at_mut(3 * nt);
+        // empty unless the material is damped (a state may carry a stale Kelvin half)
+        let kelvin = &mut kelvin[..want - ns];
+        let (tri_kelvin, quad_kelvin) = kelvin.split_at_mut(if want > ns { 3 * nt } else { 0 });
         let (tri_state, quad_state) = self.state.shell.split_at_mut(nt);
 
         // each chunk runs on the SIMD path of this CPU (element::simd)
-        let tri_chunks: Vec<ChunkResult> = self
+        let tri = |ci: usize,
+                   els: &[TriElem],
+                   states: &mut [ShellState],
+                   slots: &mut [Slot],
+                   damped: &mut [Slot]| {
+            dispatch(TriChunk {
+                sec: &sec,
+                stab: &stab,
+                els,
+                states,
+                slots,
+                damped,
+                nodes,
+                h,
+                first: ci * CHUNK,
+            })
+        };
+        let tri_base = self
             .def
             .tris
             .par_chunks(CHUNK)
             .zip(tri_state.par_chunks_mut(CHUNK))
             .zip(tri_slots.par_chunks_mut(3 * CHUNK))
-            .enumerate()
-            .map(|(ci, ((els, states), slots))| {
-                dispatch(TriChunk {
-                    sec: &sec,
-                    stab: &stab,
-                    els,
-                    states,
-                    slots,
-                    nodes,
-                    h,
-                    first: ci * CHUNK,
-                })
-            })
-            .collect();
+            .enumerate();
+        let tri_chunks: Vec<ChunkResult> = if tri_kelvin.is_empty() {
+            tri_base
+                .map(|(ci, ((els, states), slots))| tri(ci, els, states, slots, &mut []))
+                .collect()
+        } else {
+            tri_base
+                .zip(tri_kelvin.par_chunks_mut(3 * CHUNK))
+                .map(|((ci, ((els, states), slots)), d)| tri(ci, els, states, slots, d))
+                .collect()
+        };
 
-        let quad_chunks: Vec<ChunkResult> = self
+        let quad = |ci: usize,
+                    els: &[QuadElem],
+                    states: &mut [ShellState],
+                    hourglass: &mut [HourglassState],
+                    slots: &mut [Slot],
+                    damped: &mut [Slot]| {
+            dispatch(QuadChunk {
+                sec: &sec,
+                stab: &stab,
+                els,
+                states,
+                hourglass,
+                slots,
+                damped,
+                nodes,
+                h,
+                first: nt + ci * CHUNK,
+            })
+        };
+        let quad_base = self
             .def
             .quads
             .par_chunks(CHUNK)
             .zip(quad_state.par_chunks_mut(CHUNK))
             .zip(self.state.hourglass.par_chunks_mut(CHUNK))
             .zip(quad_slots.par_chunks_mut(4 * CHUNK))
-            .enumerate()
-            .map(|(ci, (((els, states), hourglass), slots))| {
-                dispatch(QuadChunk {
-                    sec: &sec,
-                    stab: &stab,
-                    els,
-                    states,
-                    hourglass,
-                    slots,
-                    nodes,
-                    h,
-                    first: nt + ci * CHUNK,
-                })
-            })
-            .collect();
+            .enumerate();
+        let quad_chunks: Vec<ChunkResult> = if quad_kelvin.is_empty() {
+            quad_base
+                .map(|(ci, (((els, states), hg), slots))| quad(ci, els, states, hg, slots, &mut []))
+                .collect()
+        } else {
+            quad_base
+                .zip(quad_kelvin.par_chunks_mut(4 * CHUNK))
+                .map(|((ci, (((els, states), hg), slots)), d)| quad(ci, els, states, hg, slots, d))
+                .collect()
+        };
 
         let mut total = ForceSums::default();
         for r in tri_chunks.iter().chain(quad_chunks.iter()) {
@@ -192,7 +225,6 @@ impl Body {
         }
         self.state.internal_now = en.internal;
         self.state.hourglass_now = en.hourglass;
-        self.state.energy.damping += en.damping;
         Ok(total)
     }
 }

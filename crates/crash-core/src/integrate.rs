@@ -35,7 +35,12 @@ pub struct NodeSums {
     pub reaction_moment_origin: Vec3,
     pub contact: f64,
     pub mass_damping: f64,
-    /// f_int(x_n) . v_{n+1/2} (forces and moments), for the shadow internal energy.
+    /// Work of the Kelvin (element viscous) forces f_d of the pass at x_n,
+    /// hbar f_d . (v_{n-1/2} + v_{n+1/2})/2 (dissipated): the time levels of the
+    /// kinetic energy's telescoping, so the damping column closes the balance exactly.
+    pub kelvin: f64,
+    /// (f_int - f_d)(x_n) . v_{n+1/2} (forces and moments; f_d the Kelvin part, booked
+    /// in `kelvin`), for the shadow internal energy.
     pub internal_power: f64,
     /// Largest nodal displacement in this step and its node.
     pub max_move: f64,
@@ -58,6 +63,7 @@ impl Default for NodeSums {
             reaction_moment_origin: Vec3::zeros(),
             contact: 0.0,
             mass_damping: 0.0,
+            kelvin: 0.0,
             internal_power: 0.0,
             max_move: 0.0,
             max_move_node: 0,
@@ -78,6 +84,7 @@ impl NodeSums {
         self.reaction_moment_origin += o.reaction_moment_origin;
         self.contact += o.contact;
         self.mass_damping += o.mass_damping;
+        self.kelvin += o.kelvin;
         self.internal_power += o.internal_power;
         if o.max_move > self.max_move {
             self.max_move = o.max_move;
@@ -112,9 +119,14 @@ impl Body {
         let c = self.def.mass_damping;
         let (dn, dd) = (1.0 - 0.5 * c * hbar, 1.0 / (1.0 + 0.5 * c * hbar));
         let kinematic = self.def.kinematic;
-        let slots = &self.state.slots;
         let gs = &self.def.gather_start;
         let gi = &self.def.gather_slot;
+        // the force slots and, with Kelvin damping, the Kelvin part of each (empty
+        // otherwise: an undamped body reads nothing more)
+        let (slots, kelvin) = self.state.slots.split_at(gi.len());
+        let kelvin = kelvin
+            .get(..self.def.slot_count() - gi.len())
+            .unwrap_or_default();
         let fc = &self.state.f_contact;
         let loads = &self.def.loads;
         let load_of = &self.def.load_of;
@@ -174,6 +186,8 @@ impl Body {
                     }
                     let mut fi = Vec3::zeros();
                     let mut mi = Vec3::zeros();
+                    let mut fd = Vec3::zeros();
+                    let mut md = Vec3::zeros();
                     if !kinematic {
                         for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
                             let q = &slots[sl as usize];
@@ -182,6 +196,13 @@ impl Body {
                         }
                         f -= fi;
                         mom -= mi;
+                        if !kelvin.is_empty() {
+                            for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
+                                let q = &kelvin[sl as usize];
+                                fd += Vec3::new(q[0], q[1], q[2]);
+                                md += Vec3::new(q[3], q[4], q[5]);
+                            }
+                        }
                     }
                     let v_old = vs[k];
                     let w_old = ws[k];
@@ -210,6 +231,12 @@ impl Body {
                     s.external += hbar * (fe.dot(&vn) + me.dot(&wn));
                     s.contact += hbar * fcon.dot(&vn);
                     s.internal_power += fi.dot(&v_new) + mi.dot(&w_new);
+                    if !kelvin.is_empty() {
+                        // the Kelvin force's work at the kinetic energy's time levels;
+                        // the shadow internal energy takes the elastic part only
+                        s.kelvin += hbar * (fd.dot(&vn) + md.dot(&wn));
+                        s.internal_power -= fd.dot(&v_new) + md.dot(&w_new);
+                    }
                     if fx != 0 {
                         // impulse the constraint applied, times the mean velocity
                         let (jf, jm) = (
@@ -275,7 +302,7 @@ impl Body {
         e.hourglass = self.state.hourglass_now;
         e.external += total.external + total.reaction;
         e.contact -= total.contact;
-        e.damping += total.mass_damping;
+        e.damping += total.mass_damping + total.kelvin;
         Ok(total)
     }
 }

@@ -135,7 +135,11 @@ fn forces_with<S: Runner>(b: &Body) -> (Vec<u64>, Vec<u64>) {
     let (sec, stab) = (b.def.section, b.def.stab);
     let nodes = (&b.state.x[..], &b.state.v[..], &b.state.w[..]);
     let nt = b.def.tris.len();
-    let (ts, qs) = b.state.slots.split_at_mut(3 * nt);
+    let ns = b.def.gather_slot.len();
+    // the forces, then (a damped body) the Kelvin part of each
+    let (slots, kelvin) = b.state.slots.split_at_mut(ns);
+    let (ts, qs) = slots.split_at_mut(3 * nt);
+    let (tk, qk) = kelvin.split_at_mut(if kelvin.is_empty() { 0 } else { 3 * nt });
     let (tst, qst) = b.state.shell.split_at_mut(nt);
     let mut sums = Vec::new();
     for _ in 0..3 {
@@ -145,6 +149,7 @@ fn forces_with<S: Runner>(b: &Body) -> (Vec<u64>, Vec<u64>) {
             els: &b.def.tris,
             states: &mut *tst,
             slots: &mut *ts,
+            damped: &mut *tk,
             nodes,
             h: 1e-6,
             first: 0,
@@ -157,6 +162,7 @@ fn forces_with<S: Runner>(b: &Body) -> (Vec<u64>, Vec<u64>) {
             states: &mut *qst,
             hourglass: &mut b.state.hourglass,
             slots: &mut *qs,
+            damped: &mut *qk,
             nodes,
             h: 1e-6,
             first: nt,
@@ -164,7 +170,7 @@ fn forces_with<S: Runner>(b: &Body) -> (Vec<u64>, Vec<u64>) {
         .expect("forces");
         for s in [s, q] {
             let e = s.energy;
-            sums.extend([e.internal, e.hourglass, e.damping, s.dt, s.hot_density]);
+            sums.extend([e.internal, e.hourglass, s.dt, s.hot_density]);
         }
     }
     let mut bits: Vec<u64> = b

@@ -116,6 +116,9 @@ class Body:
         # gathered internal forces and moments of the last force pass
         self.f_int = np.zeros((n, 3))
         self.m_int = np.zeros((n, 3))
+        # the Kelvin part of f_int, m_int (theory.md 6: booked as damping)
+        self.f_d = np.zeros((n, 3))
+        self.m_d = np.zeros((n, 3))
         self.f_contact = None
         self.energy = dict(kinetic=0.0, internal=0.0, hourglass=0.0, contact=0.0,
                            damping=0.0, external=0.0)
@@ -244,7 +247,7 @@ class Body:
         if self.kinematic:
             power = 0.0
         else:
-            power = np.sum(dot(self.f_int, v_new) + dot(self.m_int, w_new))
+            power = np.sum(dot(self.f_int - self.f_d, v_new) + dot(self.m_int - self.m_d, w_new))
         reaction = 0.0
         if np.any(constrained):
             k = constrained
@@ -253,6 +256,8 @@ class Body:
         damping = 0.0
         if c > 0.0:
             damping = np.sum(hbar * c * (self.mass * dot(vn, vn) + self.inertia * dot(wn, wn)))
+        if not self.kinematic:
+            damping += np.sum(hbar * (dot(self.f_d, vn) + dot(self.m_d, wn)))
         dx = v_new * h
         xn = self.x + dx
         moves = norm(dx)
@@ -278,6 +283,7 @@ class Body:
             return math.inf
         r = elements.forces(self, h)
         self.f_int, self.m_int = r.f, r.m
+        self.f_d, self.m_d = r.fd, r.md
         if np.any(r.ratio < COLLAPSE_RATIO) or np.any(np.isnan(r.ratio)):
             raise Fault(f"element collapsed in body {self.id}")
         if r.corners is not None and np.any(~(r.corners > 0.0)):
@@ -288,11 +294,10 @@ class Body:
             raise Fault(f"non-finite internal energy in body {self.id}")
         self.internal_now = internal
         self.hourglass_now = hourglass
-        self.energy["damping"] += float(np.sum(r.damping))
         return float(np.min(element_dt(self, r.length)))
 
     # ---- migration: the whole state, exact bits ------------------------------------
-    STATE = ("x", "v", "w", "M", "Q", "tau", "hg_w", "hg_th", "f_int", "m_int",
+    STATE = ("x", "v", "w", "M", "Q", "tau", "hg_w", "hg_th", "f_int", "m_int", "f_d", "m_d",
              "f_contact", "energy", "internal_now", "hourglass_now")
 
     def state(self):

@@ -109,7 +109,8 @@ def reference(body):
 
 def _membrane(body, X, V, bx0, by0, area0, e0, h):
     """Total-Lagrangian membrane (2.1) with Kelvin damping: global nodal forces
-    (ne, N, 3), stored energy, dissipation over h."""
+    (ne, N, 3), stored energy, and the Kelvin part of the nodal forces (ne, N, 3; zero
+    without damping), A0 F S_d b0_I."""
     f1 = (X * bx0[:, :, None]).sum(axis=1)
     f2 = (X * by0[:, :, None]).sum(axis=1)
     e = _green(f1, f2)
@@ -118,25 +119,27 @@ def _membrane(body, X, V, bx0, by0, area0, e0, h):
     nu = body.material.poisson
     s = _plane(body.k_membrane, nu, e)
     energy = 0.5 * area0 * (s * e).sum(axis=1)
-    diss = np.zeros_like(energy)
+
+    def nodal(s):
+        p1 = (f1 * s[:, 0:1] + f2 * s[:, 2:3]) * area0[:, None]
+        p2 = (f1 * s[:, 2:3] + f2 * s[:, 1:2]) * area0[:, None]
+        return p1[:, None, :] * bx0[:, :, None] + p2[:, None, :] * by0[:, :, None]
+
+    sd = np.zeros_like(s)
     alpha = body.material.kelvin
     if alpha > 0.0:
         d1 = (V * bx0[:, :, None]).sum(axis=1)
         d2 = (V * by0[:, :, None]).sum(axis=1)
         ed = np.stack([dot(f1, d1), dot(f2, d2), dot(f1, d2) + dot(d1, f2)], axis=1)
         sd = alpha * _plane(body.k_membrane, nu, ed)
-        diss = h * area0 * (sd * ed).sum(axis=1)
-        s = s + sd
-    p1 = (f1 * s[:, 0:1] + f2 * s[:, 2:3]) * area0[:, None]
-    p2 = (f1 * s[:, 2:3] + f2 * s[:, 1:2]) * area0[:, None]
-    f = p1[:, None, :] * bx0[:, :, None] + p2[:, None, :] * by0[:, :, None]
-    return f, energy, diss
+    return nodal(s + sd), energy, nodal(sd)
 
 
 def _plate(body, sl, bx, by, area, cw, cx, cy, vl, wl, h):
     """Rate-form plate part (2.2) of the elements `sl` (a slice of the body's element
     state): updates M, Q, tau; returns local nodal forces/moments (ne, N, 6), the stored
-    energy and the Kelvin dissipation."""
+    energy and the Kelvin part of the nodal forces/moments (ne, N, 6; zero without
+    damping: the same maps applied to M_d, Q_d, no drilling)."""
     N = bx.shape[1]
     wx, wy, wz = wl[:, :, 0], wl[:, :, 1], wl[:, :, 2]
     vx, vy, vz = vl[:, :, 0], vl[:, :, 1], vl[:, :, 2]
@@ -156,26 +159,27 @@ def _plate(body, sl, bx, by, area, cw, cx, cy, vl, wl, h):
         / (2.0 * D * (1.0 - nu * nu))
         + (Q[:, 0] ** 2 + Q[:, 1] ** 2) / (2.0 * body.k_shear)
         + tau * tau / (2.0 * body.k_drill))
-    diss = np.zeros_like(energy)
+    A = area[:, None]
+
+    def nodal(M, Q, tau):
+        out = np.zeros(bx.shape + (6,))
+        out[:, :, 3] = A * (-by * M[:, 1:2] - bx * M[:, 2:3])
+        out[:, :, 4] = A * (bx * M[:, 0:1] + by * M[:, 2:3])
+        out[:, :, 2] = A * (Q[:, 0:1] * cw[:, :, 0] + Q[:, 1:2] * cw[:, :, 1])
+        out[:, :, 3] += A * (Q[:, 0:1] * cx[:, :, 0] + Q[:, 1:2] * cx[:, :, 1])
+        out[:, :, 4] += A * (Q[:, 0:1] * cy[:, :, 0] + Q[:, 1:2] * cy[:, :, 1])
+        td = (area * tau)[:, None]
+        out[:, :, 5] = td / N
+        out[:, :, 0] = 0.5 * td * by
+        out[:, :, 1] = -0.5 * td * bx
+        return out
+
+    Md, Qd = np.zeros_like(M), np.zeros_like(Q)
     alpha = body.material.kelvin
     if alpha > 0.0:
         Md = alpha * _plane(body.k_bending, nu, kr)
         Qd = alpha * body.k_shear * g
-        diss = h * area * ((Md * kr).sum(axis=1) + (Qd * g).sum(axis=1))
-        M = M + Md
-        Q = Q + Qd
-    A = area[:, None]
-    out = np.zeros(bx.shape + (6,))
-    out[:, :, 3] = A * (-by * M[:, 1:2] - bx * M[:, 2:3])
-    out[:, :, 4] = A * (bx * M[:, 0:1] + by * M[:, 2:3])
-    out[:, :, 2] = A * (Q[:, 0:1] * cw[:, :, 0] + Q[:, 1:2] * cw[:, :, 1])
-    out[:, :, 3] += A * (Q[:, 0:1] * cx[:, :, 0] + Q[:, 1:2] * cx[:, :, 1])
-    out[:, :, 4] += A * (Q[:, 0:1] * cy[:, :, 0] + Q[:, 1:2] * cy[:, :, 1])
-    td = (area * tau)[:, None]
-    out[:, :, 5] = td / N
-    out[:, :, 0] = 0.5 * td * by
-    out[:, :, 1] = -0.5 * td * bx
-    return out, energy, diss
+    return nodal(M + Md, Q + Qd, tau), energy, nodal(Md, Qd, np.zeros_like(tau))
 
 
 def _tri_shear(a, c, d):
@@ -219,13 +223,13 @@ def _local(p, e1, e2, e3):
 
 def forces(body, h):
     """All element forces of a body at its current state. Returns gathered nodal forces
-    and moments (global), per-element energies, dissipation, lengths, area ratios and
-    quad corner orientations."""
+    and moments (global), their Kelvin part (global, gathered the same way), per-element
+    energies, lengths, area ratios and quad corner orientations."""
     x, v, w = body.x, body.v, body.w
     ref = body.ref
     nt, nq = len(body.tris), len(body.quads)
-    slot_f, slot_nodes = [], []
-    internal, hourglass, damping, length, ratio = [], [], [], [], []
+    slot_f, slot_d, slot_nodes = [], [], []
+    internal, hourglass, length, ratio = [], [], [], []
     corners = None
     if nt:
         X, V, W = x[body.tris], v[body.tris], w[body.tris]
@@ -238,10 +242,12 @@ def forces(body, h):
         f = fm + _to_global(e1, e2, e3, lo[:, :, 0:3])
         m = _to_global(e1, e2, e3, lo[:, :, 3:6])
         slot_f.append(np.concatenate([f, m], axis=2).reshape(-1, 6))
+        fd = dm + _to_global(e1, e2, e3, dp[:, :, 0:3])
+        md = _to_global(e1, e2, e3, dp[:, :, 3:6])
+        slot_d.append(np.concatenate([fd, md], axis=2).reshape(-1, 6))
         slot_nodes.append(body.tris.reshape(-1))
         internal.append(em + ep)
         hourglass.append(np.zeros(nt))
-        damping.append(dm + dp)
         r23 = X[:, 2] - X[:, 1]
         r2 = X[:, 1] - X[:, 0]
         r3 = X[:, 2] - X[:, 0]
@@ -280,20 +286,24 @@ def forces(body, h):
         f = fm + fq[:, None, :] * gam[:, :, None] + _to_global(e1, e2, e3, lo[:, :, 0:3])
         m = _to_global(e1, e2, e3, lo[:, :, 3:6])
         slot_f.append(np.concatenate([f, m], axis=2).reshape(-1, 6))
+        fd = dm + _to_global(e1, e2, e3, dp[:, :, 0:3])
+        md = _to_global(e1, e2, e3, dp[:, :, 3:6])
+        slot_d.append(np.concatenate([fd, md], axis=2).reshape(-1, 6))
         slot_nodes.append(body.quads.reshape(-1))
         internal.append(em + ep)
         hourglass.append(ehg)
-        damping.append(dm + dp)
         d13 = X[:, 2] - X[:, 0]
         d24 = X[:, 3] - X[:, 1]
         length.append(area / np.sqrt(np.maximum(dot(d13, d13), dot(d24, d24))))
         ratio.append(area / ref.quad_area0)
     # gather per node in element order (triangles, then quads)
     sf = np.concatenate(slot_f)
+    sd = np.concatenate(slot_d)
     sn = np.concatenate(slot_nodes)
     n = len(x)
     g = np.stack([np.bincount(sn, weights=sf[:, k], minlength=n) for k in range(6)], axis=1)
+    gd = np.stack([np.bincount(sn, weights=sd[:, k], minlength=n) for k in range(6)], axis=1)
     return SimpleNamespace(
-        f=g[:, 0:3], m=g[:, 3:6], internal=np.concatenate(internal),
-        hourglass=np.concatenate(hourglass), damping=np.concatenate(damping),
+        f=g[:, 0:3], m=g[:, 3:6], fd=gd[:, 0:3], md=gd[:, 3:6],
+        internal=np.concatenate(internal), hourglass=np.concatenate(hourglass),
         length=np.concatenate(length), ratio=np.concatenate(ratio), corners=corners)

@@ -106,26 +106,20 @@ fn book<S: Lanes>(
     let dt = element_dt(sec, r.length).to_array();
     let density = ((r.internal + hourglass) / area0).to_array();
     let (internal, hourglass) = (r.internal.to_array(), hourglass.to_array());
-    let damping = r.damping.to_array();
     for l in 0..S::W {
-        sums.add(
-            e0 + l,
-            internal[l],
-            hourglass[l],
-            damping[l],
-            density[l],
-            dt[l],
-        );
+        sums.add(e0 + l, internal[l], hourglass[l], density[l], dt[l]);
     }
     Ok(())
 }
 
-/// Lanes of a triangle batch: kernel input, resultants and nodal forces.
+/// Lanes of a triangle batch: kernel input, resultants, nodal forces and their Kelvin
+/// part.
 #[derive(Debug, Clone, Copy)]
 struct TriLanes<S> {
     input: TriIn<S>,
     st: ShellL<S>,
     out: [[S; 6]; 3],
+    out_d: [[S; 6]; 3],
 }
 
 impl<S: Real> TriLanes<S> {
@@ -147,6 +141,7 @@ impl<S: Real> TriLanes<S> {
                 drill: z,
             },
             out: [[z; 6]; 3],
+            out_d: [[z; 6]; 3],
         }
     }
 }
@@ -183,16 +178,28 @@ fn tri_gather<S: Lanes>(
     l.st = gather_shell(sts);
 }
 
+/// Resultants and force slots back; the Kelvin part into `damped` unless it is empty
+/// (a body without Kelvin damping).
 #[inline(always)]
-fn tri_scatter<S: Lanes>(l: &TriLanes<S>, sts: &mut [ShellState], slots: &mut [Slot]) {
+fn tri_scatter<S: Lanes, const KELVIN: bool>(
+    l: &TriLanes<S>,
+    sts: &mut [ShellState],
+    slots: &mut [Slot],
+    damped: &mut [Slot],
+) {
     scatter_shell(&l.st, &mut sts[..S::W]);
     for i in 0..3 {
         S::scatter_rows6(&l.out[i], slots, i, 3);
     }
+    if KELVIN {
+        for i in 0..3 {
+            S::scatter_rows6(&l.out_d[i], damped, i, 3);
+        }
+    }
 }
 
 #[inline(always)]
-fn tri_compute<S: Lanes>(
+fn tri_compute<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     e0: usize,
@@ -200,14 +207,14 @@ fn tri_compute<S: Lanes>(
     l: &mut TriLanes<S>,
     sums: &mut ForceSums,
 ) -> Result<(), (usize, ElemFailure)> {
-    let r = tri_kernel(k, &l.input, h, &mut l.st, &mut l.out);
+    let r = tri_kernel::<S, KELVIN>(k, &l.input, h, &mut l.st, &mut l.out, &mut l.out_d);
     book(sec, &r, S::splat(0.0), l.input.area0, e0, sums)
 }
 
 /// Triangles `els` (at least S::W of them; the first S::W) from element index `e0`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn tri_batch<S: Lanes>(
+fn tri_batch<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     els: &[TriElem],
@@ -215,23 +222,24 @@ fn tri_batch<S: Lanes>(
     nodes: Nodes<'_>,
     h: S,
     sts: &mut [ShellState],
-    slots: &mut [Slot],
+    (slots, damped): (&mut [Slot], &mut [Slot]),
     sums: &mut ForceSums,
     buf: &mut TriLanes<S>,
 ) -> Result<(), (usize, ElemFailure)> {
     tri_gather(els, nodes, sts, buf);
-    tri_compute(k, sec, e0, h, buf, sums)?;
-    tri_scatter(buf, sts, slots);
+    tri_compute::<S, KELVIN>(k, sec, e0, h, buf, sums)?;
+    tri_scatter::<S, KELVIN>(buf, sts, slots, damped);
     Ok(())
 }
 
-/// Lanes of a quad batch: kernel input, resultants and nodal forces.
+/// Lanes of a quad batch: kernel input, resultants, nodal forces and their Kelvin part.
 #[derive(Debug, Clone, Copy)]
 struct QuadLanes<S> {
     input: QuadIn<S>,
     st: ShellL<S>,
     hg: HgL<S>,
     out: [[S; 6]; 4],
+    out_d: [[S; 6]; 4],
 }
 
 impl<S: Real> QuadLanes<S> {
@@ -259,6 +267,7 @@ impl<S: Real> QuadLanes<S> {
             },
             hg: HgL { w: z, th: [z; 2] },
             out: [[z; 6]; 4],
+            out_d: [[z; 6]; 4],
         }
     }
 }
@@ -310,12 +319,13 @@ fn quad_gather<S: Lanes>(
     };
 }
 
+/// Resultants and force slots back; the Kelvin part into `damped` unless it is empty.
 #[inline(always)]
-fn quad_scatter<S: Lanes>(
+fn quad_scatter<S: Lanes, const KELVIN: bool>(
     l: &QuadLanes<S>,
     sts: &mut [ShellState],
     hgs: &mut [HourglassState],
-    slots: &mut [Slot],
+    (slots, damped): (&mut [Slot], &mut [Slot]),
 ) {
     scatter_shell(&l.st, &mut sts[..S::W]);
     let (w, t0, t1) = (
@@ -330,10 +340,15 @@ fn quad_scatter<S: Lanes>(
     for i in 0..4 {
         S::scatter_rows6(&l.out[i], slots, i, 4);
     }
+    if KELVIN {
+        for i in 0..4 {
+            S::scatter_rows6(&l.out_d[i], damped, i, 4);
+        }
+    }
 }
 
 #[inline(always)]
-fn quad_compute<S: Lanes>(
+fn quad_compute<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     e0: usize,
@@ -341,7 +356,15 @@ fn quad_compute<S: Lanes>(
     l: &mut QuadLanes<S>,
     sums: &mut ForceSums,
 ) -> Result<(), (usize, ElemFailure)> {
-    let (r, extra) = quad_kernel(k, &l.input, h, &mut l.st, &mut l.hg, &mut l.out);
+    let (r, extra) = quad_kernel::<S, KELVIN>(
+        k,
+        &l.input,
+        h,
+        &mut l.st,
+        &mut l.hg,
+        &mut l.out,
+        &mut l.out_d,
+    );
     let c = &extra.corners;
     let convex = c[0].all_above(0.0, true)
         && c[1].all_above(0.0, true)
@@ -363,7 +386,7 @@ fn quad_compute<S: Lanes>(
 /// Quads `els` (at least S::W of them; the first S::W) from element index `e0`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn quad_batch<S: Lanes>(
+fn quad_batch<S: Lanes, const KELVIN: bool>(
     k: &Consts<S>,
     sec: &Section,
     els: &[QuadElem],
@@ -372,14 +395,21 @@ fn quad_batch<S: Lanes>(
     h: S,
     sts: &mut [ShellState],
     hgs: &mut [HourglassState],
-    slots: &mut [Slot],
+    slots: (&mut [Slot], &mut [Slot]),
     sums: &mut ForceSums,
     buf: &mut QuadLanes<S>,
 ) -> Result<(), (usize, ElemFailure)> {
     quad_gather(els, nodes, sts, hgs, buf);
-    quad_compute(k, sec, e0, h, buf, sums)?;
-    quad_scatter(buf, sts, hgs, slots);
+    quad_compute::<S, KELVIN>(k, sec, e0, h, buf, sums)?;
+    quad_scatter::<S, KELVIN>(buf, sts, hgs, slots);
     Ok(())
+}
+
+/// The slots of elements from index `j` on (`per` slots per element); an empty slice
+/// stays empty (a body without Kelvin damping has no Kelvin slots).
+#[inline(always)]
+fn slots_from(slots: &mut [Slot], per: usize, j: usize) -> &mut [Slot] {
+    slots.get_mut(per * j..).unwrap_or_default()
 }
 
 /// One chunk of triangles: forces into `slots` (3 per element), resultants updated.
@@ -390,6 +420,9 @@ pub struct TriChunk<'a> {
     pub els: &'a [TriElem],
     pub states: &'a mut [ShellState],
     pub slots: &'a mut [Slot],
+    /// The Kelvin-damping part of the same forces (3 per element), for the energy
+    /// ledger; empty for a material without Kelvin damping (nothing written).
+    pub damped: &'a mut [Slot],
     pub nodes: Nodes<'a>,
     pub h: f64,
     /// Body-wide index of the chunk's first element.
@@ -401,18 +434,30 @@ impl Lanewise for TriChunk<'_> {
 
     #[inline(always)]
     fn run<S: Lanes>(self) -> ChunkResult {
+        // two instances: an undamped body never sees the Kelvin slots' code
+        if self.damped.is_empty() {
+            self.run_with::<S, false>()
+        } else {
+            self.run_with::<S, true>()
+        }
+    }
+}
+
+impl TriChunk<'_> {
+    #[inline(always)]
+    fn run_with<S: Lanes, const KELVIN: bool>(self) -> ChunkResult {
         let (kw, k1) = (
             Consts::<S>::new(self.sec, self.stab),
             Consts::<f64>::new(self.sec, self.stab),
         );
-        let (els, sts, slots) = (self.els, self.states, self.slots);
+        let (els, sts, slots, damped) = (self.els, self.states, self.slots, self.damped);
         let mut sums = ForceSums::default();
         let (mut buf, mut buf1) = (TriLanes::<S>::zero(), TriLanes::<f64>::zero());
         let w = S::W;
         let full = els.len() - els.len() % w;
         let mut j = 0;
         while j < full {
-            tri_batch(
+            tri_batch::<_, KELVIN>(
                 &kw,
                 self.sec,
                 &els[j..],
@@ -420,14 +465,14 @@ impl Lanewise for TriChunk<'_> {
                 self.nodes,
                 S::splat(self.h),
                 &mut sts[j..],
-                &mut slots[3 * j..],
+                (&mut slots[3 * j..], slots_from(damped, 3, j)),
                 &mut sums,
                 &mut buf,
             )?;
             j += w;
         }
         while j < els.len() {
-            tri_batch(
+            tri_batch::<_, KELVIN>(
                 &k1,
                 self.sec,
                 &els[j..],
@@ -435,7 +480,7 @@ impl Lanewise for TriChunk<'_> {
                 self.nodes,
                 self.h,
                 &mut sts[j..],
-                &mut slots[3 * j..],
+                (&mut slots[3 * j..], slots_from(damped, 3, j)),
                 &mut sums,
                 &mut buf1,
             )?;
@@ -454,6 +499,9 @@ pub struct QuadChunk<'a> {
     pub states: &'a mut [ShellState],
     pub hourglass: &'a mut [HourglassState],
     pub slots: &'a mut [Slot],
+    /// The Kelvin-damping part of the same forces (4 per element), for the energy
+    /// ledger; empty for a material without Kelvin damping (nothing written).
+    pub damped: &'a mut [Slot],
     pub nodes: Nodes<'a>,
     pub h: f64,
     /// Body-wide index of the chunk's first element.
@@ -465,18 +513,30 @@ impl Lanewise for QuadChunk<'_> {
 
     #[inline(always)]
     fn run<S: Lanes>(self) -> ChunkResult {
+        if self.damped.is_empty() {
+            self.run_with::<S, false>()
+        } else {
+            self.run_with::<S, true>()
+        }
+    }
+}
+
+impl QuadChunk<'_> {
+    #[inline(always)]
+    fn run_with<S: Lanes, const KELVIN: bool>(self) -> ChunkResult {
         let (kw, k1) = (
             Consts::<S>::new(self.sec, self.stab),
             Consts::<f64>::new(self.sec, self.stab),
         );
-        let (els, sts, hgs, slots) = (self.els, self.states, self.hourglass, self.slots);
+        let (els, sts, hgs) = (self.els, self.states, self.hourglass);
+        let (slots, damped) = (self.slots, self.damped);
         let mut sums = ForceSums::default();
         let (mut buf, mut buf1) = (QuadLanes::<S>::zero(), QuadLanes::<f64>::zero());
         let w = S::W;
         let full = els.len() - els.len() % w;
         let mut j = 0;
         while j < full {
-            quad_batch(
+            quad_batch::<_, KELVIN>(
                 &kw,
                 self.sec,
                 &els[j..],
@@ -485,14 +545,14 @@ impl Lanewise for QuadChunk<'_> {
                 S::splat(self.h),
                 &mut sts[j..],
                 &mut hgs[j..],
-                &mut slots[4 * j..],
+                (&mut slots[4 * j..], slots_from(damped, 4, j)),
                 &mut sums,
                 &mut buf,
             )?;
             j += w;
         }
         while j < els.len() {
-            quad_batch(
+            quad_batch::<_, KELVIN>(
                 &k1,
                 self.sec,
                 &els[j..],
@@ -501,7 +561,7 @@ impl Lanewise for QuadChunk<'_> {
                 self.h,
                 &mut sts[j..],
                 &mut hgs[j..],
-                &mut slots[4 * j..],
+                (&mut slots[4 * j..], slots_from(damped, 4, j)),
                 &mut sums,
                 &mut buf1,
             )?;

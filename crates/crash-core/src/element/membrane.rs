@@ -84,10 +84,12 @@ fn gradient_s<S: Real, const N: usize>(x: &[V3<S>; N], bx: &[S; N], by: &[S; N])
     (f1, f2)
 }
 
-/// Membrane stress of one element (or a batch): returns (stored energy, Kelvin
-/// dissipation over h, p1, p2) with the nodal forces f_I = p1 bx_I + p2 by_I
-/// (p1, p2 = A0 F S e1, A0 F S e2).
-#[allow(clippy::too_many_arguments)]
+/// Membrane stress of one element (or a batch): returns (stored energy, p1, p2, the
+/// Kelvin part of p1 and p2) with the nodal forces f_I = p1 bx_I + p2 by_I
+/// (p1, p2 = A0 F S e1, A0 F S e2, S including the Kelvin stress S_d when alpha > 0;
+/// the Kelvin part A0 F S_d e1, A0 F S_d e2 is zero when alpha = 0). The Kelvin part
+/// is for the energy ledger only (docs/theory.md section 6): the forces use p1, p2.
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
 #[inline(always)]
 pub fn membrane_stress<S: Real, const N: usize>(
     c: &Plane<S>,
@@ -98,24 +100,26 @@ pub fn membrane_stress<S: Real, const N: usize>(
     e0: &[S; 3],
     x: &[V3<S>; N],
     v: &[V3<S>; N],
-    h: S,
-) -> (S, S, V3<S>, V3<S>) {
+) -> (S, V3<S>, V3<S>, [V3<S>; 2]) {
     let (f1, f2) = gradient_s(x, bx, by);
     let g = green_s(f1, f2);
     let e = [g[0] - e0[0], g[1] - e0[1], g[2] - e0[2]];
     let mut s = c.apply(e);
     let energy = S::splat(0.5) * area0 * (s[0] * e[0] + s[1] * e[1] + s[2] * e[2]);
-    let mut diss = S::splat(0.0);
+    let mut pd = [V3::zero(); 2];
     if alpha > 0.0 {
         let (d1, d2) = gradient_s(v, bx, by);
         let ed = [f1.dot(d1), f2.dot(d2), f1.dot(d2) + d1.dot(f2)];
         let sd = c.apply_scaled(S::splat(alpha), ed);
-        diss = h * area0 * (sd[0] * ed[0] + sd[1] * ed[1] + sd[2] * ed[2]);
+        pd = [
+            f1.scale(sd[0]).plus(f2.scale(sd[2])).scale(area0),
+            f1.scale(sd[2]).plus(f2.scale(sd[1])).scale(area0),
+        ];
         s[0] += sd[0];
         s[1] += sd[1];
         s[2] += sd[2];
     }
     let p1 = f1.scale(s[0]).plus(f2.scale(s[2])).scale(area0);
     let p2 = f1.scale(s[2]).plus(f2.scale(s[1])).scale(area0);
-    (energy, diss, p1, p2)
+    (energy, p1, p2, pd)
 }

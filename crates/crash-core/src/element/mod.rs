@@ -47,8 +47,6 @@ pub struct ElemEnergy {
     pub internal: f64,
     /// Hourglass energy (quads).
     pub hourglass: f64,
-    /// Energy dissipated by Kelvin damping over the last step.
-    pub damping: f64,
 }
 
 /// Geometric failure of an element at the current configuration.

@@ -65,8 +65,10 @@ pub struct ShellL<S> {
 
 /// Update the rate-form resultants over the step `h` from the centroid rates (curvature
 /// kr, transverse shear g, drilling), for an element of current area `area`. Returns
-/// (stored energy, Kelvin dissipation over h, moments, shear forces), the last two
-/// including the Kelvin damping part (they enter the nodal forces; the state does not).
+/// (stored energy, moments, shear forces, their Kelvin parts): the moments and shear
+/// forces include the Kelvin damping part (they enter the nodal forces; the state does
+/// not), which is returned on its own too (zero when alpha = 0) for the energy ledger.
+#[allow(clippy::type_complexity)]
 #[inline(always)]
 pub fn plate_update<S: Real>(
     k: &Consts<S>,
@@ -76,7 +78,7 @@ pub fn plate_update<S: Real>(
     drill_rate: S,
     h: S,
     st: &mut ShellL<S>,
-) -> (S, S, [S; 3], [S; 2]) {
+) -> (S, [S; 3], [S; 2], ([S; 3], [S; 2])) {
     let dm = k.bending.apply(kr);
     st.m[0] += h * dm[0];
     st.m[1] += h * dm[1];
@@ -91,19 +93,18 @@ pub fn plate_update<S: Real>(
             + (st.q[0] * st.q[0] + st.q[1] * st.q[1]) * k.half_inv_shear
             + st.drill * st.drill * k.half_inv_drill);
     let (mut m, mut q) = (st.m, st.q);
-    let mut diss = S::splat(0.0);
+    let zero = S::splat(0.0);
+    let mut kelvin = ([zero; 3], [zero; 2]);
     if k.alpha > 0.0 {
         let a = S::splat(k.alpha);
         let md = k.bending.apply_scaled(a, kr);
         let qd = [a * k.shear * g[0], a * k.shear * g[1]];
-        diss = h
-            * area
-            * (md[0] * kr[0] + md[1] * kr[1] + md[2] * kr[2] + qd[0] * g[0] + qd[1] * g[1]);
         m[0] += md[0];
         m[1] += md[1];
         m[2] += md[2];
         q[0] += qd[0];
         q[1] += qd[1];
+        kelvin = (md, qd);
     }
-    (energy, diss, m, q)
+    (energy, m, q, kelvin)
 }

@@ -106,15 +106,19 @@ pub struct QuadExtra<S> {
     pub corners: [S; 4],
 }
 
-/// Internal forces of a quad: writes its four slots (global force, moment).
+/// Internal forces of a quad: writes its four slots (global force, moment) to `out`
+/// and, when the material has Kelvin damping, the Kelvin part of the same forces to
+/// `out_d` (for the energy ledger: docs/theory.md section 6; untouched otherwise);
+/// `KELVIN` false compiles that part out (as `tri_kernel`).
 #[inline(always)]
-pub fn quad_kernel<S: Real>(
+pub fn quad_kernel<S: Real, const KELVIN: bool>(
     k: &Consts<S>,
     e: &QuadIn<S>,
     h: S,
     st: &mut ShellL<S>,
     hg: &mut HgL<S>,
     out: &mut [[S; 6]; 4],
+    out_d: &mut [[S; 6]; 4],
 ) -> (KernelOut<S>, QuadExtra<S>) {
     let zero = S::splat(0.0);
     let one = S::splat(1.0);
@@ -158,15 +162,14 @@ pub fn quad_kernel<S: Real>(
     let es = [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]];
     let mut s = k.membrane.apply(es);
     let e_mem = half * e.area0 * (s[0] * es[0] + s[1] * es[1] + s[2] * es[2]);
-    let mut d_mem = zero;
+    let mut sd = [zero; 3];
     if k.alpha > 0.0 {
         let dv13 = e.v[2].minus(e.v[0]);
         let dv24 = e.v[3].minus(e.v[1]);
         let d1 = dv13.scale(e.bx0[0]).plus(dv24.scale(e.bx0[1]));
         let d2 = dv13.scale(e.by0[0]).plus(dv24.scale(e.by0[1]));
         let ed = [f1.dot(d1), f2.dot(d2), f1.dot(d2) + d1.dot(f2)];
-        let sd = k.membrane.apply_scaled(S::splat(k.alpha), ed);
-        d_mem = h * e.area0 * (sd[0] * ed[0] + sd[1] * ed[1] + sd[2] * ed[2]);
+        sd = k.membrane.apply_scaled(S::splat(k.alpha), ed);
         s[0] += sd[0];
         s[1] += sd[1];
         s[2] += sd[2];
@@ -218,7 +221,7 @@ pub fn quad_kernel<S: Real>(
     let drill_rate = wm[2] - half * spin;
 
     // rate-form plate resultants
-    let (e_pl, d_pl, mm, qq) = plate_update(k, area, kr, gr, drill_rate, h, st);
+    let (e_pl, mm, qq, (md, qd)) = plate_update(k, area, kr, gr, drill_rate, h, st);
 
     // rate-form hourglass resultants (w and rotations)
     hg.w += h * e.k_w * vg.dot(e3);
@@ -266,12 +269,41 @@ pub fn quad_kernel<S: Real>(
         let (f, m) = (fs[i], ms[i].plus(hh.scale(gm[i])));
         out[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
     }
+    if KELVIN && k.alpha > 0.0 {
+        // the same combinations of the Kelvin resultants alone (drilling and hourglass
+        // are not damped: no tau, no gamma terms)
+        let p1 = f1.scale(sd[0]).plus(f2.scale(sd[2])).scale(e.area0);
+        let p2 = f1.scale(sd[2]).plus(f2.scale(sd[1])).scale(e.area0);
+        let bb = e3.scale(area * qd[0]);
+        let cc = e3.scale(area * qd[1]);
+        let c3 = p1
+            .scale(e.bx0[0])
+            .plus(p2.scale(e.by0[0]))
+            .plus(bb.scale(bx[0]))
+            .plus(cc.scale(by[0]));
+        let c4 = p1
+            .scale(e.bx0[1])
+            .plus(p2.scale(e.by0[1]))
+            .plus(bb.scale(bx[1]))
+            .plus(cc.scale(by[1]));
+        let mb = e2.scale(area * md[0]).minus(e1.scale(area * md[2]));
+        let mc = e2.scale(area * md[2]).minus(e1.scale(area * md[1]));
+        let kk = e2.scale(aq * qd[0]).minus(e1.scale(aq * qd[1]));
+        let u3 = mb.scale(bx[0]).plus(mc.scale(by[0]));
+        let u4 = mb.scale(bx[1]).plus(mc.scale(by[1]));
+        let z3 = V3::zero();
+        let fs = [z3.minus(c3), z3.minus(c4), c3, c4];
+        let ms = [kk.minus(u3), kk.minus(u4), kk.plus(u3), kk.plus(u4)];
+        for i in 0..4 {
+            let (f, m) = (fs[i], ms[i]);
+            out_d[i] = [f.x, f.y, f.z, m.x, m.y, m.z];
+        }
+    }
 
     let diag = d13.norm_squared().max(d24.norm_squared()).sqrt();
     (
         KernelOut {
             internal: e_mem + e_pl,
-            damping: d_mem + d_pl,
             length: area / diag,
             ratio: area / e.area0,
         },

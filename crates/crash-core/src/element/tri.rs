@@ -143,25 +143,29 @@ pub struct TriIn<S> {
 #[derive(Debug, Clone, Copy)]
 pub struct KernelOut<S> {
     pub internal: S,
-    pub damping: S,
     /// Characteristic length L_e of the current configuration.
     pub length: S,
     /// Current area / initial area (collapse check by the caller).
     pub ratio: S,
 }
 
-/// Internal forces of a triangle: writes its three slots (global force, moment).
+/// Internal forces of a triangle: writes its three slots (global force, moment) to
+/// `out` and, when the material has Kelvin damping, the Kelvin part of the same forces
+/// to `out_d` (for the energy ledger: docs/theory.md section 6; untouched otherwise).
+/// `KELVIN` false (a chunk that has no Kelvin slots) compiles that part out, so an
+/// undamped body runs the same code as before the Kelvin slots existed.
 ///
 /// Straight-line code, no per-node accumulation arrays: the compiler keeps everything in
 /// registers (with AVX-512 enabled it otherwise turns such loops into masked
 /// gathers/scatters on the stack).
 #[inline(always)]
-pub fn tri_kernel<S: Real>(
+pub fn tri_kernel<S: Real, const KELVIN: bool>(
     k: &Consts<S>,
     e: &TriIn<S>,
     h: S,
     st: &mut ShellL<S>,
     out: &mut [[S; 6]; 3],
+    out_d: &mut [[S; 6]; 3],
 ) -> KernelOut<S> {
     let zero = S::splat(0.0);
     let half = S::splat(0.5);
@@ -184,7 +188,7 @@ pub fn tri_kernel<S: Real>(
     let area = half * two_area;
 
     // membrane, total Lagrangian: f_I = p1 bx0_I + p2 by0_I
-    let (e_mem, d_mem, p1, p2) = membrane_stress(
+    let (e_mem, p1, p2, pd) = membrane_stress(
         &k.membrane,
         k.alpha,
         &e.bx0,
@@ -193,7 +197,6 @@ pub fn tri_kernel<S: Real>(
         &[zero; 3],
         x,
         v,
-        h,
     );
 
     // current gradients and the assumed-shear operator
@@ -230,7 +233,7 @@ pub fn tri_kernel<S: Real>(
     ];
     let drill_rate = wz * S::splat(1.0 / 3.0) - half * spin;
 
-    let (e_pl, d_pl, mm, qq) = plate_update(k, area, kr, g, drill_rate, h, st);
+    let (e_pl, mm, qq, (md, qd)) = plate_update(k, area, kr, g, drill_rate, h, st);
 
     // nodal forces and moments
     let td = area * st.drill;
@@ -259,10 +262,29 @@ pub fn tri_kernel<S: Real>(
     out[0] = g.at((e.bx0[0], e.by0[0], bx[0], by[0], cw[0], cx[0], cy[0]));
     out[1] = g.at((e.bx0[1], e.by0[1], bx[1], by[1], cw[1], cx[1], cy[1]));
     out[2] = g.at((e.bx0[2], e.by0[2], bx[2], by[2], cw[2], cx[2], cy[2]));
+    if KELVIN && k.alpha > 0.0 {
+        // the same combination of the Kelvin resultants alone (drilling is not damped)
+        let z3 = V3::zero();
+        let gd = NodeForce {
+            p1: pd[0],
+            p2: pd[1],
+            fb: z3,
+            fc: z3,
+            mb: e2.scale(area * md[0]).minus(e1.scale(area * md[2])),
+            mc: e2.scale(area * md[2]).minus(e1.scale(area * md[1])),
+            mk: z3,
+            e1,
+            e2,
+            e3,
+            aq: [area * qd[0], area * qd[1]],
+        };
+        out_d[0] = gd.at((e.bx0[0], e.by0[0], bx[0], by[0], cw[0], cx[0], cy[0]));
+        out_d[1] = gd.at((e.bx0[1], e.by0[1], bx[1], by[1], cw[1], cx[1], cy[1]));
+        out_d[2] = gd.at((e.bx0[2], e.by0[2], bx[2], by[2], cw[2], cx[2], cy[2]));
+    }
     let longest = l2sq.max(r3.norm_squared()).max(r23.norm_squared()).sqrt();
     KernelOut {
         internal: e_mem + e_pl,
-        damping: d_mem + d_pl,
         length: two_area / longest,
         ratio: area / e.area0,
     }
