@@ -265,7 +265,12 @@ pub(crate) fn check_memory(
             memory::human(need),
             total.elements(),
             total.nodes,
-            Counts { nodes: 1, tris: 0, quads: 1 }.bytes(),
+            Counts {
+                nodes: 1,
+                quads: 1,
+                ..Counts::default()
+            }
+            .bytes(),
             memory::human(available as f64),
         ),
     ))
@@ -275,7 +280,15 @@ pub fn build(scene: &Scene, ctx: &Ctx, mut hash: Fnv) -> Result<Built, SceneErro
     let g = &scene.globals;
     let mut plans = Vec::with_capacity(scene.spec.bodies.len());
     for (i, b) in scene.spec.bodies.iter().enumerate() {
-        plans.push(plan(ctx, &scene.dir, i, b, &mut hash, &scene.inputs)?);
+        let mut p = plan(ctx, &scene.dir, i, b, &mut hash, &scene.inputs)?;
+        if scene
+            .materials
+            .get(&b.material)
+            .is_some_and(|m| m.kelvin > 0.0)
+        {
+            p.counts = p.counts.with_kelvin();
+        }
+        plans.push(p);
     }
     let available = scene.memory_limit.or_else(memory::available);
     check_memory(ctx, &plans, available)?;

@@ -49,6 +49,9 @@ pub struct Counts {
     pub nodes: usize,
     pub tris: usize,
     pub quads: usize,
+    /// Extra force slots of Kelvin-damped bodies (their elements keep the Kelvin part
+    /// of each nodal force apart: one more slot per element node).
+    pub kelvin_slots: usize,
 }
 
 impl Counts {
@@ -60,6 +63,18 @@ impl Counts {
         self.nodes = self.nodes.saturating_add(o.nodes);
         self.tris = self.tris.saturating_add(o.tris);
         self.quads = self.quads.saturating_add(o.quads);
+        self.kelvin_slots = self.kelvin_slots.saturating_add(o.kelvin_slots);
+    }
+
+    /// These counts for a body with Kelvin damping.
+    pub fn with_kelvin(self) -> Counts {
+        Counts {
+            kelvin_slots: self
+                .tris
+                .saturating_mul(3)
+                .saturating_add(self.quads.saturating_mul(4)),
+            ..self
+        }
     }
 
     /// Estimated peak bytes of a run holding these.
@@ -67,7 +82,8 @@ impl Counts {
         RUN_FACTOR
             * (self.nodes as f64 * NODE_BYTES as f64
                 + self.tris as f64 * TRI_BYTES as f64
-                + self.quads as f64 * QUAD_BYTES as f64)
+                + self.quads as f64 * QUAD_BYTES as f64
+                + self.kelvin_slots as f64 * size_of::<Slot>() as f64)
     }
 }
 
@@ -117,18 +133,31 @@ mod tests {
         // measured peak RSS per quad + node and per node + 2 triangles (module docs)
         let quad = Counts {
             nodes: 1,
-            tris: 0,
             quads: 1,
+            ..Counts::default()
         }
         .bytes();
         let tri = Counts {
             nodes: 1,
             tris: 2,
-            quads: 0,
+            ..Counts::default()
         }
         .bytes();
         assert!((1510.0..1510.0 * 1.25).contains(&quad), "{quad}");
         assert!((1900.0..1900.0 * 1.25).contains(&tri), "{tri}");
         assert_eq!(human(3.2e10), "32.0 GB");
+    }
+
+    #[test]
+    fn a_kelvin_damped_body_counts_one_more_slot_per_element_node() {
+        let c = Counts {
+            nodes: 10,
+            tris: 2,
+            quads: 3,
+            ..Counts::default()
+        };
+        let extra = c.with_kelvin().bytes() - c.bytes();
+        let want = RUN_FACTOR * (2 * 3 + 3 * 4) as f64 * size_of::<Slot>() as f64;
+        assert!((extra - want).abs() < 1e-6, "{extra} vs {want}");
     }
 }

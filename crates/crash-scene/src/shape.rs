@@ -195,12 +195,12 @@ fn counts(nodes: usize, elements: usize, k: ElementKind) -> Counts {
         ElementKind::Tri => Counts {
             nodes,
             tris: elements,
-            quads: 0,
+            ..Counts::default()
         },
         ElementKind::Quad => Counts {
             nodes,
-            tris: 0,
             quads: elements,
+            ..Counts::default()
         },
     }
 }
@@ -421,6 +421,7 @@ pub fn plan(
             nodes: mesh.nodes.len(),
             tris: mesh.tris.len(),
             quads: mesh.quads.len(),
+            ..Counts::default()
         };
         (key, Gen::Loaded(mesh), d, c)
     } else {

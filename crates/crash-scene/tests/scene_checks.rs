@@ -235,6 +235,7 @@ fn plate_of_19_6_million_elements_is_refused_on_this_machine() {
         nodes: 4431 * 4431 + 42,
         tris: 80,
         quads: 4430 * 4430,
+        ..Default::default()
     }
     .bytes();
     match crash_scene::memory::available() {
