@@ -96,14 +96,7 @@ fn free_plate_error(kind: ElementKind, kelvin: f64) -> f64 {
     }
     let mat = Material::new(7800.0, 200e9, 0.3, kelvin).expect("valid");
     let mut b = body(&m, mat, 0.002);
-    for i in 0..b.state.x.len() {
-        let p = b.def.x0[i];
-        b.state.v[i] = Vec3::new(
-            0.0,
-            0.0,
-            0.5 * (std::f64::consts::PI * p.x / lx).cos() * (p.y / ly),
-        );
-    }
+    transverse_start(&mut b, lx, ly);
     let (max, _, run) = run_to(b, Vec3::zeros(), 5e-3);
     let e = run.ledger.last;
     println!(

@@ -58,15 +58,7 @@ fn free_triangle_strip_10_by_1_holds_energy_to_1e_4() {
     let (lx, ly) = (1.0, 0.1);
     let m = plate(lx, ly, 10, 1, ElementKind::Tri);
     let mut b = body(&m, steel(), 0.002);
-    for i in 0..b.state.x.len() {
-        let p = b.def.x0[i];
-        // the stability study's field: transverse, inconsistent with the (zero) rotations
-        b.state.v[i] = Vec3::new(
-            0.0,
-            0.0,
-            0.5 * (std::f64::consts::PI * p.x / lx).cos() * (p.y / ly),
-        );
-    }
+    transverse_start(&mut b, lx, ly);
     let mut run = Run::new(
         Group::new(vec![b], Vec3::zeros()),
         RunConfig {

@@ -361,9 +361,10 @@ impl Out<'_> {
     /// Move the stream's buffered bytes to the spill as one block.
     fn store_block(&mut self, s: &mut ArrayStream) -> io::Result<()> {
         let k = s.blocks.len();
-        let cached = match (self.compress && s.steady, &*self.cache) {
-            (true, c) => c.get(s.index, k, &s.buf),
-            _ => None,
+        let cached = if self.compress && s.steady {
+            self.cache.get(s.index, k, &s.buf)
+        } else {
+            None
         };
         let stored = match cached {
             Some(z) => z,

@@ -282,6 +282,16 @@ pub fn contact_forces(
         return Ok(dt);
     }
     let pairs = pairs_of(bodies, cfg, bounds);
+    // node lists only for this pass's pairs (a floor under many bodies would otherwise
+    // keep a list per node for every body that ever came near it)
+    let live: std::collections::BTreeSet<(u32, u32)> = pairs
+        .iter()
+        .flat_map(|&(a, b)| {
+            let (a, b) = (bodies[a].def.id, bodies[b].def.id);
+            [(a, b), (b, a)]
+        })
+        .collect();
+    state.lists.retain(|k, _| live.contains(k));
     // each body of a pair once per pass, however many pairs it is in (a floor under many
     // bodies): its surface, and its mean velocity when the closing speed is needed
     let mut in_pairs: Vec<usize> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();

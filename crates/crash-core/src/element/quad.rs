@@ -106,6 +106,30 @@ pub struct QuadExtra<S> {
     pub corners: [S; 4],
 }
 
+/// c_3, c_4 of the nodal forces (f_I = c_I + gamma_I G, c_1 = -c_3, c_2 = -c_4) from the
+/// membrane rows p1, p2 and the shear and drilling rows bb, cc: the same combination for
+/// the whole forces and for their Kelvin part.
+#[inline(always)]
+fn corner_terms<S: Real>(
+    e: &QuadIn<S>,
+    [p1, p2, bb, cc]: [V3<S>; 4],
+    bx: &[S; 2],
+    by: &[S; 2],
+) -> [V3<S>; 2] {
+    std::array::from_fn(|k| {
+        p1.scale(e.bx0[k])
+            .plus(p2.scale(e.by0[k]))
+            .plus(bb.scale(bx[k]))
+            .plus(cc.scale(by[k]))
+    })
+}
+
+/// u_3, u_4 of the nodal moments (u_1 = -u_3, u_2 = -u_4) from the bending rows mb, mc.
+#[inline(always)]
+fn moment_terms<S: Real>(mb: V3<S>, mc: V3<S>, bx: &[S; 2], by: &[S; 2]) -> [V3<S>; 2] {
+    std::array::from_fn(|k| mb.scale(bx[k]).plus(mc.scale(by[k])))
+}
+
 /// Internal forces of a quad: writes its four slots (global force, moment) to `out`
 /// and, when the material has Kelvin damping, the Kelvin part of the same forces to
 /// `out_d` (for the energy ledger: docs/theory.md section 6; untouched otherwise);
@@ -237,16 +261,7 @@ pub fn quad_kernel<S: Real, const KELVIN: bool>(
     let gg = qt.scale(e.k_m).plus(e3.scale(hg.w));
     let bb = e3.scale(area * qq[0]).minus(e2.scale(td_half));
     let cc = e3.scale(area * qq[1]).plus(e1.scale(td_half));
-    let c3 = p1
-        .scale(e.bx0[0])
-        .plus(p2.scale(e.by0[0]))
-        .plus(bb.scale(bx[0]))
-        .plus(cc.scale(by[0]));
-    let c4 = p1
-        .scale(e.bx0[1])
-        .plus(p2.scale(e.by0[1]))
-        .plus(bb.scale(bx[1]))
-        .plus(cc.scale(by[1]));
+    let [c3, c4] = corner_terms(e, [p1, p2, bb, cc], &bx, &by);
     // nodal moments: m_I = k + u_I + gamma_I H, with u_1 = -u_3, u_2 = -u_4
     let mb = e2.scale(area * mm[0]).minus(e1.scale(area * mm[2]));
     let mc = e2.scale(area * mm[2]).minus(e1.scale(area * mm[1]));
@@ -256,8 +271,7 @@ pub fn quad_kernel<S: Real, const KELVIN: bool>(
         .scale(aq * qq[0])
         .minus(e1.scale(aq * qq[1]))
         .plus(e3.scale(td * quarter));
-    let u3 = mb.scale(bx[0]).plus(mc.scale(by[0]));
-    let u4 = mb.scale(bx[1]).plus(mc.scale(by[1]));
+    let [u3, u4] = moment_terms(mb, mc, &bx, &by);
     let fs = [
         gg.scale(gm[0]).minus(c3),
         gg.scale(gm[1]).minus(c4),
@@ -276,21 +290,11 @@ pub fn quad_kernel<S: Real, const KELVIN: bool>(
         let p2 = f1.scale(sd[2]).plus(f2.scale(sd[1])).scale(e.area0);
         let bb = e3.scale(area * qd[0]);
         let cc = e3.scale(area * qd[1]);
-        let c3 = p1
-            .scale(e.bx0[0])
-            .plus(p2.scale(e.by0[0]))
-            .plus(bb.scale(bx[0]))
-            .plus(cc.scale(by[0]));
-        let c4 = p1
-            .scale(e.bx0[1])
-            .plus(p2.scale(e.by0[1]))
-            .plus(bb.scale(bx[1]))
-            .plus(cc.scale(by[1]));
+        let [c3, c4] = corner_terms(e, [p1, p2, bb, cc], &bx, &by);
         let mb = e2.scale(area * md[0]).minus(e1.scale(area * md[2]));
         let mc = e2.scale(area * md[2]).minus(e1.scale(area * md[1]));
         let kk = e2.scale(aq * qd[0]).minus(e1.scale(aq * qd[1]));
-        let u3 = mb.scale(bx[0]).plus(mc.scale(by[0]));
-        let u4 = mb.scale(bx[1]).plus(mc.scale(by[1]));
+        let [u3, u4] = moment_terms(mb, mc, &bx, &by);
         let z3 = V3::zero();
         let fs = [z3.minus(c3), z3.minus(c4), c3, c4];
         let ms = [kk.minus(u3), kk.minus(u4), kk.plus(u3), kk.plus(u4)];

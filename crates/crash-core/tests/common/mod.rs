@@ -48,3 +48,16 @@ pub fn orders(ladder: &[(f64, f64)]) -> Vec<f64> {
         .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
         .collect()
 }
+
+/// The stability study's free-vibration start on a plate of `lx` x `ly` centred at the
+/// origin: a transverse velocity field inconsistent with the (zero) nodal rotations.
+pub fn transverse_start(b: &mut Body, lx: f64, ly: f64) {
+    for i in 0..b.state.x.len() {
+        let p = b.def.x0[i];
+        b.state.v[i] = Vec3::new(
+            0.0,
+            0.0,
+            0.5 * (std::f64::consts::PI * p.x / lx).cos() * (p.y / ly),
+        );
+    }
+}
