@@ -85,22 +85,37 @@ fn pass_through_exits_3_with_a_complete_summary_naming_both_bodies() {
     assert!(err.contains(&format!("{} steps done", s.steps)), "{err}");
 }
 
+/// The energy warning's lines on stderr.
+fn energy_warnings(err: &str) -> Vec<&str> {
+    err.lines()
+        .filter(|l| l.contains("crash: warning:") && l.contains("energy-balance error"))
+        .collect()
+}
+
+/// A scene whose `energy_limit` no run can meet, run to `end` seconds.
+fn impossible_limit_scene(d: &Path, end: &str) -> PathBuf {
+    let sc = fast_scene(d, 2.0, "limit_dt", "energy_limit = 1.0e-15");
+    let sc_text = std::fs::read_to_string(&sc).expect("scene");
+    std::fs::write(
+        &sc,
+        sc_text.replace("end_time = 0.06", &format!("end_time = {end}")),
+    )
+    .expect("scene");
+    sc
+}
+
 #[test]
 fn a_doubtful_warning_is_printed_once_listed_and_exits_4_unless_allowed() {
     let d = dir("report-warning");
-    // a scene limit no run can meet: the energy-balance warning must fire
-    let sc = fast_scene(&d, 2.0, "limit_dt", "energy_limit = 1.0e-15");
-    let sc_text = std::fs::read_to_string(&sc).expect("scene");
-    std::fs::write(&sc, sc_text.replace("end_time = 0.06", "end_time = 1.0e-5")).expect("scene");
+    // past the limit from the first step, but the run ends (3 records) before the
+    // energy guard's persistence (more than 3 steps) stops it: it finishes warned
+    let sc = impossible_limit_scene(&d, "2.0e-6");
     let out = d.join("out");
     let o = crash(&sc, &out, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     println!("{err}");
     assert_eq!(o.status.code(), Some(4), "{err}");
-    let lines: Vec<&str> = err
-        .lines()
-        .filter(|l| l.contains("crash: warning:") && l.contains("energy-balance error"))
-        .collect();
+    let lines = energy_warnings(&err);
     assert_eq!(lines.len(), 1, "printed once: {lines:?}");
     assert!(
         lines[0].contains("step ") && lines[0].contains("t = "),
@@ -116,6 +131,29 @@ fn a_doubtful_warning_is_printed_once_listed_and_exits_4_unless_allowed() {
 
     let o = crash(&sc, &d.join("allowed"), &["--allow-warnings"]);
     assert_eq!(o.status.code(), Some(0));
+}
+
+/// One energy limit: the figure the warning judges is the figure the guard judges, so a
+/// run past `energy_limit` for more than 3 steps is stopped (exit 3) after the warning.
+#[test]
+fn an_energy_error_past_the_limit_warns_once_then_the_guard_stops_the_run_with_exit_3() {
+    let d = dir("report-energy-guard");
+    let sc = impossible_limit_scene(&d, "1.0e-5");
+    let out = d.join("out");
+    let o = crash(&sc, &out, &["--allow-warnings"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    println!("{err}");
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert_eq!(energy_warnings(&err).len(), 1, "{err}");
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).expect("summary");
+    let fault = s.fault.expect("the guard's fault is in summary.json");
+    assert!(
+        fault.contains("energy runaway") && fault.contains("energy_limit"),
+        "{fault}"
+    );
+    assert_eq!(s.steps, 4, "stopped on the 4th step past the limit");
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert_eq!(s.warnings[0].kind, crash_io::WarningKind::EnergyBalance);
 }
 
 #[test]

@@ -13,8 +13,10 @@ pub struct RunConfig {
     pub safety: f64,
     /// Force a constant time step (tests of the stability limit); None: automatic.
     pub fixed_dt: Option<f64>,
-    /// Balance error (relative to the largest energy) that stops the run as a runaway.
-    pub runaway_limit: f64,
+    /// The scene's one energy-balance limit (`energy_limit`): the run's energy figure
+    /// (`EnergyLedger::max_error`) above it for more than `RUNAWAY_PERSIST` steps stops
+    /// the run; the indicators and the warning judge the same figure against it.
+    pub energy_limit: f64,
     /// A time step below this fraction of the initial one stops the run.
     pub dt_floor_ratio: f64,
 }
@@ -25,7 +27,7 @@ impl Default for RunConfig {
             end_time: 0.0,
             safety: 0.9,
             fixed_dt: None,
-            runaway_limit: 0.25,
+            energy_limit: DEFAULT_ENERGY_LIMIT,
             dt_floor_ratio: 1e-3,
         }
     }
@@ -42,8 +44,11 @@ pub fn step_length(next_dt: f64, left: f64) -> (f64, bool) {
     }
 }
 
-/// Consecutive steps above the runaway limit that stop a run.
+/// Consecutive steps above the energy limit that stop a run.
 pub const RUNAWAY_PERSIST: u32 = 3;
+
+/// The energy-balance limit when a scene gives none (`energy_limit` of the scene).
+pub const DEFAULT_ENERGY_LIMIT: f64 = 0.05;
 
 /// A run of one group in this process.
 #[derive(Debug)]
@@ -102,10 +107,12 @@ pub fn choose_dt(
     Ok(dt)
 }
 
-/// The runaway guard: the relative balance error above `runaway_limit` for more than
-/// `RUNAWAY_PERSIST` consecutive steps (or NaN) stops the run, naming the most strained
-/// element. A start from rest has O(1) relative errors for a few steps while all energies
-/// are tiny; a real instability keeps growing, hence the persistence.
+/// The energy guard: the run's energy-balance figure (`EnergyTotals::run_error`, the
+/// largest imbalance over the largest energy, the figure the indicators and the warning
+/// judge) above the scene's `energy_limit` for more than `RUNAWAY_PERSIST` consecutive
+/// steps, or NaN, stops the run naming the most strained element. The persistence lets
+/// the first steps of a start from rest pass, when every energy is near zero and the
+/// largest energy still grows faster than the imbalance.
 pub fn check_runaway(
     cfg: &RunConfig,
     ledger: &mut EnergyLedger,
@@ -113,20 +120,23 @@ pub fn check_runaway(
     reports: &[BodyReport],
     step: u64,
 ) -> Result<(), Fault> {
-    if energy.balance_error.abs() <= cfg.runaway_limit {
+    if energy.run_error.abs() <= cfg.energy_limit {
         ledger.over_limit = 0;
     } else {
         ledger.over_limit += 1;
     }
-    if ledger.over_limit > RUNAWAY_PERSIST || energy.balance_error.is_nan() {
+    if ledger.over_limit > RUNAWAY_PERSIST
+        || energy.balance_error.is_nan()
+        || energy.run_error.is_nan()
+    {
         let hot = reports.iter().fold(None::<&BodyReport>, |a, b| match a {
             Some(a) if a.hot_density >= b.hot_density => Some(a),
             _ => Some(b),
         });
         return Err(Fault::EnergyRunaway {
             step,
-            error: energy.balance_error,
-            limit: cfg.runaway_limit,
+            error: energy.run_error,
+            limit: cfg.energy_limit,
             body: hot.map_or(0, |h| h.id),
             element: hot.map_or(0, |h| h.hot_element),
         });

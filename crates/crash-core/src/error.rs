@@ -73,7 +73,7 @@ pub enum Fault {
         element: usize,
         corner: usize,
     },
-    #[error("step {step}: energy runaway: balance error {error:.3} of the largest energy exceeds {limit:.3}; the most strained element is {element} of body {body} (usually: time step above the critical one, or a too stiff penalty)")]
+    #[error("step {step}: energy runaway: the run's energy-balance error {:.2}% of its largest energy exceeds the scene's energy_limit {:.2}% for more than 3 steps; the most strained element is {element} of body {body} (usually: a time step above the critical one, a too stiff penalty, or an impact that crushes the mesh)", .error * 100.0, .limit * 100.0)]
     EnergyRunaway {
         step: u64,
         error: f64,

@@ -21,7 +21,7 @@ pub const CONTACT_LIMIT: f64 = 0.10;
 /// doubtful.
 pub const PENETRATION_LIMIT: f64 = 0.5;
 /// Energy-balance limit when a scene gives none (the scene's default `energy_limit`).
-pub const DEFAULT_ENERGY_LIMIT: f64 = 0.05;
+pub use crash_core::driver::DEFAULT_ENERGY_LIMIT;
 
 /// serde_json writes non-finite floats as null; read null back as NaN.
 fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {

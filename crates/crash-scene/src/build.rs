@@ -74,6 +74,7 @@ impl Built {
         RunConfig {
             end_time: self.end_time,
             safety: self.safety,
+            energy_limit: self.energy_limit,
             ..RunConfig::default()
         }
     }

@@ -8,7 +8,7 @@ use crash_core::{CoreError, Material, Vec3};
 use std::collections::BTreeMap;
 
 pub const DEFAULT_SAFETY: f64 = 0.9;
-pub const DEFAULT_ENERGY_LIMIT: f64 = 0.05;
+pub use crash_core::driver::DEFAULT_ENERGY_LIMIT;
 /// Output frames per run when output_interval is not given.
 pub const DEFAULT_FRAMES: f64 = 100.0;
 

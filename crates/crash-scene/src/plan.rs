@@ -43,6 +43,7 @@ impl Plan {
         RunConfig {
             end_time: self.end_time,
             safety: self.safety,
+            energy_limit: self.energy_limit,
             ..RunConfig::default()
         }
     }

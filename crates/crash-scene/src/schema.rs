@@ -23,7 +23,8 @@ pub struct SceneFile {
     pub gravity: Option<V3>,
     /// Time between output frames [s] (default end_time / 100).
     pub output_interval: Option<f64>,
-    /// Relative energy-balance error that draws a warning at the end (default 0.05).
+    /// The run's energy-balance limit (default 0.05): a warning at once, a stop (exit 3)
+    /// more than 3 steps past it.
     pub energy_limit: Option<f64>,
     #[serde(default)]
     pub contact: ContactSpec,

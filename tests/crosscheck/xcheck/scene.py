@@ -13,6 +13,7 @@ from . import mesh as meshes
 from .body import Body, Material, DOF, element_dt
 
 DEFAULT_SAFETY = 0.9
+DEFAULT_ENERGY_LIMIT = 0.05   # globals.rs / driver.rs: the scene's energy_limit
 DEFAULT_FRAMES = 100.0
 SELECT_TOL = 1e-9
 ICOSAHEDRON_EDGE = 1.0514622242382672
@@ -29,6 +30,7 @@ class Scene:
         self.name = ""
         self.end_time = 0.0
         self.safety = DEFAULT_SAFETY
+        self.energy_limit = DEFAULT_ENERGY_LIMIT
         self.gravity = np.zeros(3)
         self.output_interval = 0.0
         self.contact = {}
@@ -224,6 +226,7 @@ def load(path, end_time=None, output_interval=None):
     s.name = spec.get("name", os.path.splitext(os.path.basename(path))[0])
     s.end_time = float(end_time if end_time is not None else spec["end_time"])
     s.safety = float(spec.get("dt_safety", DEFAULT_SAFETY))
+    s.energy_limit = float(spec.get("energy_limit", DEFAULT_ENERGY_LIMIT))
     s.gravity = _vec(spec.get("gravity"))
     oi = output_interval if output_interval is not None else spec.get("output_interval")
     s.output_interval = float(oi) if oi is not None else s.end_time / DEFAULT_FRAMES

@@ -13,7 +13,7 @@ fn expect_text(e: Expect) -> &'static str {
         Expect::Stable => "stable",
         Expect::Stopped => "stopped",
         Expect::NotSilent => "not silent",
-        Expect::CompletedOrStopped => "error < 5 %, warned or stopped",
+        Expect::CompletedOrStopped => "error < 5 % or stopped",
     }
 }
 
