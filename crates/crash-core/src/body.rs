@@ -187,6 +187,12 @@ pub struct BodyDef {
     pub self_contact: bool,
     /// Every DOF of every node constrained: no internal forces are computed.
     pub kinematic: bool,
+    /// A part of a split body (`partition`): its last `halo_nodes` nodes are copies of
+    /// nodes another part owns, not integrated here (their state is copied from the
+    /// owner after each update) and out of the kinetic energy and work sums. 0 for a
+    /// whole body.
+    #[serde(default)]
+    pub halo_nodes: usize,
 }
 
 /// What a step changes: nodal motion, element resultants and force slots, contact
@@ -334,6 +340,7 @@ impl Body {
                 contact: false,
                 self_contact: false,
                 kinematic: false,
+                halo_nodes: 0,
             }),
         })
     }
@@ -482,7 +489,8 @@ impl Body {
     pub fn kinetic_energy_now(&self) -> f64 {
         let (d, s) = (&*self.def, &self.state);
         let mut e = 0.0;
-        for i in 0..s.x.len() {
+        // a part's halo nodes are counted by their owner
+        for i in 0..s.x.len().saturating_sub(d.halo_nodes) {
             e += 0.5 * (d.mass[i] * s.v[i].norm_squared() + d.inertia[i] * s.w[i].norm_squared());
         }
         e

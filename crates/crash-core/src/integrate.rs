@@ -112,7 +112,7 @@ pub struct StepClock {
 }
 
 impl Body {
-    /// Advance all nodes of this body from x_n to x_{n+1}.
+    /// Advance the nodes of this body from x_n to x_{n+1} (all but a part's halo nodes).
     pub fn integrate(&mut self, clock: &StepClock, gravity: Vec3) -> Result<NodeSums, Fault> {
         let h = clock.h;
         let hbar = 0.5 * (clock.h_prev + h);
@@ -139,13 +139,13 @@ impl Body {
             &self.def.program,
         );
         let t = clock.t;
+        // a part's halo nodes (the last ones) take their state from their owner
+        let n = self.state.x.len().saturating_sub(self.def.halo_nodes);
 
-        let parts: Vec<NodeSums> = self
-            .state
-            .x
+        let parts: Vec<NodeSums> = self.state.x[..n]
             .par_chunks_mut(CHUNK)
-            .zip(self.state.v.par_chunks_mut(CHUNK))
-            .zip(self.state.w.par_chunks_mut(CHUNK))
+            .zip(self.state.v[..n].par_chunks_mut(CHUNK))
+            .zip(self.state.w[..n].par_chunks_mut(CHUNK))
             .enumerate()
             .map(|(ci, ((xs, vs), ws))| {
                 let mut s = NodeSums::default();

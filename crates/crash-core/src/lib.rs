@@ -24,6 +24,7 @@ pub mod material;
 pub mod mesh;
 pub mod modal;
 pub mod output;
+pub mod partition;
 pub mod probe;
 pub mod shapes;
 

@@ -1,0 +1,169 @@
+//! Domain decomposition of one body by elements (issue 16 point 2, first layer: in one
+//! process). `bisect` cuts a body's elements into k parts of balanced cost by recursive
+//! coordinate bisection of their centroids; `parts` builds from such a cut one sub-body
+//! per part (owned nodes + a one-element halo) that steps bit-identically to the whole.
+
+mod parts;
+
+pub use parts::{Part, Split};
+
+use crate::body::BodyDef;
+use crate::error::CoreError;
+use crate::Vec3;
+
+/// Cost of one triangle per step, the unit of the element weights.
+pub const TRI_COST: f64 = 1.0;
+/// Cost of one quad per step relative to a triangle: the whole-step A/B of
+/// docs/performance.md (second sitting of 2026-11-26, `shell_step` 1 thread): triangle
+/// 6.97 / 6.12 ms for 100 352 elements, quad 13.14 / 11.39 ms for 100 489, i.e.
+/// 69.5 / 61.0 and 130.8 / 113.3 ns per element-cycle: 1.88 and 1.86.
+pub const QUAD_COST: f64 = 1.87;
+
+/// Which part each element of a body belongs to: `part_of[e]` for the body's element
+/// index e (triangles first, then quads, as in `BodyState::shell`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Partition {
+    pub parts: usize,
+    pub part_of: Vec<u32>,
+}
+
+impl Partition {
+    /// Elements of part `p`, in element order.
+    pub fn elements(&self, p: usize) -> Vec<usize> {
+        (0..self.part_of.len())
+            .filter(|&e| self.part_of[e] as usize == p)
+            .collect()
+    }
+
+    /// Summed weight of each part.
+    pub fn weights(&self, weight: &[f64]) -> Vec<f64> {
+        let mut w = vec![0.0; self.parts];
+        for (e, &p) in self.part_of.iter().enumerate() {
+            w[p as usize] += weight[e];
+        }
+        w
+    }
+}
+
+/// Cost weight of every element of `def` (triangles then quads).
+pub fn element_weights(def: &BodyDef) -> Vec<f64> {
+    let mut w = vec![TRI_COST; def.tris.len()];
+    w.resize(def.element_count(), QUAD_COST);
+    w
+}
+
+/// Centroids of the elements of `def` at positions `x` (triangles then quads).
+pub fn centroids(def: &BodyDef, x: &[Vec3]) -> Vec<Vec3> {
+    let mean = |nodes: &[u32]| {
+        nodes.iter().fold(Vec3::zeros(), |c, &n| c + x[n as usize]) / nodes.len() as f64
+    };
+    def.tris
+        .iter()
+        .map(|e| mean(&e.nodes))
+        .chain(def.quads.iter().map(|e| mean(&e.nodes)))
+        .collect()
+}
+
+/// Cut a body's elements into `k` parts by recursive coordinate bisection of their
+/// centroids at its reference positions, weighted by `element_weights`.
+pub fn partition_body(def: &BodyDef, k: usize) -> Result<Partition, CoreError> {
+    bisect(&centroids(def, &def.x0), &element_weights(def), k).map_err(|what| CoreError::Other {
+        body: def.name.clone(),
+        what,
+    })
+}
+
+/// Recursive coordinate bisection of `points` with `weight`s into `k >= 1` parts: each
+/// cut is normal to the longest side of the current set's bounding box and puts the
+/// weight share k_left / k on the low side (k_left = k / 2, so any k, not only powers
+/// of two). Points are ordered by coordinate, ties by index: the same input always
+/// gives the same partition. Every part gets at least one point; error when k is 0 or
+/// exceeds the number of points, or a weight is not finite and positive.
+pub fn bisect(points: &[Vec3], weight: &[f64], k: usize) -> Result<Partition, String> {
+    let n = points.len();
+    if k == 0 || k > n {
+        return Err(format!("cannot cut {n} elements into {k} parts"));
+    }
+    if weight.len() != n || weight.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
+        return Err("element weights must be finite and positive, one per element".into());
+    }
+    let mut part_of = vec![0u32; n];
+    let mut ids: Vec<usize> = (0..n).collect();
+    cut(points, weight, &mut ids, 0, k, &mut part_of);
+    Ok(Partition { parts: k, part_of })
+}
+
+/// Assign `ids` to parts `first..first + k`.
+fn cut(points: &[Vec3], weight: &[f64], ids: &mut [usize], first: u32, k: usize, out: &mut [u32]) {
+    if k == 1 {
+        for &e in ids.iter() {
+            out[e] = first;
+        }
+        return;
+    }
+    let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
+    for &e in ids.iter() {
+        lo = lo.inf(&points[e]);
+        hi = hi.sup(&points[e]);
+    }
+    // longest side; ties go to the lower axis
+    let ext = hi - lo;
+    let axis = (1..3).fold(0, |a, d| if ext[d] > ext[a] { d } else { a });
+    ids.sort_unstable_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
+    let kl = k / 2;
+    let total: f64 = ids.iter().map(|&e| weight[e]).sum();
+    let target = total * kl as f64 / k as f64;
+    // the prefix whose weight is nearest the target, leaving each side a point per part
+    let (mut best, mut best_err, mut acc) = (kl, f64::INFINITY, 0.0);
+    for (m, &e) in ids.iter().enumerate() {
+        acc += weight[e];
+        let len = m + 1;
+        if len < kl || ids.len() - len < k - kl {
+            continue;
+        }
+        let err = (acc - target).abs();
+        if err < best_err {
+            (best, best_err) = (len, err);
+        }
+        if acc > target {
+            break;
+        }
+    }
+    let (left, right) = ids.split_at_mut(best);
+    cut(points, weight, left, first, kl, out);
+    cut(points, weight, right, first + kl as u32, k - kl, out);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(nx: usize, ny: usize) -> Vec<Vec3> {
+        (0..ny)
+            .flat_map(|j| (0..nx).map(move |i| Vec3::new(i as f64, j as f64, 0.0)))
+            .collect()
+    }
+
+    #[test]
+    fn every_point_is_in_exactly_one_part_and_no_part_is_empty() {
+        let p = grid(13, 7);
+        let w = vec![1.0; p.len()];
+        for k in 1..=9 {
+            let part = bisect(&p, &w, k).expect("valid");
+            assert!(part.part_of.iter().all(|&q| (q as usize) < k));
+            for q in 0..k {
+                assert!(!part.elements(q).is_empty(), "k = {k}: part {q} empty");
+            }
+        }
+    }
+
+    #[test]
+    fn k_of_zero_or_above_the_element_count_is_refused() {
+        let p = grid(2, 2);
+        let w = vec![1.0; 4];
+        assert!(bisect(&p, &w, 0).is_err());
+        assert!(bisect(&p, &w, 5).is_err());
+        assert!(bisect(&p, &w, 4).is_ok());
+        assert!(bisect(&p, &[1.0, 1.0, f64::NAN, 1.0], 2).is_err());
+    }
+}
