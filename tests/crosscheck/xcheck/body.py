@@ -18,7 +18,7 @@ class DOF:
 SHEAR_CORRECTION = 5.0 / 6.0
 DT_SHAPE = 0.8
 ROT_INERTIA_TRI = 0.5
-ROT_INERTIA_QUAD = 0.125
+ROT_INERTIA_QUAD = 0.1875
 COLLAPSE_RATIO = 1e-3
 # stabilisation coefficients (theory.md 2.2, 2.3)
 R_DRILL = 0.1
