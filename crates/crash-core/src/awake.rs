@@ -18,7 +18,7 @@
 
 use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Idle polls between two yields of the core to the OS.
 const POLLS_PER_YIELD: u32 = 64;
@@ -42,6 +42,9 @@ impl KeepAwake {
     /// than the machine's cores); `None` outside a pool, in a pool of one thread or on
     /// one core (nothing to keep awake).
     pub fn start() -> Option<Self> {
+        if !enabled() {
+            return None;
+        }
         let home = rayon::current_thread_index()?;
         // never more spinning threads than cores: a pool larger than the machine keeps
         // only as many awake as there are other cores
@@ -77,6 +80,19 @@ impl Drop for KeepAwake {
     fn drop(&mut self) {
         self.stop.store(true, Ordering::Relaxed);
     }
+}
+
+/// `CRASH_KEEP_AWAKE=0` (or `off`) in the environment turns the keepers off: on a
+/// machine shared with other work the idle threads then sleep (and the A/B of
+/// docs/performance.md compares the two in one binary).
+fn enabled() -> bool {
+    static ON: OnceLock<bool> = OnceLock::new();
+    *ON.get_or_init(|| {
+        !matches!(
+            std::env::var("CRASH_KEEP_AWAKE").as_deref(),
+            Ok("0") | Ok("off")
+        )
+    })
 }
 
 /// One keeper: poll the pool for work until stopped. On the stepping thread (which may
