@@ -217,8 +217,6 @@ impl Run {
 
     /// Step until the end time, calling `observe` after every step.
     pub fn run(&mut self, mut observe: impl FnMut(&Run)) -> Result<(), Fault> {
-        // the pool's other threads stay awake while this loop steps (crate::awake)
-        let _awake = crate::awake::KeepAwake::start();
         while !self.finished() {
             self.step()?;
             observe(self);

@@ -7,7 +7,6 @@
 // Index loops over the nodes of an element mirror the formulas in docs/theory.md.
 #![allow(clippy::needless_range_loop)]
 
-pub mod awake;
 pub mod body;
 pub mod brief;
 pub mod clock;

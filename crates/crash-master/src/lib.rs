@@ -82,9 +82,6 @@ fn drive<'a, L: WorkerLink>(
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
     let wall = Instant::now();
-    // in-process workers step on this thread's pool: keep its other threads awake for
-    // the run (nothing starts outside a pool or with one thread; crash_core::awake)
-    let _awake = crash_core::awake::KeepAwake::start();
     // wall time before the checkpoint (the time lost after it is not counted)
     let wall_before = resume.as_ref().map_or(0.0, |c| c.stats.wall_s);
     let mut s = match Session::start_with(input, resume, links, joiner, sink, opts) {

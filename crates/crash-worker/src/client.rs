@@ -441,13 +441,7 @@ fn serve(
                 if matches!(cmd, Command::Step { .. }) && !opts.step_delay.is_zero() {
                     std::thread::sleep(opts.step_delay);
                 }
-                // the other compute threads stay awake through the command's parallel
-                // regions (crash_core::awake; none with one thread)
-                let work = || {
-                    let _awake = crash_core::awake::KeepAwake::start();
-                    engine.handle(cmd)
-                };
-                (pool.install(work), shutdown)
+                (pool.install(|| engine.handle(cmd)), shutdown)
             }
             Err(e) => (Reply::Error(e.to_string()), None),
         };
