@@ -3,8 +3,10 @@
 //! coordinate bisection of their centroids; `parts` builds from such a cut one sub-body
 //! per part (owned nodes + a one-element halo) that steps bit-identically to the whole.
 
+mod contact;
 mod parts;
 
+pub use contact::{GroupSplit, SplitError, View, ViewRule};
 pub use parts::{Part, Split};
 
 use crate::body::BodyDef;
