@@ -150,7 +150,11 @@ impl ContactState {
 /// with self pairs for bodies that have self-contact on. Pairs of two kinematic bodies
 /// are left out: contact cannot move either (and such a pair may meet in several
 /// groups as read-only copies: it must not be counted twice).
-pub(crate) fn pairs_of(bodies: &[Body], cfg: &ContactConfig, bounds: &[(Vec3, Vec3)]) -> Vec<(usize, usize)> {
+pub(crate) fn pairs_of(
+    bodies: &[Body],
+    cfg: &ContactConfig,
+    bounds: &[(Vec3, Vec3)],
+) -> Vec<(usize, usize)> {
     let index: BTreeMap<u32, usize> = bodies
         .iter()
         .enumerate()

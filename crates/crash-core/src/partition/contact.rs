@@ -12,12 +12,14 @@
 //! (sorted pairs, first pass then second, node order). The part keeps the sums of its
 //! owned nodes and ignores the rest: a hit on a cut is computed by both parts.
 //!
-//! Reach: a hit needs its slave within c = (t_a + t_b)/2 of its segment. With G = c_max
-//! + 2 skin, the view's slaves are the nodes within G of the part's node box (every node
-//! that can hit a segment touching an owned node while no node moves more than `skin`),
-//! its segments those whose node box meets the part's box grown by 2G (every segment
-//! within c of such a slave). The view is rebuilt when some node has moved farther than
-//! the skin since it was built.
+//! Reach: a hit needs its slave within c = (t_a + t_b)/2 of its segment. With G = t_max
+//! + 2 skin (c <= t_max; each of two nodes moves at most `skin` between view builds),
+//! the view's slaves are the nodes within G of the node box of one of the part's
+//! elements (every node that can hit a segment touching an owned node, and the owned
+//! nodes), its segments those whose node box comes within 2G of one (every segment
+//! within c of such a slave, so the closest-segment choice is the whole body's). Then the
+//! ring. The view is rebuilt when some node has moved farther than the skin since it was
+//! built.
 //!
 //! Global figures: the candidate pairs (body boxes: min/max over the parts), the
 //! element critical steps (min over the parts) and the closing-speed step of each pair
@@ -31,10 +33,12 @@ use crate::clock::Clock;
 use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, pairs_of};
 use crate::contact::surface::Surface;
 use crate::contact::sweep::mean_velocity;
-use crate::contact::{body_bounds, check_moves, ContactConfig, ContactState, PenaltyKind};
 use crate::contact::SpeedRule;
+use crate::contact::{body_bounds, check_moves, ContactConfig, ContactState, PenaltyKind};
 use crate::error::{CoreError, Fault};
 use crate::Vec3;
+use rstar::primitives::Rectangle;
+use rstar::{RTree, AABB};
 use std::collections::BTreeMap;
 
 /// Why a split group cannot step: a fault of the run (as the whole group would have
@@ -208,12 +212,7 @@ impl GroupSplit {
 
     /// Contact forces into the parts' `f_contact`; `element_dt[i]` body i's element
     /// critical step. Returns each body's stable step.
-    fn contact(
-        &mut self,
-        element_dt: Vec<f64>,
-        h: f64,
-        step: u64,
-    ) -> Result<Vec<f64>, SplitError> {
+    fn contact(&mut self, element_dt: Vec<f64>, h: f64, step: u64) -> Result<Vec<f64>, SplitError> {
         let cfg = self.contact;
         for (s, b) in self.splits.iter().zip(&mut self.whole) {
             s.gather_into(b);
@@ -275,7 +274,10 @@ impl GroupSplit {
         }
         for (i, views) in self.views.iter_mut().enumerate() {
             for (q, view) in views.iter_mut().enumerate() {
-                for (vb, (&j, node)) in view.bodies.iter_mut().zip(view.index.iter().zip(&view.node))
+                for (vb, (&j, node)) in view
+                    .bodies
+                    .iter_mut()
+                    .zip(view.index.iter().zip(&view.node))
                 {
                     let (s, w) = (&mut vb.state, &self.whole[j].state);
                     for (k, &n) in node.iter().enumerate() {
@@ -336,9 +338,7 @@ impl GroupSplit {
         for (i, s) in self.splits.iter().enumerate() {
             let mut vs = Vec::with_capacity(s.parts.len());
             for p in &s.parts {
-                let x = &self.whole[i].state.x;
-                let pts: Vec<Vec3> = p.node.iter().map(|&n| x[n as usize]).collect();
-                let (lo, hi) = crate::mesh::bounds(&pts);
+                let boxes = element_boxes(&self.whole[i], &p.element);
                 let mut view = View {
                     bodies: Vec::new(),
                     index: Vec::new(),
@@ -352,7 +352,7 @@ impl GroupSplit {
                     if !b.def.contact {
                         continue;
                     }
-                    let (node, element) = select(b, (lo, hi), g, self.rule.ring);
+                    let (node, element) = select(b, &boxes, g, self.rule.ring);
                     if node.is_empty() {
                         continue;
                     }
@@ -411,15 +411,58 @@ impl GroupSplit {
         self.views
             .iter()
             .flatten()
-            .map(|v| v.state.stats().iter().map(|s| s.active_nodes).sum::<usize>())
+            .map(|v| {
+                v.state
+                    .stats()
+                    .iter()
+                    .map(|s| s.active_nodes)
+                    .sum::<usize>()
+            })
             .sum()
     }
 }
 
+/// Node boxes of the elements `element` of `b` at its current positions, in an R-tree.
+fn element_boxes(b: &Body, element: &[u32]) -> RTree<Rectangle<[f64; 3]>> {
+    let boxes = element
+        .iter()
+        .map(|&e| {
+            let (lo, hi) = node_box(b, e as usize);
+            Rectangle::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
+        })
+        .collect();
+    RTree::bulk_load(boxes)
+}
+
+/// Box of element e's nodes (triangles then quads) at the current positions.
+fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
+    let d = &b.def;
+    let nt = d.tris.len();
+    let ns: &[u32] = if e < nt {
+        &d.tris[e].nodes
+    } else {
+        &d.quads[e - nt].nodes
+    };
+    ns.iter().fold(crate::mesh::bounds(&[]), |(lo, hi), &n| {
+        let p = b.state.x[n as usize];
+        (lo.inf(&p), hi.sup(&p))
+    })
+}
+
+/// Does the box (lo, hi) grown by r meet one of the part's element boxes?
+fn near(part: &RTree<Rectangle<[f64; 3]>>, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
+    let q = AABB::from_corners(
+        [lo.x - r, lo.y - r, lo.z - r],
+        [hi.x + r, hi.y + r, hi.z + r],
+    );
+    part.locate_in_envelope_intersecting(&q).next().is_some()
+}
+
 /// The nodes and elements (whole-body indices, sorted) of body `b` in the contact view
-/// of a part whose nodes span (lo, hi): slaves within g of the box, segments whose node
-/// box meets the box grown by 2g, and (`ring`) every segment touching one of their nodes.
-fn select(b: &Body, (lo, hi): (Vec3, Vec3), g: f64, ring: bool) -> (Vec<u32>, Vec<u32>) {
+/// of a part whose element boxes are `part`: the slaves within g of an element box of
+/// the part, the segments whose node box comes within 2g of one, and (`ring`) every
+/// segment at one of their nodes.
+fn select(b: &Body, part: &RTree<Rectangle<[f64; 3]>>, g: f64, ring: bool) -> (Vec<u32>, Vec<u32>) {
     let d = &b.def;
     let x = &b.state.x;
     let nt = d.tris.len();
@@ -430,18 +473,11 @@ fn select(b: &Body, (lo, hi): (Vec3, Vec3), g: f64, ring: bool) -> (Vec<u32>, Ve
             &d.quads[e - nt].nodes
         }
     };
-    let within = |p: &Vec3, r: f64| (0..3).all(|k| p[k] >= lo[k] - r && p[k] <= hi[k] + r);
-    let mut keep = vec![false; x.len()];
-    for (n, p) in x.iter().enumerate() {
-        keep[n] = within(p, g);
-    }
-    let r2 = 2.0 * g;
-    let mut take = vec![false; d.element_count()];
-    for (e, t) in take.iter_mut().enumerate() {
-        let ns = nodes_of(e);
-        let (l, u) = crate::mesh::bounds(&ns.iter().map(|&n| x[n as usize]).collect::<Vec<_>>());
-        *t = (0..3).all(|k| u[k] >= lo[k] - r2 && l[k] <= hi[k] + r2);
-    }
+    let mut keep: Vec<bool> = x.iter().map(|p| near(part, (*p, *p), g)).collect();
+    let mut take: Vec<bool> = (0..d.element_count())
+        .map(|e| near(part, node_box(b, e), 2.0 * g))
+        .collect();
+    // every segment at a slave comes within 2g (it holds the slave): taken above
     for e in 0..take.len() {
         if take[e] {
             for &n in nodes_of(e) {
@@ -468,7 +504,9 @@ fn select(b: &Body, (lo, hi): (Vec3, Vec3), g: f64, ring: bool) -> (Vec<u32>, Ve
         }
     }
     let node = (0..x.len() as u32).filter(|&n| keep[n as usize]).collect();
-    let element = (0..take.len() as u32).filter(|&e| take[e as usize]).collect();
+    let element = (0..take.len() as u32)
+        .filter(|&e| take[e as usize])
+        .collect();
     (node, element)
 }
 
