@@ -128,6 +128,7 @@ fn split_run(bodies: &[Body], parts: &[usize], rule: ViewRule, end: f64) -> (Tra
         per_owned = per_owned.max((view - owned) as f64 / owned as f64);
     }
     t.v = com_velocity(&whole[0]);
+    println!("parts {parts:?}: contact views built {} times", g.builds);
     (t, pushes, per_owned)
 }
 

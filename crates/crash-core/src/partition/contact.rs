@@ -13,7 +13,8 @@
 //! owned nodes and ignores the rest: a hit on a cut is computed by both parts.
 //!
 //! Reach: a hit needs its slave within c = (t_a + t_b)/2 of its segment. With G = t_max
-//! + 2 skin (c <= t_max; each of two nodes moves at most `skin` between view builds),
+//! plus twice the skin (c <= t_max; each of two nodes moves at most `skin` between view
+//! builds),
 //! the view's slaves are the nodes within G of the node box of one of the part's
 //! elements (every node that can hit a segment touching an owned node, and the owned
 //! nodes), its segments those whose node box comes within 2G of one (every segment
@@ -317,11 +318,11 @@ impl GroupSplit {
     fn moved_beyond_skin(&self) -> bool {
         let s2 = self.skin * self.skin;
         self.whole.iter().zip(&self.reference).any(|(b, r)| {
-            b.state
-                .x
-                .iter()
-                .zip(r)
-                .any(|(x, r)| !((x - r).norm_squared() <= s2))
+            b.state.x.iter().zip(r).any(|(x, r)| {
+                // NaN counts as moved
+                let d2 = (x - r).norm_squared();
+                d2.is_nan() || d2 > s2
+            })
         })
     }
 
