@@ -101,7 +101,22 @@ fn whole_run(bodies: &[Body], end: f64) -> Trace {
 /// The same run with body i in `parts[i]` parts; also the pushes computed by the parts
 /// (summed over the steps), and the most view nodes beyond the owned per owned node.
 fn split_run(bodies: &[Body], parts: &[usize], rule: ViewRule, end: f64) -> (Trace, usize, f64) {
+    split_run_with_skin(bodies, parts, rule, end, None).0
+}
+
+/// `split_run` with the views' skin set (default: the search margin); also the number
+/// of view builds.
+fn split_run_with_skin(
+    bodies: &[Body],
+    parts: &[usize],
+    rule: ViewRule,
+    end: f64,
+    skin: Option<f64>,
+) -> ((Trace, usize, f64), u64) {
     let mut g = GroupSplit::new(bodies, parts, config(), Vec3::zeros(), rule).expect("split");
+    if let Some(skin) = skin {
+        g.skin = skin;
+    }
     let mut whole = bodies.to_vec();
     let mut dt = min_dt(&g.start().expect("start"));
     let mut clock = Clock::default();
@@ -129,7 +144,7 @@ fn split_run(bodies: &[Body], parts: &[usize], rule: ViewRule, end: f64) -> (Tra
     }
     t.v = com_velocity(&whole[0]);
     println!("parts {parts:?}: contact views built {} times", g.builds);
-    (t, pushes, per_owned)
+    ((t, pushes, per_owned), g.builds)
 }
 
 /// First step whose hash or stable step differs, if any.
@@ -218,6 +233,20 @@ fn coarse_spheres_closing_head_on_in_parts_step_bit_identically_to_the_whole_gro
     for k in 1..=4 {
         let (got, _, _) = split_run(&bodies, &[k, k], ViewRule::default(), HEAD_ON_END);
         assert_eq!(first_difference(&got, &want), None, "{k} parts each");
+        // a skin of 0.1 mm: the views are rebuilt many times through the contact
+        let ((got, _, _), builds) = split_run_with_skin(
+            &bodies,
+            &[k, k],
+            ViewRule::default(),
+            HEAD_ON_END,
+            Some(1e-4),
+        );
+        assert!(builds > 5, "{builds} builds");
+        assert_eq!(
+            first_difference(&got, &want),
+            None,
+            "{k} parts each, skin 0.1 mm"
+        );
     }
 }
 
