@@ -150,7 +150,11 @@ impl ContactState {
 /// with self pairs for bodies that have self-contact on. Pairs of two kinematic bodies
 /// are left out: contact cannot move either (and such a pair may meet in several
 /// groups as read-only copies: it must not be counted twice).
-fn pairs_of(bodies: &[Body], cfg: &ContactConfig, bounds: &[(Vec3, Vec3)]) -> Vec<(usize, usize)> {
+pub(crate) fn pairs_of(
+    bodies: &[Body],
+    cfg: &ContactConfig,
+    bounds: &[(Vec3, Vec3)],
+) -> Vec<(usize, usize)> {
     let index: BTreeMap<u32, usize> = bodies
         .iter()
         .enumerate()
@@ -211,7 +215,7 @@ pub fn body_bounds(bodies: &[Body]) -> Vec<(Vec3, Vec3)> {
 
 /// Element-form stable step of nodes of `nb` against segments of `surf`: a two-mass
 /// spring k between m* and the segment gives omega^2 <= 2 k / m*, so dt = sqrt(2 m*/k).
-fn element_form_dt(cfg: &ContactConfig, nb: &Surface, surf: &Surface) -> f64 {
+pub(crate) fn element_form_dt(cfg: &ContactConfig, nb: &Surface, surf: &Surface) -> f64 {
     let s = cfg.penalty_scale;
     let m_over_k = (nb.min_mass * surf.inv_k).min(surf.mass_per_k) / s;
     (2.0 * m_over_k).sqrt()
@@ -268,6 +272,33 @@ pub fn contact_forces(
     h: f64,
     step: u64,
 ) -> Result<Vec<f64>, Fault> {
+    contact_forces_given(bodies, cfg, state, element_dt, bounds, h, step, None)
+}
+
+/// The closing-speed step of a pair of different bodies (`SpeedRule::LimitDt`): a
+/// fraction of the mean thickness over the pair's closing speed, None when they do not
+/// close. `ua`, `ub`: the bodies' mean velocities (`mean_velocity`).
+pub(crate) fn closing_dt(a: &Body, b: &Body, ua: Vec3, ub: Vec3) -> Option<f64> {
+    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+    let v = closing_speed(a, b, ua, ub);
+    (v > 0.0).then(|| CLOSING_FRACTION * c / v)
+}
+
+/// `contact_forces`, with the closing-speed steps of the pairs (by body ids, None where
+/// they do not close) given by `closing` instead of computed from `bodies`: a body split
+/// into parts sees only a contact halo of the others, while the closing speed is a
+/// figure of the whole bodies (`partition::contact`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn contact_forces_given(
+    bodies: &mut [Body],
+    cfg: &ContactConfig,
+    state: &mut ContactState,
+    element_dt: &[f64],
+    bounds: &[(Vec3, Vec3)],
+    h: f64,
+    step: u64,
+    closing: Option<&BTreeMap<(u32, u32), Option<f64>>>,
+) -> Result<Vec<f64>, Fault> {
     let mut dt = vec![f64::INFINITY; bodies.len()];
     state.stats.clear();
     for b in bodies.iter_mut() {
@@ -301,7 +332,7 @@ pub fn contact_forces(
     for &k in &in_pairs {
         let skin = cfg.margin_for(&bodies[k]);
         ensure_surface(&mut state.surfaces, &bodies[k], skin);
-        if cfg.speed_rule == SpeedRule::LimitDt {
+        if cfg.speed_rule == SpeedRule::LimitDt && closing.is_none() {
             mean_v[k] = mean_velocity(&bodies[k]);
         }
     }
@@ -323,10 +354,9 @@ pub fn contact_forces(
             continue; // two kinematic bodies: contact cannot move anything
         }
         if cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
-            let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-            let v = closing_speed(a, b, mean_v[ia], mean_v[ib]);
-            if v > 0.0 {
-                let d = CLOSING_FRACTION * c / v;
+            let given = closing.map(|m| m.get(&(a.def.id, b.def.id)).copied().flatten());
+            let d = given.unwrap_or_else(|| closing_dt(a, b, mean_v[ia], mean_v[ib]));
+            if let Some(d) = d {
                 dt[ia] = dt[ia].min(d);
                 dt[ib] = dt[ib].min(d);
                 pair_dt = pair_dt.min(d);

@@ -1,10 +1,14 @@
 //! Domain decomposition of one body by elements (issue 16 point 2, first layer: in one
 //! process). `bisect` cuts a body's elements into k parts of balanced cost by recursive
 //! coordinate bisection of their centroids; `parts` builds from such a cut one sub-body
-//! per part (owned nodes + a one-element halo) that steps bit-identically to the whole.
+//! per part (owned nodes + a one-element halo) that steps bit-identically to the whole;
+//! `contact` (second layer) steps a group of such split bodies in contact, each part
+//! computing the hits on its owned nodes from a contact view of the whole group.
 
+mod contact;
 mod parts;
 
+pub use contact::{GroupSplit, SplitError, View, ViewRule};
 pub use parts::{Part, Split};
 
 use crate::body::BodyDef;

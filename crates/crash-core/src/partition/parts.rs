@@ -217,7 +217,12 @@ impl Split {
 
 /// The sub-body of the nodes `node` (owned first, the last `node.len() - owned` halo)
 /// and the elements `element` of `whole`.
-fn sub_body(whole: &Body, node: &[u32], element: &[u32], owned: usize) -> Result<Body, CoreError> {
+pub(super) fn sub_body(
+    whole: &Body,
+    node: &[u32],
+    element: &[u32],
+    owned: usize,
+) -> Result<Body, CoreError> {
     let (d, s) = (&*whole.def, &whole.state);
     let nt = d.tris.len();
     let mut local = vec![u32::MAX; d.node_count()];

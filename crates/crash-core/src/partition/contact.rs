@@ -1,0 +1,543 @@
+//! Contact across parts (issue 16 point 2, second layer: in one process). A group of
+//! bodies, each split into parts (`Split`), steps bit-identically to the whole group,
+//! contact included.
+//!
+//! Each part evaluates every hit that touches one of its owned nodes, as the slave or as
+//! a segment corner, on a *contact view*: a sub-body of every contact body of the group
+//! (its own included) holding the nodes and segments within reach of the part, plus
+//! one ring of segments around them so that every nodal normal a hit reads sums all of
+//! its segments. The view keeps the whole bodies' node and element order and masses, so
+//! the contact stage run on it (`contact_forces_given`) finds, for each node within
+//! reach, the same closest segment and force, and adds the pushes in the same order
+//! (sorted pairs, first pass then second, node order). The part keeps the sums of its
+//! owned nodes and ignores the rest: a hit on a cut is computed by both parts.
+//!
+//! Reach: a hit needs its slave within c = (t_a + t_b)/2 of its segment. With G = t_max
+//! plus twice the skin (c <= t_max; each of two nodes moves at most `skin` between view
+//! builds),
+//! the view's slaves are the nodes within G of the node box of one of the part's
+//! elements (every node that can hit a segment touching an owned node, and the owned
+//! nodes), its segments those whose node box comes within 2G of one (every segment
+//! within c of such a slave, so the closest-segment choice is the whole body's). Then the
+//! ring. The view is rebuilt when some node has moved farther than the skin since it was
+//! built.
+//!
+//! Global figures: the candidate pairs (body boxes: min/max over the parts), the
+//! element critical steps (min over the parts) and the closing-speed step of each pair
+//! (a mass-weighted mean velocity summed in node order over the whole body: an ordered
+//! reduction, here over the gathered velocities) are computed once per step for all
+//! parts, as the whole group's stage computes them.
+
+use super::{partition_body, Split};
+use crate::body::Body;
+use crate::clock::Clock;
+use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, pairs_of};
+use crate::contact::surface::Surface;
+use crate::contact::sweep::mean_velocity;
+use crate::contact::SpeedRule;
+use crate::contact::{body_bounds, check_moves, ContactConfig, ContactState, PenaltyKind};
+use crate::error::{CoreError, Fault};
+use crate::Vec3;
+use rstar::primitives::Rectangle;
+use rstar::{RTree, AABB};
+use std::collections::BTreeMap;
+
+/// Why a split group cannot step: a fault of the run (as the whole group would have
+/// it), or a contact view that cannot be built.
+#[derive(Debug)]
+pub enum SplitError {
+    Fault(Fault),
+    View(CoreError),
+}
+
+impl From<Fault> for SplitError {
+    fn from(f: Fault) -> Self {
+        Self::Fault(f)
+    }
+}
+
+impl From<CoreError> for SplitError {
+    fn from(e: CoreError) -> Self {
+        Self::View(e)
+    }
+}
+
+impl std::fmt::Display for SplitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Fault(x) => write!(f, "{x}"),
+            Self::View(x) => write!(f, "{x}"),
+        }
+    }
+}
+
+impl std::error::Error for SplitError {}
+
+/// What a contact view holds, for the tests that show each piece is needed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ViewRule {
+    /// One ring of segments around the view's nodes (complete nodal normals).
+    pub ring: bool,
+    /// Node masses copied from the whole bodies (else the view's own lumped masses,
+    /// partial where a node's elements are not all in the view).
+    pub whole_masses: bool,
+}
+
+impl Default for ViewRule {
+    fn default() -> Self {
+        Self {
+            ring: true,
+            whole_masses: true,
+        }
+    }
+}
+
+/// The contact view of one part.
+#[derive(Debug, Clone)]
+pub struct View {
+    /// One sub-body per contact body with nodes here, in the group's order.
+    pub bodies: Vec<Body>,
+    /// The group body of each view body.
+    pub index: Vec<usize>,
+    /// View node -> node of the whole body, per view body.
+    pub node: Vec<Vec<u32>>,
+    /// View element -> element of the whole body, per view body.
+    pub element: Vec<Vec<u32>>,
+    /// The part's own body among `bodies`, and the view index of each owned node.
+    own: usize,
+    owned_at: Vec<u32>,
+    state: ContactState,
+}
+
+/// A group of bodies, each split into parts, with contact between all of them.
+#[derive(Debug, Clone)]
+pub struct GroupSplit {
+    pub splits: Vec<Split>,
+    pub contact: ContactConfig,
+    pub gravity: Vec3,
+    pub rule: ViewRule,
+    /// The whole bodies: definitions, and x, v, w gathered from the parts each step
+    /// (for the global figures and to fill the views, what would cross the wire).
+    whole: Vec<Body>,
+    /// Whole-body surfaces (element-form stable step constants), per contact body.
+    surfaces: Vec<Option<Surface>>,
+    /// Views per body per part, and the positions they were built at.
+    pub views: Vec<Vec<View>>,
+    reference: Vec<Vec<Vec3>>,
+    /// Node motion allowed between view builds [m].
+    pub skin: f64,
+    /// View builds so far.
+    pub builds: u64,
+}
+
+impl GroupSplit {
+    /// Split body i of `bodies` into `parts[i]` parts (recursive coordinate bisection).
+    pub fn new(
+        bodies: &[Body],
+        parts: &[usize],
+        contact: ContactConfig,
+        gravity: Vec3,
+        rule: ViewRule,
+    ) -> Result<Self, CoreError> {
+        let splits = bodies
+            .iter()
+            .zip(parts)
+            .map(|(b, &k)| Split::new(b, &partition_body(&b.def, k)?))
+            .collect::<Result<Vec<_>, _>>()?;
+        let surfaces = bodies
+            .iter()
+            .map(|b| b.def.contact.then(|| Surface::new(b)))
+            .collect();
+        let skin = bodies
+            .iter()
+            .filter(|b| b.def.contact)
+            .map(|b| contact.margin_for(b))
+            .fold(0.0, f64::max);
+        Ok(Self {
+            splits,
+            contact,
+            gravity,
+            rule,
+            whole: bodies.to_vec(),
+            surfaces,
+            views: Vec::new(),
+            reference: Vec::new(),
+            skin,
+            builds: 0,
+        })
+    }
+
+    /// Start like `Group::start`: constraints, element forces and contact forces at the
+    /// initial configuration. Returns the stable step of each body (no safety factor).
+    pub fn start(&mut self) -> Result<Vec<f64>, SplitError> {
+        let dt = self
+            .splits
+            .iter_mut()
+            .map(|s| s.start())
+            .collect::<Result<Vec<_>, _>>()?;
+        self.contact(dt, 0.0, 0)
+    }
+
+    /// One step of length h from `clock` (the pipeline of `Group::advance`): integrate
+    /// the owned nodes, tunnelling guard, halo exchange, element forces, contact forces.
+    /// Returns the stable step of each body.
+    pub fn advance(&mut self, clock: &Clock, h: f64) -> Result<Vec<f64>, SplitError> {
+        let step = clock.after(h).step;
+        let mut moves = Vec::with_capacity(self.splits.len());
+        for s in &mut self.splits {
+            let sums = s.integrate(clock, h, self.gravity)?;
+            // the largest move over the parts (its node named in the whole body)
+            let m = s
+                .parts
+                .iter()
+                .zip(&sums)
+                .map(|(p, n)| (n.max_move, p.node[n.max_move_node] as usize))
+                .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
+            moves.push(m);
+        }
+        check_moves(&self.whole, &self.contact, &moves, h, step)?;
+        let mut dt = Vec::with_capacity(self.splits.len());
+        for s in &mut self.splits {
+            s.exchange();
+            dt.push(s.forces(h, step)?);
+        }
+        self.contact(dt, h, step)
+    }
+
+    /// Write every body's owned x, v, w into `out` (the whole bodies).
+    pub fn gather_into(&self, out: &mut [Body]) {
+        for (s, b) in self.splits.iter().zip(out) {
+            s.gather_into(b);
+        }
+    }
+
+    /// Contact forces into the parts' `f_contact`; `element_dt[i]` body i's element
+    /// critical step. Returns each body's stable step.
+    fn contact(&mut self, element_dt: Vec<f64>, h: f64, step: u64) -> Result<Vec<f64>, SplitError> {
+        let cfg = self.contact;
+        for (s, b) in self.splits.iter().zip(&mut self.whole) {
+            s.gather_into(b);
+        }
+        let mut dt = element_dt.clone();
+        if !cfg.enabled {
+            for p in self.splits.iter_mut().flat_map(|s| &mut s.parts) {
+                p.body.state.f_contact.clear();
+            }
+            return Ok(dt);
+        }
+        // global figures: body boxes (min/max over the parts' owned nodes), pairs, the
+        // closing-speed step of each pair, each body's contact stable step
+        let bounds: Vec<(Vec3, Vec3)> = self
+            .splits
+            .iter()
+            .zip(&self.whole)
+            .map(|(s, b)| {
+                if !b.def.contact {
+                    return (Vec3::zeros(), Vec3::zeros());
+                }
+                s.parts
+                    .iter()
+                    .map(|p| crate::mesh::bounds(&p.body.state.x[..p.owned]))
+                    .fold(crate::mesh::bounds(&[]), |(lo, hi), (l, u)| {
+                        (lo.inf(&l), hi.sup(&u))
+                    })
+            })
+            .collect();
+        let pairs = pairs_of(&self.whole, &cfg, &bounds);
+        let mut mean_v: BTreeMap<usize, Vec3> = BTreeMap::new();
+        let mut closing = BTreeMap::new();
+        for &(ia, ib) in &pairs {
+            let (a, b) = (&self.whole[ia], &self.whole[ib]);
+            if cfg.penalty == PenaltyKind::Element {
+                if let (Some(sa), Some(sb)) = (&self.surfaces[ia], &self.surfaces[ib]) {
+                    let d = element_form_dt(&cfg, sa, sb).min(element_form_dt(&cfg, sb, sa));
+                    dt[ia] = dt[ia].min(d);
+                    dt[ib] = dt[ib].min(d);
+                }
+            }
+            let pair_dt = element_dt[ia].min(element_dt[ib]);
+            if cfg.penalty == PenaltyKind::Soft && !(pair_dt.is_finite() && pair_dt > 0.0) {
+                continue;
+            }
+            if cfg.speed_rule == SpeedRule::LimitDt && ia != ib {
+                let ua = *mean_v.entry(ia).or_insert_with(|| mean_velocity(a));
+                let ub = *mean_v.entry(ib).or_insert_with(|| mean_velocity(b));
+                let d = closing_dt(a, b, ua, ub);
+                if let Some(d) = d {
+                    dt[ia] = dt[ia].min(d);
+                    dt[ib] = dt[ib].min(d);
+                }
+                closing.insert((a.def.id, b.def.id), d);
+            }
+        }
+        if self.views.is_empty() || self.moved_beyond_skin() {
+            self.build_views()?;
+        }
+        for (i, views) in self.views.iter_mut().enumerate() {
+            for (q, view) in views.iter_mut().enumerate() {
+                for (vb, (&j, node)) in view
+                    .bodies
+                    .iter_mut()
+                    .zip(view.index.iter().zip(&view.node))
+                {
+                    let (s, w) = (&mut vb.state, &self.whole[j].state);
+                    for (k, &n) in node.iter().enumerate() {
+                        let n = n as usize;
+                        (s.x[k], s.v[k], s.w[k]) = (w.x[n], w.v[n], w.w[n]);
+                    }
+                }
+                let edt: Vec<f64> = view.index.iter().map(|&j| element_dt[j]).collect();
+                let vbounds = body_bounds(&view.bodies);
+                contact_forces_given(
+                    &mut view.bodies,
+                    &cfg,
+                    &mut view.state,
+                    &edt,
+                    &vbounds,
+                    h,
+                    step,
+                    Some(&closing),
+                )
+                .map_err(|f| in_whole(f, view))?;
+                let part = &mut self.splits[i].parts[q];
+                let fc = &mut part.body.state.f_contact;
+                fc.clear();
+                if !part.body.def.contact {
+                    continue;
+                }
+                fc.resize(part.node.len(), Vec3::zeros());
+                let own = &view.bodies[view.own].state.f_contact;
+                for (k, &at) in view.owned_at.iter().enumerate() {
+                    fc[k] = own[at as usize];
+                }
+            }
+        }
+        Ok(dt)
+    }
+
+    fn moved_beyond_skin(&self) -> bool {
+        let s2 = self.skin * self.skin;
+        self.whole.iter().zip(&self.reference).any(|(b, r)| {
+            b.state.x.iter().zip(r).any(|(x, r)| {
+                // NaN counts as moved
+                let d2 = (x - r).norm_squared();
+                d2.is_nan() || d2 > s2
+            })
+        })
+    }
+
+    /// Build the contact view of every part at the current (gathered) positions.
+    fn build_views(&mut self) -> Result<(), CoreError> {
+        let tmax = self
+            .whole
+            .iter()
+            .filter(|b| b.def.contact)
+            .map(|b| b.def.section.thickness)
+            .fold(0.0, f64::max);
+        let g = tmax + 2.0 * self.skin;
+        let mut views = Vec::with_capacity(self.splits.len());
+        for (i, s) in self.splits.iter().enumerate() {
+            let mut vs = Vec::with_capacity(s.parts.len());
+            for p in &s.parts {
+                let boxes = element_boxes(&self.whole[i], &p.element);
+                let mut view = View {
+                    bodies: Vec::new(),
+                    index: Vec::new(),
+                    node: Vec::new(),
+                    element: Vec::new(),
+                    own: 0,
+                    owned_at: Vec::new(),
+                    state: ContactState::default(),
+                };
+                for (j, b) in self.whole.iter().enumerate() {
+                    if !b.def.contact {
+                        continue;
+                    }
+                    let (node, element) = select(b, &boxes, g, self.rule.ring);
+                    if node.is_empty() {
+                        continue;
+                    }
+                    let mut vb = super::parts::sub_body(b, &node, &element, node.len())?;
+                    if !self.rule.whole_masses {
+                        let m = crate::mesh::Mesh {
+                            nodes: vb.def.x0.clone(),
+                            tris: vb.def.tris.iter().map(|e| e.nodes).collect(),
+                            quads: vb.def.quads.iter().map(|e| e.nodes).collect(),
+                        };
+                        let own = Body::new(b.def.id, &b.def.name, &m, b.def.section, b.def.stab)?;
+                        vb.def_mut().mass = own.def.mass.clone();
+                    }
+                    if j == i {
+                        view.own = view.bodies.len();
+                        view.owned_at = p.node[..p.owned]
+                            .iter()
+                            .map(|n| node.binary_search(n).map(|k| k as u32))
+                            .collect::<Result<_, _>>()
+                            .map_err(|_| CoreError::Other {
+                                body: b.def.name.clone(),
+                                what: "an owned node is not in its part's contact view".into(),
+                            })?;
+                    }
+                    view.bodies.push(vb);
+                    view.index.push(j);
+                    view.node.push(node);
+                    view.element.push(element);
+                }
+                vs.push(view);
+            }
+            views.push(vs);
+        }
+        self.views = views;
+        self.reference = self.whole.iter().map(|b| b.state.x.clone()).collect();
+        self.builds += 1;
+        Ok(())
+    }
+
+    /// Nodes in the contact views summed over the parts (every body's), and the parts'
+    /// owned nodes.
+    pub fn view_nodes(&self) -> (usize, usize) {
+        let nodes = self
+            .views
+            .iter()
+            .flatten()
+            .map(|v| v.node.iter().map(Vec::len).sum::<usize>())
+            .sum();
+        let owned = self.splits.iter().map(|s| s.node_counts().0).sum();
+        (nodes, owned)
+    }
+
+    /// Pushes computed by the parts in the last pass, summed over the parts (those that
+    /// touch no owned node of their part are computed and dropped).
+    pub fn pushes(&self) -> usize {
+        self.views
+            .iter()
+            .flatten()
+            .map(|v| {
+                v.state
+                    .stats()
+                    .iter()
+                    .map(|s| s.active_nodes)
+                    .sum::<usize>()
+            })
+            .sum()
+    }
+}
+
+/// Node boxes of the elements `element` of `b` at its current positions, in an R-tree.
+fn element_boxes(b: &Body, element: &[u32]) -> RTree<Rectangle<[f64; 3]>> {
+    let boxes = element
+        .iter()
+        .map(|&e| {
+            let (lo, hi) = node_box(b, e as usize);
+            Rectangle::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
+        })
+        .collect();
+    RTree::bulk_load(boxes)
+}
+
+/// Box of element e's nodes (triangles then quads) at the current positions.
+fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
+    let d = &b.def;
+    let nt = d.tris.len();
+    let ns: &[u32] = if e < nt {
+        &d.tris[e].nodes
+    } else {
+        &d.quads[e - nt].nodes
+    };
+    ns.iter().fold(crate::mesh::bounds(&[]), |(lo, hi), &n| {
+        let p = b.state.x[n as usize];
+        (lo.inf(&p), hi.sup(&p))
+    })
+}
+
+/// Does the box (lo, hi) grown by r meet one of the part's element boxes?
+fn near(part: &RTree<Rectangle<[f64; 3]>>, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
+    let q = AABB::from_corners(
+        [lo.x - r, lo.y - r, lo.z - r],
+        [hi.x + r, hi.y + r, hi.z + r],
+    );
+    part.locate_in_envelope_intersecting(&q).next().is_some()
+}
+
+/// The nodes and elements (whole-body indices, sorted) of body `b` in the contact view
+/// of a part whose element boxes are `part`: the slaves within g of an element box of
+/// the part, the segments whose node box comes within 2g of one, and (`ring`) every
+/// segment at one of their nodes.
+fn select(b: &Body, part: &RTree<Rectangle<[f64; 3]>>, g: f64, ring: bool) -> (Vec<u32>, Vec<u32>) {
+    let d = &b.def;
+    let x = &b.state.x;
+    let nt = d.tris.len();
+    let nodes_of = |e: usize| -> &[u32] {
+        if e < nt {
+            &d.tris[e].nodes
+        } else {
+            &d.quads[e - nt].nodes
+        }
+    };
+    let mut keep: Vec<bool> = x.iter().map(|p| near(part, (*p, *p), g)).collect();
+    let mut take: Vec<bool> = (0..d.element_count())
+        .map(|e| near(part, node_box(b, e), 2.0 * g))
+        .collect();
+    // every segment at a slave comes within 2g (it holds the slave): taken above
+    for e in 0..take.len() {
+        if take[e] {
+            for &n in nodes_of(e) {
+                keep[n as usize] = true;
+            }
+        }
+    }
+    // the ring: every segment at a node of the view, so that each normal read sums all
+    // of its node's segments (the slaves' segments are taken already: their boxes hold
+    // the slave, within g of the part's box)
+    if ring {
+        let core = keep.clone();
+        for (e, t) in take.iter_mut().enumerate() {
+            if nodes_of(e).iter().any(|&n| core[n as usize]) {
+                *t = true;
+            }
+        }
+        for e in 0..take.len() {
+            if take[e] {
+                for &n in nodes_of(e) {
+                    keep[n as usize] = true;
+                }
+            }
+        }
+    }
+    let node = (0..x.len() as u32).filter(|&n| keep[n as usize]).collect();
+    let element = (0..take.len() as u32)
+        .filter(|&e| take[e as usize])
+        .collect();
+    (node, element)
+}
+
+/// A fault found on a view, with the whole body's node and segment numbers.
+fn in_whole(f: Fault, view: &View) -> Fault {
+    match f {
+        Fault::PassThrough {
+            step,
+            body,
+            body_name,
+            node,
+            other,
+            other_name,
+            segment,
+            closing_speed,
+        } => {
+            let at = |id: u32| view.bodies.iter().position(|b| b.def.id == id);
+            let node = at(body).map_or(node, |k| view.node[k][node] as usize);
+            let segment = at(other).map_or(segment, |k| view.element[k][segment] as usize);
+            Fault::PassThrough {
+                step,
+                body,
+                body_name,
+                node,
+                other,
+                other_name,
+                segment,
+                closing_speed,
+            }
+        }
+        f => f,
+    }
+}
