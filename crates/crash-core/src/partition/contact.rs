@@ -44,34 +44,13 @@ use std::collections::BTreeMap;
 
 /// Why a split group cannot step: a fault of the run (as the whole group would have
 /// it), or a contact view that cannot be built.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum SplitError {
-    Fault(Fault),
-    View(CoreError),
+    #[error("{0}")]
+    Fault(#[from] Fault),
+    #[error("{0}")]
+    View(#[from] CoreError),
 }
-
-impl From<Fault> for SplitError {
-    fn from(f: Fault) -> Self {
-        Self::Fault(f)
-    }
-}
-
-impl From<CoreError> for SplitError {
-    fn from(e: CoreError) -> Self {
-        Self::View(e)
-    }
-}
-
-impl std::fmt::Display for SplitError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Fault(x) => write!(f, "{x}"),
-            Self::View(x) => write!(f, "{x}"),
-        }
-    }
-}
-
-impl std::error::Error for SplitError {}
 
 /// What a contact view holds, for the tests that show each piece is needed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
