@@ -8,7 +8,9 @@
 //! `rotary_inertia_probe rollup F [ny] [moment factor] [end]`: the roll-up cantilever of
 //! tests/cantilever.rs (40 x ny quads, default 2; end moment factor x 2 pi E I / L,
 //! default 1, ramped over 0.6 s; end time default 1 s); prints the tip's distance to the
-//! clamped end, the kinetic and hourglass energy every 0.1 s.
+//! clamped end, the kinetic and hourglass energy and the energy-balance error every 0.1 s.
+//! Ablations (docs/theory.md section 8): env HG_M, HG_W, HG_R scale the membrane, w and
+//! rotational hourglass coefficients, SAFETY sets the step's safety factor.
 
 use crash_core::body::dof;
 use crash_core::shapes::{plate, ElementKind};
@@ -67,7 +69,18 @@ fn rollup(f: f64, ny: usize, factor: f64, end: f64) {
     );
     let mat = Material::new(7800.0, e, 0.0, 0.0).expect("valid");
     let sec = Section::new(mat, t);
-    let mut b = Body::new(0, "strip", &m, sec, Stabilization::default()).expect("valid body");
+    // Ablation knobs (env): HG_M, HG_W, HG_R scale the hourglass coefficients, SAFETY the step.
+    let knob = |k: &str, d: f64| {
+        std::env::var(k)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(d)
+    };
+    let mut stab = Stabilization::default();
+    stab.hourglass_membrane *= knob("HG_M", 1.0);
+    stab.hourglass_w *= knob("HG_W", 1.0);
+    stab.hourglass_rotation *= knob("HG_R", 1.0);
+    let mut b = Body::new(0, "strip", &m, sec, stab).expect("valid body");
     set_quad_factor(&mut b, f);
     b.def_mut().mass_damping = 2.0 * omega1;
     let at = |b: &Body, x: f64| -> Vec<usize> {
@@ -94,6 +107,7 @@ fn rollup(f: f64, ny: usize, factor: f64, end: f64) {
     }
     let cfg = RunConfig {
         end_time: end,
+        safety: knob("SAFETY", RunConfig::default().safety),
         ..Default::default()
     };
     let mut run = Run::new(Group::new(vec![b], Vec3::zeros()), cfg).expect("start");
@@ -104,10 +118,11 @@ fn rollup(f: f64, ny: usize, factor: f64, end: f64) {
         let gap = (p - Vec3::new(0.0, w / 2.0, 0.0)).norm();
         let en = &b.state.energy;
         println!(
-            "rollup, f = {f}, 40 x {ny}, moment x {factor}: t {:.2} s, tip {gap:.4} m from the root, kinetic {:.3e} J, hourglass {:.3e} J",
+            "rollup, f = {f}, 40 x {ny}, moment x {factor}: t {:.2} s, tip {gap:.4} m from the root, kinetic {:.3e} J, hourglass {:.3e} J, balance error {:.1e}",
             r.time(),
             en.kinetic,
-            en.hourglass
+            en.hourglass,
+            r.ledger.max_error()
         );
     };
     let outcome = run.run(|r| {
