@@ -125,12 +125,27 @@ fn rollup(f: f64, ny: usize, factor: f64, end: f64) {
             r.ledger.max_error()
         );
     };
-    let outcome = run.run(|r| {
-        if r.time() >= next - 1e-12 {
-            next += 0.1;
-            report(r);
+    // FOLLOWER=1: the moment's axis follows the tip's width line (a follower moment; the
+    // dead one keeps the global y axis, the same only while the roll-up stays planar).
+    let follower = knob("FOLLOWER", 0.0) > 0.0;
+    let (lo, hi) = (tip[0], tip[last]);
+    let outcome = (|| -> Result<(), crash_core::Fault> {
+        while !run.finished() {
+            run.step()?;
+            if follower {
+                let body = &mut run.group.bodies[0];
+                let axis = (body.state.x[hi] - body.state.x[lo]).normalize();
+                for ld in body.def_mut().loads.iter_mut() {
+                    ld.moment = -ld.moment.norm() * axis;
+                }
+            }
+            if run.time() >= next - 1e-12 {
+                next += 0.1;
+                report(&run);
+            }
         }
-    });
+        Ok(())
+    })();
     if let Err(fault) = outcome {
         println!("rollup, f = {f}, 40 x {ny}, moment x {factor}: stopped: {fault}");
     }
