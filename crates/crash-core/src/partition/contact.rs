@@ -491,32 +491,22 @@ fn select(b: &Body, part: &RTree<Rectangle<[f64; 3]>>, g: f64, ring: bool) -> (V
 }
 
 /// A fault found on a view, with the whole body's node and segment numbers.
-fn in_whole(f: Fault, view: &View) -> Fault {
-    match f {
-        Fault::PassThrough {
-            step,
-            body,
-            body_name,
-            node,
-            other,
-            other_name,
-            segment,
-            closing_speed,
-        } => {
-            let at = |id: u32| view.bodies.iter().position(|b| b.def.id == id);
-            let node = at(body).map_or(node, |k| view.node[k][node] as usize);
-            let segment = at(other).map_or(segment, |k| view.element[k][segment] as usize);
-            Fault::PassThrough {
-                step,
-                body,
-                body_name,
-                node,
-                other,
-                other_name,
-                segment,
-                closing_speed,
-            }
+fn in_whole(mut f: Fault, view: &View) -> Fault {
+    if let Fault::PassThrough {
+        body,
+        node,
+        other,
+        segment,
+        ..
+    } = &mut f
+    {
+        let at = |id: u32| view.bodies.iter().position(|b| b.def.id == id);
+        if let Some(k) = at(*body) {
+            *node = view.node[k][*node] as usize;
         }
-        f => f,
+        if let Some(k) = at(*other) {
+            *segment = view.element[k][*segment] as usize;
+        }
     }
+    f
 }
