@@ -260,6 +260,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(t) = args.threads {
         pool = pool.num_threads(t.max(1));
+        if let Some(note) = crash_core::threads::oversubscription(t, crash_core::threads::cores()) {
+            eprintln!("crash: note: {note}");
+        }
     }
     let pool = pool.build().context("cannot start the thread pool")?;
     let files = match &restart {

@@ -27,6 +27,7 @@ pub mod output;
 pub mod partition;
 pub mod probe;
 pub mod shapes;
+pub mod threads;
 
 /// 3-vector of f64 (nalgebra).
 pub type Vec3 = nalgebra::Vector3<f64>;

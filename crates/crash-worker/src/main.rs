@@ -92,9 +92,11 @@ fn main() -> ExitCode {
         eprintln!("crash-worker: error: --master URL is required");
         return ExitCode::FAILURE;
     };
-    let threads = args
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let threads = args.threads.unwrap_or_else(crash_core::threads::cores);
+    if let Some(note) = crash_core::threads::oversubscription(threads, crash_core::threads::cores())
+    {
+        eprintln!("crash-worker: note: {note}");
+    }
     eprintln!(
         "crash-worker: {} element kernels, {threads} threads",
         crash_core::element::simd::path_name()
