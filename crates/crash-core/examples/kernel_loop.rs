@@ -13,7 +13,55 @@
 use crash_core::shapes::{plate, ElementKind};
 use crash_core::{Body, Group, Material, Section, Stabilization, Vec3};
 
+/// Diagnostic: flush denormals to zero (FTZ + DAZ in MXCSR) on every pool thread.
+#[allow(unsafe_code, deprecated)]
+fn set_ftz() {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: changes only this thread's floating-point control word.
+    unsafe {
+        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
+        _mm_setcsr(_mm_getcsr() | 0x8040);
+    }
+}
+
+/// Diagnostic: clear the sticky exception flags of MXCSR.
+#[allow(unsafe_code, deprecated)]
+fn clear_flags() {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: changes only this thread's floating-point status word.
+    unsafe {
+        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
+        _mm_setcsr(_mm_getcsr() & !0x3f);
+    }
+}
+
+/// Diagnostic: the sticky exception flags (IE DE ZE OE UE PE) of this thread.
+#[allow(unsafe_code, deprecated)]
+fn read_flags() -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: reads this thread's floating-point status word.
+    unsafe {
+        std::arch::x86_64::_mm_getcsr() & 0x3f
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    0
+}
+
 fn main() {
+    if std::env::var("CRASH_FTZ").is_ok_and(|v| v == "1") {
+        set_ftz();
+        rayon::ThreadPoolBuilder::new()
+            .start_handler(|_| set_ftz())
+            .build_global()
+            .expect("pool");
+    }
+    let flags = std::env::var("CRASH_FTZ").is_ok_and(|v| v == "flags");
+    if flags {
+        rayon::ThreadPoolBuilder::new()
+            .start_handler(|_| clear_flags())
+            .build_global()
+            .expect("pool");
+    }
     let mut args = std::env::args().skip(1);
     let what = args.next().unwrap_or_default();
     let kind = if what.starts_with("quad") {
@@ -64,6 +112,10 @@ fn main() {
                 .internal;
         }
         fastest = fastest.min(t.elapsed().as_nanos() as f64);
+    }
+    if flags {
+        let f = rayon::broadcast(|_| read_flags());
+        println!("MXCSR flags per pool thread (IE=1 DE=2 ZE=4 OE=8 UE=16 PE=32): {f:?}");
     }
     let ns = start.elapsed().as_nanos() as f64 / (cycles as f64 * n);
     println!(
