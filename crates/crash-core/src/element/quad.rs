@@ -48,6 +48,8 @@ pub struct QuadElem {
 }
 
 impl QuadElem {
+    /// Reference data (once per element at input, outside the SIMD kernels).
+    #[allow(clippy::disallowed_methods)]
     pub fn new(nodes: [u32; 4], x: &[Vec3; 4], sec: &Section, stab: &Stabilization) -> Self {
         let (fr, c) = Frame::quad(x);
         let xl = x.map(|p| (p - c).dot(&fr.e1));
