@@ -9,6 +9,10 @@
 //! Besides the mean it prints the fastest single cycle: on a loaded machine a cycle
 //! (10 000 elements, well under a scheduler time slice) that ran undisturbed is the
 //! least noisy time figure available without hardware counters.
+//!
+//! Diagnostics (docs/performance.md, "The quad kernel on AMD Zen 4"): `CRASH_FTZ=1` sets
+//! flush-to-zero and denormals-are-zero on every thread; `CRASH_FTZ=flags` clears the
+//! MXCSR exception flags on the pool threads and prints them after the run.
 
 use crash_core::shapes::{plate, ElementKind};
 use crash_core::{Body, Group, Material, Section, Stabilization, Vec3};
@@ -48,17 +52,15 @@ fn read_flags() -> u32 {
 }
 
 fn main() {
-    if std::env::var("CRASH_FTZ").is_ok_and(|v| v == "1") {
-        set_ftz();
+    // CRASH_FTZ=1: flush denormals to zero (does the time change?); CRASH_FTZ=flags:
+    // report which floating-point exceptions the element loops raised (denormal, NaN)
+    let ftz = std::env::var("CRASH_FTZ").unwrap_or_default();
+    let flags = ftz == "flags";
+    if ftz == "1" || flags {
+        let handler = if flags { clear_flags } else { set_ftz };
+        handler();
         rayon::ThreadPoolBuilder::new()
-            .start_handler(|_| set_ftz())
-            .build_global()
-            .expect("pool");
-    }
-    let flags = std::env::var("CRASH_FTZ").is_ok_and(|v| v == "flags");
-    if flags {
-        rayon::ThreadPoolBuilder::new()
-            .start_handler(|_| clear_flags())
+            .start_handler(move |_| handler())
             .build_global()
             .expect("pool");
     }
