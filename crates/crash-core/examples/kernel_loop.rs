@@ -9,11 +9,61 @@
 //! Besides the mean it prints the fastest single cycle: on a loaded machine a cycle
 //! (10 000 elements, well under a scheduler time slice) that ran undisturbed is the
 //! least noisy time figure available without hardware counters.
+//!
+//! Diagnostics (docs/performance.md, "The quad kernel on AMD Zen 4"): `CRASH_FTZ=1` sets
+//! flush-to-zero and denormals-are-zero on every thread; `CRASH_FTZ=flags` clears the
+//! MXCSR exception flags on the pool threads and prints them after the run.
 
 use crash_core::shapes::{plate, ElementKind};
 use crash_core::{Body, Group, Material, Section, Stabilization, Vec3};
 
+/// Diagnostic: flush denormals to zero (FTZ + DAZ in MXCSR) on every pool thread.
+#[allow(unsafe_code, deprecated)]
+fn set_ftz() {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: changes only this thread's floating-point control word.
+    unsafe {
+        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
+        _mm_setcsr(_mm_getcsr() | 0x8040);
+    }
+}
+
+/// Diagnostic: clear the sticky exception flags of MXCSR.
+#[allow(unsafe_code, deprecated)]
+fn clear_flags() {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: changes only this thread's floating-point status word.
+    unsafe {
+        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
+        _mm_setcsr(_mm_getcsr() & !0x3f);
+    }
+}
+
+/// Diagnostic: the sticky exception flags (IE DE ZE OE UE PE) of this thread.
+#[allow(unsafe_code, deprecated)]
+fn read_flags() -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: reads this thread's floating-point status word.
+    unsafe {
+        std::arch::x86_64::_mm_getcsr() & 0x3f
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    0
+}
+
 fn main() {
+    // CRASH_FTZ=1: flush denormals to zero (does the time change?); CRASH_FTZ=flags:
+    // report which floating-point exceptions the element loops raised (denormal, NaN)
+    let ftz = std::env::var("CRASH_FTZ").unwrap_or_default();
+    let flags = ftz == "flags";
+    if ftz == "1" || flags {
+        let handler = if flags { clear_flags } else { set_ftz };
+        handler();
+        rayon::ThreadPoolBuilder::new()
+            .start_handler(move |_| handler())
+            .build_global()
+            .expect("pool");
+    }
     let mut args = std::env::args().skip(1);
     let what = args.next().unwrap_or_default();
     let kind = if what.starts_with("quad") {
@@ -64,6 +114,10 @@ fn main() {
                 .internal;
         }
         fastest = fastest.min(t.elapsed().as_nanos() as f64);
+    }
+    if flags {
+        let f = rayon::broadcast(|_| read_flags());
+        println!("MXCSR flags per pool thread (IE=1 DE=2 ZE=4 OE=8 UE=16 PE=32): {f:?}");
     }
     let ns = start.elapsed().as_nanos() as f64 / (cycles as f64 * n);
     println!(

@@ -48,6 +48,8 @@ pub struct QuadElem {
 }
 
 impl QuadElem {
+    /// Reference data (once per element at input, outside the SIMD kernels).
+    #[allow(clippy::disallowed_methods)]
     pub fn new(nodes: [u32; 4], x: &[Vec3; 4], sec: &Section, stab: &Stabilization) -> Self {
         let (fr, c) = Frame::quad(x);
         let xl = x.map(|p| (p - c).dot(&fr.e1));
@@ -116,18 +118,30 @@ fn corner_terms<S: Real>(
     bx: &[S; 2],
     by: &[S; 2],
 ) -> [V3<S>; 2] {
-    std::array::from_fn(|k| {
-        p1.scale(e.bx0[k])
-            .plus(p2.scale(e.by0[k]))
-            .plus(bb.scale(bx[k]))
-            .plus(cc.scale(by[k]))
-    })
+    // written out, no closure: `std::array::from_fn`'s closure was not inlined into the
+    // `#[target_feature]` entry point, so each vector operation in it became a call
+    // passing vectors through memory (docs/performance.md, "The quad kernel on AMD
+    // Zen 4")
+    [
+        p1.scale(e.bx0[0])
+            .plus(p2.scale(e.by0[0]))
+            .plus(bb.scale(bx[0]))
+            .plus(cc.scale(by[0])),
+        p1.scale(e.bx0[1])
+            .plus(p2.scale(e.by0[1]))
+            .plus(bb.scale(bx[1]))
+            .plus(cc.scale(by[1])),
+    ]
 }
 
 /// u_3, u_4 of the nodal moments (u_1 = -u_3, u_2 = -u_4) from the bending rows mb, mc.
 #[inline(always)]
 fn moment_terms<S: Real>(mb: V3<S>, mc: V3<S>, bx: &[S; 2], by: &[S; 2]) -> [V3<S>; 2] {
-    std::array::from_fn(|k| mb.scale(bx[k]).plus(mc.scale(by[k])))
+    // written out, not `std::array::from_fn` (see `corner_terms`)
+    [
+        mb.scale(bx[0]).plus(mc.scale(by[0])),
+        mb.scale(bx[1]).plus(mc.scale(by[1])),
+    ]
 }
 
 /// Internal forces of a quad: writes its four slots (global force, moment) to `out`

@@ -532,10 +532,27 @@ mod x86 {
     unsafe fn quarter8(c: &[Avx8; 6], k: usize) -> [__m256d; 6] {
         // SAFETY: called only from Avx8 methods (see the module documentation).
         unsafe {
+            // written out, no `array::map` closure: a closure outside the
+            // `#[target_feature]` entry point may not inline the intrinsics (quad.rs,
+            // `corner_terms`)
             if k == 0 {
-                c.map(|v| _mm512_castpd512_pd256(v.0))
+                [
+                    _mm512_castpd512_pd256(c[0].0),
+                    _mm512_castpd512_pd256(c[1].0),
+                    _mm512_castpd512_pd256(c[2].0),
+                    _mm512_castpd512_pd256(c[3].0),
+                    _mm512_castpd512_pd256(c[4].0),
+                    _mm512_castpd512_pd256(c[5].0),
+                ]
             } else {
-                c.map(|v| _mm512_extractf64x4_pd::<1>(v.0))
+                [
+                    _mm512_extractf64x4_pd::<1>(c[0].0),
+                    _mm512_extractf64x4_pd::<1>(c[1].0),
+                    _mm512_extractf64x4_pd::<1>(c[2].0),
+                    _mm512_extractf64x4_pd::<1>(c[3].0),
+                    _mm512_extractf64x4_pd::<1>(c[4].0),
+                    _mm512_extractf64x4_pd::<1>(c[5].0),
+                ]
             }
         }
     }
