@@ -6,8 +6,10 @@
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_master::{CostModel, RecordSink, RunInput, RunOptions, SplitMode};
+use crash_tests::procs::{master, out_dir, worker};
 use crash_tests::runs::{driver_reference, input, input_of, run_local};
 use std::path::PathBuf;
+use std::time::Duration;
 
 fn opts(split: SplitMode) -> RunOptions {
     RunOptions {
@@ -43,6 +45,37 @@ fn the_showcase_split_over_two_workers_has_the_single_process_state() {
     let (hash, splits) = split_run(&inp, 2, SplitMode::Auto);
     assert!(splits >= 1, "the showcase's one group must be split");
     assert_eq!(format!("{hash:016x}"), format!("{reference:016x}"));
+}
+
+/// `crash-master --split auto` over 2 `crash-worker` processes (gRPC on loopback):
+/// the showcase to 1.2 ms ends in the single-process state, and the log names the split.
+#[test]
+fn the_showcase_split_over_two_grpc_workers_has_the_single_process_state() {
+    let out = out_dir("split-grpc");
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes/sphere-on-plate.toml");
+    let extra = [
+        "--split",
+        "auto",
+        "--end-time",
+        "1.2e-3",
+        "--output-interval",
+        "6e-4",
+    ];
+    let (mut m, url) = master(&p, 2, &out, &extra);
+    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+    assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
+    for p in &mut w {
+        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    }
+    assert!(
+        m.log().contains("split over workers [0, 1]")
+            || m.log().contains("split over workers [1, 0]"),
+        "{}",
+        m.log()
+    );
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    assert!(s.fault.is_none(), "{:?}", s.fault);
+    assert_eq!(s.final_state_hash, "137893bb99bd4cec");
 }
 
 #[test]

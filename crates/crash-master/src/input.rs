@@ -221,6 +221,18 @@ pub enum SplitMode {
     Always,
 }
 
+impl std::str::FromStr for SplitMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "off" => Ok(SplitMode::Off),
+            "auto" => Ok(SplitMode::Auto),
+            "always" => Ok(SplitMode::Always),
+            _ => Err(format!("'{s}' is not off, auto or always")),
+        }
+    }
+}
+
 impl Default for RunOptions {
     fn default() -> Self {
         Self {
