@@ -97,3 +97,34 @@ fn groups_split_merged_back_and_split_again_keep_the_single_process_state() {
         assert_eq!(hash, reference, "{workers} workers");
     }
 }
+
+/// A physical fault found by a part (tunnelling: the largest move over the parts, its
+/// node named in the whole body) stops the run with exactly the driver's fault.
+#[test]
+fn a_fault_in_a_split_group_is_the_drivers_fault() {
+    let text = std::fs::read_to_string(crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
+        .unwrap()
+        .replace(
+            "penalty_scale = 0.1",
+            "penalty_scale = 0.1\nmargin = 1.0e-5",
+        )
+        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [400.0, 0.0, 0.0]");
+    let scene = crash_scene::parse(&text, "fast.toml").unwrap();
+    let inp = RunInput::from_built(scene.build().unwrap());
+    let mut g = crash_core::Group::new(inp.bodies.all().unwrap(), inp.gravity);
+    g.contact = inp.contact;
+    let expected = crash_core::driver::Run::new(g, inp.config)
+        .unwrap()
+        .run(|_| {})
+        .unwrap_err();
+    assert!(
+        matches!(expected, crash_core::Fault::Tunnelling { .. }),
+        "{expected}"
+    );
+    let mut sink = RecordSink::default();
+    let err = run_local(inp, 2, &mut sink, &opts(SplitMode::Always)).unwrap_err();
+    match &err {
+        crash_master::MasterError::Fault(f) => assert_eq!(f, &expected),
+        other => panic!("{other}"),
+    }
+}
