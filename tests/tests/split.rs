@@ -7,7 +7,7 @@
 
 use crash_master::{CostModel, RecordSink, RunInput, RunOptions, SplitMode};
 use crash_tests::procs::{master, out_dir, worker};
-use crash_tests::runs::{driver_reference, input, input_of, run_local};
+use crash_tests::runs::{driver_reference, input, input_of, resume_local, run_local};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -96,6 +96,25 @@ fn groups_split_merged_back_and_split_again_keep_the_single_process_state() {
         assert!(splits >= 2, "{workers} workers: {splits} splits");
         assert_eq!(hash, reference, "{workers} workers");
     }
+    // checkpoints every 7 steps: each assembles the split bodies at their homes
+    let mut sink = RecordSink::default();
+    let o = RunOptions {
+        checkpoint_every: 7,
+        ..opts(SplitMode::Always)
+    };
+    let stats = run_local(inp.clone(), 2, &mut sink, &o).unwrap();
+    assert!(stats.splits >= 2);
+    assert!(!sink.checkpoints.is_empty(), "no checkpoint taken");
+    assert_eq!(stats.final_hash, reference, "with checkpoints");
+    // a checkpoint assembled from parts is complete: resumed (split again), the run
+    // ends in the same state
+    let ck = sink.checkpoints[sink.checkpoints.len() / 2].clone();
+    let mut again = RecordSink::default();
+    let resumed = resume_local(inp, ck, 2, &mut again, &opts(SplitMode::Always)).unwrap();
+    assert_eq!(
+        resumed.final_hash, reference,
+        "resumed from a split run's checkpoint"
+    );
 }
 
 /// A physical fault found by a part (tunnelling: the largest move over the parts, its
