@@ -77,6 +77,7 @@ impl InstantWorker {
             contacts: Vec::new(),
             codec_ns: 0,
             probes: Vec::new(),
+            parts: Vec::new(),
         }
     }
 
@@ -139,6 +140,14 @@ impl InstantWorker {
                     .collect(),
             ),
             Command::States(_) => Reply::Error("no states in this bench".into()),
+            // the master splits no group here (SplitMode::Off)
+            Command::Split(_)
+            | Command::Share { .. }
+            | Command::Halo(_)
+            | Command::Contact(_)
+            | Command::Parts
+            | Command::Assemble(_)
+            | Command::Unsplit => Reply::Error("no split groups in this bench".into()),
         }
     }
 }

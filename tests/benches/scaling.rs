@@ -3,7 +3,9 @@
 //! load affects every mode alike:
 //!
 //! - `crash run --threads 1` and `crash run --threads 2` (one process),
-//! - `crash-master` + 1 and + 2 `crash-worker` processes x 1 thread (gRPC on loopback).
+//! - `crash-master` + 1 and + 2 `crash-worker` processes x 1 thread (gRPC on loopback),
+//! - `crash-master --split auto` + 2 workers: a group above its fair share is split
+//!   over both workers by elements (three exchanges per step instead of one).
 //!
 //! Prints, per mode, the median wall time of the run (summary.json `wall_time_s`: from
 //! the first command to the last frame), ns per element-cycle, the speed-up over
@@ -23,14 +25,21 @@ use std::process::{Command, Stdio};
 #[derive(Clone, Copy, PartialEq)]
 enum Mode {
     Local { threads: usize },
-    Cluster { workers: usize },
+    Cluster { workers: usize, split: bool },
 }
 
 impl Mode {
     fn label(self) -> String {
         match self {
             Mode::Local { threads } => format!("crash run --threads {threads}"),
-            Mode::Cluster { workers } => format!("master + {workers} worker(s) x 1 thread"),
+            Mode::Cluster {
+                workers,
+                split: false,
+            } => format!("master + {workers} worker(s) x 1 thread"),
+            Mode::Cluster {
+                workers,
+                split: true,
+            } => format!("master --split auto + {workers} workers x 1 thread"),
         }
     }
 }
@@ -51,9 +60,10 @@ fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
                 .unwrap();
             assert!(st.success(), "{}: {st}", mode.label());
         }
-        Mode::Cluster { workers } => {
+        Mode::Cluster { workers, split } => {
             let mut m = Command::new(master_bin())
                 .args([scene_s, "--listen", "127.0.0.1:0"])
+                .args(["--split", if split { "auto" } else { "off" }])
                 .args(["--workers", &workers.to_string(), "--out", out_s])
                 .args(["--end-time", end, "--output-interval", end])
                 .env("RUST_LOG", "warn")
@@ -121,8 +131,18 @@ fn main() {
     let modes = [
         Mode::Local { threads: 1 },
         Mode::Local { threads: 2 },
-        Mode::Cluster { workers: 1 },
-        Mode::Cluster { workers: 2 },
+        Mode::Cluster {
+            workers: 1,
+            split: false,
+        },
+        Mode::Cluster {
+            workers: 2,
+            split: false,
+        },
+        Mode::Cluster {
+            workers: 2,
+            split: true,
+        },
     ];
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("scaling-run");
     let mut runs: Vec<Vec<Summary>> = vec![Vec::new(); modes.len()];

@@ -3,6 +3,7 @@
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_core::body::NodalLoad;
+use crash_core::partition::{PartDt, PartState};
 use crash_core::shapes::{icosphere, plate, ElementKind};
 use crash_core::{
     dof, hash::state_hash, Body, BodyReport, Clock, Fault, Group, Material, Section, Stabilization,
@@ -11,7 +12,7 @@ use crash_core::{
 use crash_link::wire::{
     command_from_pb, command_to_pb, reply_from_pb, reply_to_pb, report_from_pb,
 };
-use crash_link::{BodyLoad, Command, GroupTime, Reply, StepReport};
+use crash_link::{BodyLoad, Command, GroupTime, Reply, SplitSpec, StepReport};
 use crash_proto::pb::worker_message::Reply as PbReply;
 use crash_proto::report::{fault_from_pb, fault_to_pb};
 use crash_proto::{body_from_pb, body_to_pb};
@@ -231,6 +232,7 @@ fn step_report_round_trips_bit_exact() {
     let rep = StepReport {
         probes,
         bodies,
+        parts: vec![part_state()],
         groups: vec![GroupTime {
             first: 0,
             nanos: 12345,
@@ -406,4 +408,75 @@ fn regroup_with_inconsistent_sizes_is_refused() {
         r.sizes[1] = 5;
     }
     assert!(command_from_pb(&m).is_err());
+}
+
+fn part_state() -> PartState {
+    PartState {
+        id: 3,
+        part: 1,
+        x: vec![
+            Vec3::new(0.1, -2.5e-300, 7.0),
+            Vec3::new(-0.0, 1.0, f64::MAX),
+        ],
+        v: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.0, 5.5, 1e-310)],
+        w: vec![Vec3::new(0.0, 0.0, 0.25), Vec3::new(9.0, -1.0 / 3.0, 2.0)],
+        max_move: 1.0 / 7.0,
+        max_move_node: 41,
+    }
+}
+
+/// The split-group commands and replies (protocol v9) cross the wire with every bit.
+#[test]
+fn split_group_commands_and_replies_round_trip_bit_exact() {
+    let spec = SplitSpec {
+        ids: vec![2, 3, 9],
+        parts: vec![2, 1, 2],
+        holder: vec![vec![0, 1], vec![1], vec![0, 1]],
+        slot: 1,
+    };
+    let bodies = evolved_bodies();
+    let dts = vec![
+        PartDt {
+            id: 2,
+            dt: 1.0 / 3.0 * 1e-7,
+            element: 17,
+        },
+        PartDt {
+            id: 9,
+            dt: f64::INFINITY,
+            element: 0,
+        },
+    ];
+    let states: Vec<(u32, u32, crash_core::BodyState)> = bodies
+        .iter()
+        .enumerate()
+        .map(|(k, b)| (b.def.id, k as u32, b.state.clone()))
+        .collect();
+    let cmds = vec![
+        Command::Split(spec.clone()),
+        Command::Share {
+            at: Clock::default().after(1e-7),
+            spec,
+            bodies: bodies.iter().cloned().map(BodyLoad::whole).collect(),
+        },
+        Command::Halo(vec![part_state(), part_state()]),
+        Command::Contact(dts.clone()),
+        Command::Parts,
+        Command::Assemble(states.clone()),
+        Command::Unsplit,
+    ];
+    for c in cmds {
+        let bytes = command_to_pb(&c, |_| false).encode_to_vec();
+        let back =
+            command_from_pb(&crash_proto::pb::MasterMessage::decode(bytes.as_slice()).unwrap())
+                .unwrap();
+        assert_eq!(format!("{back:?}"), format!("{c:?}"));
+    }
+    for r in [Reply::PartDts(dts), Reply::Parts(states)] {
+        let bytes = reply_to_pb(&r).encode_to_vec();
+        let back =
+            reply_from_pb(&crash_proto::pb::WorkerMessage::decode(bytes.as_slice()).unwrap())
+                .unwrap();
+        assert_eq!(format!("{back:?}"), format!("{r:?}"));
+    }
 }

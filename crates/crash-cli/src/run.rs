@@ -45,6 +45,10 @@ pub struct RunArgs {
     /// steps.
     #[arg(long, value_name = "N")]
     pub checkpoint_every: Option<u64>,
+    /// Split a group over several workers by elements (with --workers >= 2): off,
+    /// auto (a group above its fair share of the work), always. Same bits either way.
+    #[arg(long, default_value = "off", value_name = "WHEN")]
+    pub split: crash_master::SplitMode,
     /// Continue the run from this restart file (same scene file; the run directory
     /// defaults to the file's directory and is continued: rows and frames after the
     /// checkpoint are replaced).
@@ -292,6 +296,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     };
     let opts = RunOptions {
         checkpoint_every: args.checkpoint_every.unwrap_or(0),
+        split: args.split,
         ..RunOptions::default()
     };
     if let Some((path, r)) = &restart {

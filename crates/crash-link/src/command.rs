@@ -1,6 +1,7 @@
 //! The commands a master sends and the replies a worker gives (exactly one per command).
 
 use crash_core::contact::{ContactConfig, PairStats};
+use crash_core::partition::{PartDt, PartState};
 use crash_core::{
     Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Due, Fault, NodeProbe, Vec3,
 };
@@ -115,6 +116,34 @@ pub enum Command {
     /// Forget every body held, keep the definitions (a rollback to a checkpoint after a
     /// worker was lost: the checkpoint's states are loaded next).
     Reset,
+    /// The worker holds the group `spec.ids` (one of its groups, no copies): split it
+    /// into parts shared with other workers. Answered by `Unloaded` (the whole bodies,
+    /// definitions included, for the other holders).
+    Split(SplitSpec),
+    /// Hold the parts `spec` gives this worker of a group another worker splits: the
+    /// whole bodies at clock `at`.
+    Share {
+        at: Clock,
+        spec: SplitSpec,
+        bodies: Vec<BodyLoad>,
+    },
+    /// Second exchange of a step for workers holding parts: the other holders' part
+    /// states (`StepReport::parts`) of every split group this worker holds parts of.
+    /// Answered by `PartDts`.
+    Halo(Vec<PartState>),
+    /// Third exchange: each split body's element step over all its parts (the master's
+    /// minimum of the `PartDts`); contact, then a `Report` with this worker's share of
+    /// each split body's report.
+    Contact(Vec<PartDt>),
+    /// The full states of the parts this worker computes (of every split group), for
+    /// the assembly of whole bodies. Answered by `Parts`.
+    Parts,
+    /// The other holders' parts (`Parts`) for the groups this worker split: assemble
+    /// the whole bodies (frames, states, the hash and merging back read them).
+    Assemble(Vec<(u32, u32, BodyState)>),
+    /// Merge every split group back: its splitting worker holds it as a group again
+    /// (after an `Assemble` at this clock), the others drop their parts.
+    Unsplit,
     Shutdown(String),
 }
 
@@ -126,6 +155,17 @@ impl Command {
             copies: Vec::new(),
         }
     }
+}
+
+/// A group split over workers: its bodies (sorted), each body's part count, the
+/// worker slot computing each part (`holder[i][q]`), and the receiving worker's slot.
+/// Every holder cuts the bodies the same way (`partition_body` is deterministic).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SplitSpec {
+    pub ids: Vec<u32>,
+    pub parts: Vec<u32>,
+    pub holder: Vec<Vec<u32>>,
+    pub slot: u32,
 }
 
 /// Compute time of one group in one step.
@@ -150,6 +190,9 @@ pub struct StepReport {
     pub codec_ns: u64,
     /// History nodes of the worker's groups, group after group (empty unless asked).
     pub probes: Vec<NodeProbe>,
+    /// Owned states of the parts of split groups this worker computes (a Step): the
+    /// master relays them to the other holders (`Command::Halo`).
+    pub parts: Vec<PartState>,
 }
 
 #[derive(Debug, Clone)]
@@ -162,6 +205,10 @@ pub enum Reply {
     Frame(Vec<FrameBody>),
     /// (id, state) of every body held, sorted by id.
     States(Vec<(u32, BodyState)>),
+    /// Each split body's smallest element step over the parts here (`Halo`).
+    PartDts(Vec<PartDt>),
+    /// (body id, part, state) of the parts this worker computes (`Parts`).
+    Parts(Vec<(u32, u32, BodyState)>),
     /// A physical fault in the group whose smallest body id is `group_first`.
     Fault {
         group_first: u32,

@@ -17,7 +17,7 @@ pub mod version;
 pub mod wire;
 
 pub use auth::{HelloFields, Secret, SecretError, SECRET_ENV};
-pub use command::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
+pub use command::{BodyLoad, Command, GroupTime, Reply, Setup, SplitSpec, StepReport};
 pub use link::{LinkError, WorkerLink};
 pub use text::escape_peer;
 pub use version::{check_version, VersionError, PROTOCOL_VERSION};

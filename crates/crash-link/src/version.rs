@@ -15,8 +15,9 @@ use thiserror::Error;
 /// reports carry them) for spcforc.csv and nodout.csv. v8: a reaction carries its
 /// resultant moment about the origin too (stride 9); Step says whether reactions and
 /// history nodes are due (sent only for steps whose result rows are written); velocity
-/// programs carry their kind (prescribed displacement, stride 8).
-pub const PROTOCOL_VERSION: u32 = 8;
+/// programs carry their kind (prescribed displacement, stride 8). v9: groups split over
+/// workers (Split, Share, Halo, Contact, Parts, Assemble, Unsplit; Report.parts).
+pub const PROTOCOL_VERSION: u32 = 9;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

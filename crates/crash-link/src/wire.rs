@@ -2,8 +2,10 @@
 //! as a state plus, when the receiver lacks it, a definition (crash-proto's body
 //! conversions); the clock travels in Step and Load.
 
-use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, StepReport};
+use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, SplitSpec, StepReport};
 use crash_core::contact::{ContactConfig, PenaltyKind, SpeedRule};
+use crash_core::partition::{PartDt, PartState};
+use crash_core::BodyState;
 use crash_core::{Clock, Due, Vec3};
 use crash_io::FrameBody;
 use crash_proto::pb;
@@ -273,7 +275,133 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
         Command::Shutdown(reason) => PbCommand::Shutdown(pb::Shutdown {
             reason: reason.clone(),
         }),
+        Command::Split(spec) => PbCommand::Split(spec_to_pb(spec)),
+        Command::Share { at, spec, bodies } => PbCommand::Share(pb::Share {
+            at: Some(clock_to_pb(at)),
+            spec: Some(spec_to_pb(spec)),
+            bodies: bodies
+                .iter()
+                .map(|b| load_to_pb(b, !has_def(b.id)))
+                .collect(),
+        }),
+        Command::Halo(parts) => PbCommand::Halo(part_states_to_pb(parts)),
+        Command::Contact(dts) => PbCommand::Contact(part_dts_to_pb(dts)),
+        Command::Parts => PbCommand::Parts(pb::PartsRequest {}),
+        Command::Assemble(parts) => PbCommand::Assemble(part_bodies_to_pb(parts)),
+        Command::Unsplit => PbCommand::Unsplit(pb::Unsplit {}),
     })
+}
+
+fn spec_to_pb(s: &SplitSpec) -> pb::SplitSpec {
+    pb::SplitSpec {
+        ids: s.ids.clone(),
+        parts: s.parts.clone(),
+        holder: s.holder.iter().flatten().copied().collect(),
+        slot: s.slot,
+    }
+}
+
+fn spec_from_pb(s: Option<&pb::SplitSpec>) -> Result<SplitSpec, ProtoError> {
+    let s = s.ok_or(ProtoError::Missing("share.spec"))?;
+    if s.ids.len() != s.parts.len() {
+        return Err(ProtoError::Invalid(
+            "split: ids and part counts differ in length".into(),
+        ));
+    }
+    Ok(SplitSpec {
+        ids: s.ids.clone(),
+        parts: s.parts.clone(),
+        holder: split_sizes(&s.holder, &s.parts, "part holders")?,
+        slot: s.slot,
+    })
+}
+
+fn part_states_to_pb(parts: &[PartState]) -> pb::PartStates {
+    pb::PartStates {
+        parts: parts
+            .iter()
+            .map(|p| pb::PartState {
+                id: p.id,
+                part: p.part,
+                x: pack3(&p.x),
+                v: pack3(&p.v),
+                w: pack3(&p.w),
+                max_move: p.max_move,
+                max_move_node: p.max_move_node,
+            })
+            .collect(),
+    }
+}
+
+fn part_states_from_pb(p: Option<&pb::PartStates>) -> Result<Vec<PartState>, ProtoError> {
+    let Some(p) = p else {
+        return Ok(Vec::new());
+    };
+    p.parts
+        .iter()
+        .map(|s| {
+            let x = unpack3(s.id, "part x", &s.x)?;
+            let v = unpack3(s.id, "part v", &s.v)?;
+            let w = unpack3(s.id, "part w", &s.w)?;
+            if v.len() != x.len() || w.len() != x.len() {
+                return Err(ProtoError::Invalid(format!(
+                    "part {} of body {}: x, v, w differ in length",
+                    s.part, s.id
+                )));
+            }
+            Ok(PartState {
+                id: s.id,
+                part: s.part,
+                x,
+                v,
+                w,
+                max_move: s.max_move,
+                max_move_node: s.max_move_node,
+            })
+        })
+        .collect()
+}
+
+fn part_dts_to_pb(d: &[PartDt]) -> pb::PartDts {
+    pb::PartDts {
+        id: d.iter().map(|d| d.id).collect(),
+        dt: d.iter().map(|d| d.dt).collect(),
+        element: d.iter().map(|d| d.element).collect(),
+    }
+}
+
+fn part_dts_from_pb(d: &pb::PartDts) -> Result<Vec<PartDt>, ProtoError> {
+    if d.dt.len() != d.id.len() || d.element.len() != d.id.len() {
+        return Err(ProtoError::Invalid(
+            "part steps: columns differ in length".into(),
+        ));
+    }
+    Ok(d.id
+        .iter()
+        .zip(&d.dt)
+        .zip(&d.element)
+        .map(|((&id, &dt), &element)| PartDt { id, dt, element })
+        .collect())
+}
+
+fn part_bodies_to_pb(parts: &[(u32, u32, BodyState)]) -> pb::PartBodyStates {
+    pb::PartBodyStates {
+        part: parts.iter().map(|p| p.1).collect(),
+        states: parts.iter().map(|(id, _, s)| state_to_pb(*id, s)).collect(),
+    }
+}
+
+fn part_bodies_from_pb(p: &pb::PartBodyStates) -> Result<Vec<(u32, u32, BodyState)>, ProtoError> {
+    if p.part.len() != p.states.len() {
+        return Err(ProtoError::Invalid(
+            "part states: part column and states differ in length".into(),
+        ));
+    }
+    p.part
+        .iter()
+        .zip(&p.states)
+        .map(|(&q, s)| Ok((s.id, q, state_from_pb(s)?)))
+        .collect()
 }
 
 /// Decode a command on the worker. `Welcome` is part of the handshake, not a command.
@@ -362,6 +490,21 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
             PbCommand::States(s) => Command::States(s.ids.clone()),
             PbCommand::Reset(_) => Command::Reset,
             PbCommand::Shutdown(s) => Command::Shutdown(s.reason.clone()),
+            PbCommand::Split(s) => Command::Split(spec_from_pb(Some(s))?),
+            PbCommand::Share(s) => Command::Share {
+                at: clock_from_pb(s.at.as_ref())?,
+                spec: spec_from_pb(s.spec.as_ref())?,
+                bodies: s
+                    .bodies
+                    .iter()
+                    .map(load_from_pb)
+                    .collect::<Result<_, _>>()?,
+            },
+            PbCommand::Halo(p) => Command::Halo(part_states_from_pb(Some(p))?),
+            PbCommand::Contact(d) => Command::Contact(part_dts_from_pb(d)?),
+            PbCommand::Parts(_) => Command::Parts,
+            PbCommand::Assemble(p) => Command::Assemble(part_bodies_from_pb(p)?),
+            PbCommand::Unsplit(_) => Command::Unsplit,
         },
     )
 }
@@ -379,7 +522,10 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
             contacts: Some(contacts_to_pb(&rep.contacts)),
             codec_nanos: rep.codec_ns,
             probes: (!rep.probes.is_empty()).then(|| probes_to_pb(&rep.probes)),
+            parts: (!rep.parts.is_empty()).then(|| part_states_to_pb(&rep.parts)),
         }),
+        Reply::PartDts(d) => PbReply::PartDts(part_dts_to_pb(d)),
+        Reply::Parts(p) => PbReply::Parts(part_bodies_to_pb(p)),
         Reply::Unloaded(bodies) => PbReply::Unloaded(pb::BodyLoads {
             bodies: bodies.iter().map(|b| load_to_pb(b, true)).collect(),
         }),
@@ -438,6 +584,8 @@ pub fn reply_from_pb(msg: &pb::WorkerMessage) -> Result<Reply, ProtoError> {
                     pb::failure::Kind::Error(e) => Reply::Error(e.clone()),
                 }
             }
+            PbReply::PartDts(d) => Reply::PartDts(part_dts_from_pb(d)?),
+            PbReply::Parts(p) => Reply::Parts(part_bodies_from_pb(p)?),
             PbReply::Hello(_) => return Err(ProtoError::Invalid("a second Hello".into())),
         },
     )
@@ -472,5 +620,6 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
             Some(p) => probes_from_pb(p)?,
             None => Vec::new(),
         },
+        parts: part_states_from_pb(r.parts.as_ref())?,
     })
 }

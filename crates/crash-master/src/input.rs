@@ -204,6 +204,33 @@ pub struct RunOptions {
     /// checkpoint and another live worker; `master/confirm.rs`). For workers that could
     /// lie (crash-master's); in-process workers cannot, so `crash run` leaves it off.
     pub confirm_faults: bool,
+    /// Split a group larger than its share over several workers (`master/split.rs`).
+    pub split: SplitMode,
+}
+
+/// When a group is split over workers by elements (issue 16 point 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SplitMode {
+    /// Never: a group runs on one worker.
+    #[default]
+    Off,
+    /// When its estimated cost exceeds the fair share (total / workers) by the balance
+    /// tolerance.
+    Auto,
+    /// Every group that can be split, whenever there are two workers (tests).
+    Always,
+}
+
+impl std::str::FromStr for SplitMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "off" => Ok(SplitMode::Off),
+            "auto" => Ok(SplitMode::Auto),
+            "always" => Ok(SplitMode::Always),
+            _ => Err(format!("'{s}' is not off, auto or always")),
+        }
+    }
 }
 
 impl Default for RunOptions {
@@ -218,6 +245,7 @@ impl Default for RunOptions {
             checkpoint_seconds: 0.0,
             rejoin_seconds: 0.0,
             confirm_faults: false,
+            split: SplitMode::Off,
         }
     }
 }

@@ -37,7 +37,7 @@ pub use checkpoint::MasterCheckpoint;
 pub use error::MasterError;
 pub use file_sink::FileSink;
 pub use file_sink::{frame_format, read_restart, read_restart_keyed, RestartFile, RESTART_FILE};
-pub use input::{BodySource, CostModel, ResultRequest, RunInput, RunOptions, RunSize};
+pub use input::{BodySource, CostModel, ResultRequest, RunInput, RunOptions, RunSize, SplitMode};
 pub use join::{Newcomers, NoNewcomers};
 pub use remote_link::RemoteWorker;
 pub use server::{Cluster, RemoteOptions, TlsIdentity};

@@ -77,6 +77,10 @@ struct Args {
     /// times: placement is then reproducible.
     #[arg(long)]
     estimated_costs: bool,
+    /// Split a group over several workers by elements: off, auto (a group above its
+    /// fair share of the work), always. Same bits either way.
+    #[arg(long, default_value = "off", value_name = "WHEN")]
+    split: crash_master::SplitMode,
     /// Write a restart file OUT/restart.ckp (replaced atomically) every N steps, and at
     /// every timed checkpoint (--checkpoint-seconds) too. It is
     /// continued with `crash-master --resume OUT/restart.ckp` on any number of workers,
@@ -290,6 +294,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         },
         // a fault a worker reports is replayed on another before it is believed
         confirm_faults: true,
+        split: args.split,
         ..RunOptions::default()
     };
     let stats = match restart {

@@ -103,6 +103,9 @@ pub struct RunStats {
     pub migrations: Vec<Migration>,
     /// MEIM updates that changed the groups.
     pub group_changes: u64,
+    /// Groups split over workers (each time a split is made).
+    #[serde(default)]
+    pub splits: u64,
     pub max_groups: usize,
     /// Groups (body ids) and their worker at the end.
     pub final_groups: Vec<(Vec<u32>, usize)>,

@@ -20,6 +20,8 @@
 //! clock; the engine only remembers the clock its bodies are at, to refuse a command
 //! meant for another moment (so a resumed run continues on any set of workers).
 
+mod split;
+
 use crate::error::EngineError;
 use crash_core::contact::PairStats;
 use crash_core::{Body, BodyDef, BodyReport, BodyState, Clock, Fault, Group};
@@ -49,6 +51,11 @@ pub struct Engine {
     /// A fault left the groups at different steps: only Frame, States and Shutdown
     /// remain.
     broken: bool,
+    /// Groups split over workers that this worker holds parts of (`split.rs`).
+    shared: Vec<split::Shared>,
+    /// The step in flight for the split groups: its clock, length and what is due
+    /// (set by Step, read by Halo and Contact).
+    pending: Option<(Clock, f64, crash_core::Due)>,
 }
 
 impl Engine {
@@ -68,7 +75,9 @@ impl Engine {
 
     /// Number of bodies held (copies not counted).
     pub fn body_count(&self) -> usize {
-        self.loose.len() + self.groups.iter().map(|g| g.owned().count()).sum::<usize>()
+        self.loose.len()
+            + self.groups.iter().map(|g| g.owned().count()).sum::<usize>()
+            + self.split_home_ids().count()
     }
 
     /// Current group layout (owned body ids).
@@ -118,6 +127,9 @@ impl Engine {
                 if let Err(e) = self.check_clock(&Clock::default()) {
                     return Reply::Error(e.to_string());
                 }
+                if !self.shared.is_empty() {
+                    return Reply::Error(EngineError::Split("Start").to_string());
+                }
                 self.at = Some(Clock::default());
                 return self.run(|g| g.start(), true);
             }
@@ -132,23 +144,39 @@ impl Engine {
                 } else if !(dt.is_finite() && dt > 0.0) {
                     Err(EngineError::Step { step: at.step, dt })
                 } else {
-                    let reply = self.run(|g| g.advance_with(&at, dt, due), kin_nodes);
+                    let mut reply = self.run(|g| g.advance_with(&at, dt, due), kin_nodes);
+                    if let Reply::Report(rep) = &mut reply {
+                        if let Some(fault) = self.step_shared(&at, dt, due, rep) {
+                            return fault;
+                        }
+                    }
                     self.at = Some(at.after(dt));
                     return reply;
                 }
             }
             Command::Frame(ids) => self.frame(&ids).map(Reply::Frame),
-            Command::States(ids) if ids.is_empty() => Ok(Reply::States(self.states())),
+            Command::States(ids) if ids.is_empty() => self
+                .check_assembled()
+                .map(|()| Reply::States(self.states())),
             Command::States(ids) => self.states_of(&ids).map(Reply::States),
             Command::Reset => {
                 // a rollback: the checkpoint's states follow in Loads (definitions kept)
                 self.groups.clear();
                 self.loose.clear();
+                self.shared.clear();
+                self.pending = None;
                 self.at = None;
                 self.broken = false;
                 Ok(Reply::Ack)
             }
             Command::Shutdown(_) => Ok(Reply::Ack),
+            Command::Split(spec) => self.split(spec),
+            Command::Share { at, spec, bodies } => self.share(at, spec, bodies),
+            Command::Halo(parts) => return self.halo(parts),
+            Command::Contact(dts) => return self.contact(dts),
+            Command::Parts => Ok(self.parts()),
+            Command::Assemble(parts) => self.assemble(parts),
+            Command::Unsplit => self.unsplit(),
         };
         res.unwrap_or_else(|e| Reply::Error(e.to_string()))
     }
@@ -192,6 +220,7 @@ impl Engine {
             .flat_map(|g| g.owned())
             .chain(&self.loose)
             .map(|b| b.def.id)
+            .chain(self.split_home_ids())
     }
 
     fn load_copies(&mut self, at: Clock, bodies: Vec<BodyLoad>) -> Result<Reply, EngineError> {
@@ -276,6 +305,9 @@ impl Engine {
     }
 
     fn unload(&mut self, ids: &[u32], with_def: &[u32]) -> Result<Reply, EngineError> {
+        if !self.shared.is_empty() {
+            return Err(EngineError::Split("Unload"));
+        }
         let held: BTreeSet<u32> = self.ids().collect();
         if let Some(id) = ids.iter().find(|id| !held.contains(id)) {
             return Err(EngineError::NotHeld {
@@ -324,6 +356,9 @@ impl Engine {
         layout: Vec<Vec<u32>>,
         copies: Vec<Vec<u32>>,
     ) -> Result<Reply, EngineError> {
+        if !self.shared.is_empty() {
+            return Err(EngineError::Split("Regroup"));
+        }
         let mut listed = BTreeSet::new();
         for id in layout.iter().flatten() {
             if !listed.insert(*id) {
@@ -447,6 +482,7 @@ impl Engine {
             contacts: Vec::new(),
             codec_ns: 0,
             probes: Vec::new(),
+            parts: Vec::new(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.first();
@@ -491,6 +527,7 @@ impl Engine {
             .iter()
             .flat_map(|g| g.owned())
             .chain(&self.loose)
+            .chain(self.split_home_bodies())
             .collect();
         out.sort_by_key(|b| b.def.id);
         out
@@ -498,6 +535,7 @@ impl Engine {
 
     /// What an output frame shows of the bodies `ids` (all held), in that order.
     pub fn frame(&self, ids: &[u32]) -> Result<Vec<FrameBody>, EngineError> {
+        self.check_assembled()?;
         let held: BTreeMap<u32, &Body> = self.held().into_iter().map(|b| (b.def.id, b)).collect();
         ids.iter()
             .map(|id| {
@@ -513,6 +551,7 @@ impl Engine {
 
     /// The state of these bodies, in the order asked.
     pub fn states_of(&self, ids: &[u32]) -> Result<Vec<(u32, BodyState)>, EngineError> {
+        self.check_assembled()?;
         let held: BTreeMap<u32, &Body> = self.held().into_iter().map(|b| (b.def.id, b)).collect();
         ids.iter()
             .map(|id| {

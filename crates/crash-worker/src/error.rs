@@ -34,4 +34,8 @@ pub enum EngineError {
     NotKinematic(u32),
     #[error("regroup asks for a copy of body {0}, but neither the body nor a copy of it is on this worker")]
     NoCopySource(u32),
+    #[error("{0} while groups are split over workers (merge them back first)")]
+    Split(&'static str),
+    #[error("split group: {0}")]
+    Shared(String),
 }

@@ -97,7 +97,7 @@ pub struct GroupSplit {
     pub rule: ViewRule,
     /// The whole bodies: definitions, and x, v, w gathered from the parts each step
     /// (for the global figures and to fill the views, what would cross the wire).
-    whole: Vec<Body>,
+    pub(super) whole: Vec<Body>,
     /// Whole-body surfaces (element-form stable step constants), per contact body.
     surfaces: Vec<Option<Surface>>,
     /// Views per body per part, and the positions they were built at.
@@ -107,6 +107,9 @@ pub struct GroupSplit {
     pub skin: f64,
     /// View builds so far.
     pub builds: u64,
+    /// Which parts this process computes (`mine[i][q]`; all of them unless the group is
+    /// shared between workers, `partition::shared`): the others' views are not built.
+    pub mine: Vec<Vec<bool>>,
 }
 
 impl GroupSplit {
@@ -143,6 +146,7 @@ impl GroupSplit {
             reference: Vec::new(),
             skin,
             builds: 0,
+            mine: parts.iter().map(|&k| vec![true; k]).collect(),
         })
     }
 
@@ -192,7 +196,12 @@ impl GroupSplit {
 
     /// Contact forces into the parts' `f_contact`; `element_dt[i]` body i's element
     /// critical step. Returns each body's stable step.
-    fn contact(&mut self, element_dt: Vec<f64>, h: f64, step: u64) -> Result<Vec<f64>, SplitError> {
+    pub(super) fn contact(
+        &mut self,
+        element_dt: Vec<f64>,
+        h: f64,
+        step: u64,
+    ) -> Result<Vec<f64>, SplitError> {
         let cfg = self.contact;
         for (s, b) in self.splits.iter().zip(&mut self.whole) {
             s.gather_into(b);
@@ -254,6 +263,9 @@ impl GroupSplit {
         }
         for (i, views) in self.views.iter_mut().enumerate() {
             for (q, view) in views.iter_mut().enumerate() {
+                if !self.mine[i][q] {
+                    continue;
+                }
                 for (vb, (&j, node)) in view
                     .bodies
                     .iter_mut()
@@ -317,8 +329,7 @@ impl GroupSplit {
         let mut views = Vec::with_capacity(self.splits.len());
         for (i, s) in self.splits.iter().enumerate() {
             let mut vs = Vec::with_capacity(s.parts.len());
-            for p in &s.parts {
-                let boxes = element_boxes(&self.whole[i], &p.element);
+            for (q, p) in s.parts.iter().enumerate() {
                 let mut view = View {
                     bodies: Vec::new(),
                     index: Vec::new(),
@@ -328,6 +339,12 @@ impl GroupSplit {
                     owned_at: Vec::new(),
                     state: ContactState::default(),
                 };
+                if !self.mine[i][q] {
+                    // another worker's part: its view is built there
+                    vs.push(view);
+                    continue;
+                }
+                let boxes = element_boxes(&self.whole[i], &p.element);
                 for (j, b) in self.whole.iter().enumerate() {
                     if !b.def.contact {
                         continue;

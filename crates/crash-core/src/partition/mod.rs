@@ -3,13 +3,16 @@
 //! coordinate bisection of their centroids; `parts` builds from such a cut one sub-body
 //! per part (owned nodes + a one-element halo) that steps bit-identically to the whole;
 //! `contact` (second layer) steps a group of such split bodies in contact, each part
-//! computing the hits on its owned nodes from a contact view of the whole group.
+//! computing the hits on its owned nodes from a contact view of the whole group;
+//! `shared` (the wiring) steps such a group with its parts spread over workers.
 
 mod contact;
 mod parts;
+mod shared;
 
 pub use contact::{GroupSplit, SplitError, View, ViewRule};
 pub use parts::{Part, Split};
+pub use shared::{merge_report, PartDt, PartState, SharedGroup};
 
 use crate::body::BodyDef;
 use crate::error::CoreError;

@@ -9,7 +9,8 @@
 //! - `recover`: a lost worker dropped, the run rolled back to the last checkpoint on
 //!   the survivors;
 //! - `newcomers`: workers that join after the start, added at step boundaries;
-//! - `confirm`: a worker's fault replayed elsewhere to tell a real one from a lie.
+//! - `confirm`: a worker's fault replayed elsewhere to tell a real one from a lie;
+//! - `split`: groups larger than their share split over workers (relay, assembly).
 //!
 //! The master keeps one small record per body (`BodyInfo`) and the reports of the last
 //! step; it holds no nodal data between output times.
@@ -36,6 +37,7 @@ mod plausible;
 mod recover;
 mod results;
 mod resume;
+mod split;
 mod time_loop;
 
 /// What the master keeps per body (index = position in the sorted id list).
@@ -149,6 +151,8 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     probed: Vec<(u64, NodeProbe)>,
     frames: u64,
     last_frame_step: Option<u64>,
+    /// Groups split over workers (`split`).
+    splits: Vec<split::SplitGroup>,
     pub(crate) stats: RunStats,
 }
 
@@ -255,6 +259,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             probed: Vec::new(),
             frames: 0,
             last_frame_step: None,
+            splits: Vec::new(),
             stats: RunStats::default(),
         })
     }

@@ -115,6 +115,7 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let t = Instant::now();
         let _s = tracing::debug_span!("output").entered();
+        self.assemble_splits()?;
         self.stats.final_hash = self.stream_frame(sink)?;
         self.write_groups(sink)?;
         self.last_frame_step = Some(self.clock.step);

@@ -204,7 +204,10 @@ impl<L: WorkerLink> Master<'_, L> {
             | Fault::Tunnelling { body, .. } => (*body, None),
             Fault::PassThrough { body, other, .. } => (*body, Some(*other)),
         };
-        let own = |id: u32| self.index(id).is_some_and(|i| self.worker_of[i] == Some(w));
+        // a worker holding parts of a split group may report its faults too
+        let own = |id: u32| {
+            self.index(id).is_some_and(|i| self.worker_of[i] == Some(w)) || self.holds_part(w, id)
+        };
         // the bodies a fault names may include a read-only copy of a kinematic body
         let near = |id: u32| own(id) || self.is_kinematic(id);
         if !own(group_first) {

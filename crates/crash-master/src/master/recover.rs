@@ -61,6 +61,8 @@ impl<L: WorkerLink> Master<'_, L> {
     fn roll_back(&mut self, ck: &MasterCheckpoint) -> Result<(), MasterError> {
         let nw = self.links.len();
         self.expect_acks((0..nw).map(|_| vec![Command::Reset]).collect(), "Reset")?;
+        // a Reset forgets the split groups too; the rule splits again at the next regroup
+        self.splits.clear();
         self.restore_loop(ck);
         let placement = self.place_all();
         // per body: does its new worker lack the definition?

@@ -13,6 +13,7 @@ use crash_link::{BodyLoad, Command, Reply, WorkerLink};
 impl<L: WorkerLink> Master<'_, L> {
     /// The state after the current step (body states gathered from the workers).
     pub(crate) fn checkpoint(&mut self) -> Result<MasterCheckpoint, MasterError> {
+        self.assemble_splits()?;
         let nw = self.links.len();
         // in the frame's pieces (bounded size: each reply stays under MAX_MESSAGE)
         let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];

@@ -66,7 +66,7 @@ impl<L: WorkerLink> Master<'_, L> {
             .map_err(MasterError::sink)?;
         self.write_results(sink, None)?;
         self.output(sink, true)?;
-        Ok(())
+        self.split_groups()
     }
 
     /// The core's rule (`crash_core::driver::choose_dt`), shared by every loop.
@@ -107,7 +107,7 @@ impl<L: WorkerLink> Master<'_, L> {
         };
         let reps = {
             let _s = tracing::debug_span!("barrier").entered();
-            self.reports_of(
+            let mut reps = self.reports_of(
                 || Command::Step {
                     at,
                     dt: h,
@@ -115,7 +115,10 @@ impl<L: WorkerLink> Master<'_, L> {
                     due,
                 },
                 "Step",
-            )?
+            )?;
+            // split groups: two more exchanges (split.rs)
+            self.relay_split(&mut reps)?;
+            reps
         };
         let wall = ns(t0);
         // a fault being replayed did not recur: its reporter lied (confirm.rs)
@@ -168,11 +171,15 @@ impl<L: WorkerLink> Master<'_, L> {
             && step.is_multiple_of(self.opts.rebalance_interval);
         self.stats.stages.meim_ns += ns(t1);
         drop(_s);
+        // a split group stays where it is until the groups change (no periodic moves)
+        let periodic = periodic && self.splits.is_empty();
         if changed || periodic || self.rebalance {
             self.rebalance = false;
             let _s = tracing::debug_span!("migration").entered();
             let t2 = Instant::now();
+            self.unsplit()?;
             self.migrate(changed)?;
+            self.split_groups()?;
             self.announce();
             self.stats.stages.migration_ns += ns(t2);
         }

@@ -1,0 +1,501 @@
+//! A split group shared between workers (issue 16 point 2, the wiring). Every holder
+//! keeps all parts of the group (`GroupSplit`) but computes only its own (`mine`); the
+//! others are containers for the owned states that arrive from their holders. One step
+//! is three exchanges, the master relaying:
+//!
+//! 1. `integrate`: the holder's parts update their owned nodes and return them
+//!    (`PartState`: x, v, w and the largest move).
+//! 2. `forces`: the other holders' `PartState`s fill the other parts (so the whole
+//!    bodies, the halos and the contact views are current everywhere), the tunnelling
+//!    guard runs on the largest move over all parts, the holder's parts compute their
+//!    element forces; returns each body's smallest element step over its parts here.
+//! 3. `contact`: with each body's element step (the minimum over all holders: the soft
+//!    penalty's reference step reads it), the contact stage on the holder's views, then
+//!    the holder's share of each body's report (`merge_reports` joins the shares).
+//!
+//! Every holder holds the whole bodies' x, v, w after step 2, so the global figures
+//! (body boxes, pairs, each body's mass-weighted mean velocity for the closing-speed
+//! step, the view rebuild rule) are computed from the same numbers in the same order
+//! on every holder: no order-free reduction is needed.
+
+use super::GroupSplit;
+use crate::body::{Body, BodyEnergy, BodyState};
+use crate::clock::Clock;
+use crate::contact::{check_moves, ContactConfig};
+use crate::error::{CoreError, Fault};
+use crate::forces::ForceSums;
+use crate::group::{BodyReport, Reaction};
+use crate::integrate::NodeSums;
+use crate::Vec3;
+
+pub use super::SplitError;
+
+/// The owned nodes of one part after its integration: what the other holders of its
+/// group import.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PartState {
+    /// Body id and part index.
+    pub id: u32,
+    pub part: u32,
+    pub x: Vec<Vec3>,
+    pub v: Vec<Vec3>,
+    pub w: Vec<Vec3>,
+    /// Largest move of an owned node in the step and that node (whole-body index).
+    pub max_move: f64,
+    pub max_move_node: u32,
+}
+
+/// The smallest element critical step of body `id` over some of its parts, and its
+/// element (whole-body index).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PartDt {
+    pub id: u32,
+    pub dt: f64,
+    pub element: u32,
+}
+
+impl PartDt {
+    /// The smaller of two (ties: the lower element, as the whole body's element loop).
+    pub fn min(self, o: PartDt) -> PartDt {
+        if o.dt < self.dt || (o.dt == self.dt && o.element < self.element) {
+            o
+        } else {
+            self
+        }
+    }
+}
+
+/// A group of bodies split into parts over `holders` workers, the parts of holder
+/// `slot` computed here.
+#[derive(Debug, Clone)]
+pub struct SharedGroup {
+    pub split: GroupSplit,
+    /// Body ids, in the group's order.
+    pub ids: Vec<u32>,
+    /// Per body and part: the node sums of the last integration (own parts only).
+    sums: Vec<Vec<Option<NodeSums>>>,
+    /// Per body and part: the element sums of the last force pass (own parts only).
+    forces: Vec<Vec<Option<ForceSums>>>,
+    /// Per body: the element step over all holders (phase 3's input).
+    dt: Vec<PartDt>,
+}
+
+impl SharedGroup {
+    /// Split body i of `bodies` (whole, at their current state) into `parts[i]` parts;
+    /// `mine[i][q]`: part q of body i is computed here. The energy record and current
+    /// energies of each body go with its part 0 (the sums over parts continue them).
+    pub fn new(
+        bodies: &[Body],
+        parts: &[usize],
+        mine: Vec<Vec<bool>>,
+        contact: ContactConfig,
+        gravity: Vec3,
+    ) -> Result<Self, CoreError> {
+        if mine.len() != bodies.len() || mine.iter().zip(parts).any(|(m, &k)| m.len() != k) {
+            return Err(CoreError::Other {
+                body: "split group".into(),
+                what: "the parts computed here do not fit the split".into(),
+            });
+        }
+        let mut split = GroupSplit::new(bodies, parts, contact, gravity, Default::default())?;
+        for (s, b) in split.splits.iter_mut().zip(bodies) {
+            let st = &mut s.parts[0].body.state;
+            st.energy = b.state.energy;
+            st.internal_now = b.state.internal_now;
+            st.hourglass_now = b.state.hourglass_now;
+        }
+        split.mine = mine;
+        let sums = parts.iter().map(|&k| vec![None; k]).collect();
+        let forces = parts.iter().map(|&k| vec![None; k]).collect();
+        let ids = bodies.iter().map(|b| b.def.id).collect();
+        Ok(Self {
+            split,
+            ids,
+            sums,
+            forces,
+            dt: Vec::new(),
+        })
+    }
+
+    fn mine(&self, i: usize, q: usize) -> bool {
+        self.split.mine[i][q]
+    }
+
+    /// Phase 1: integrate the owned nodes of the parts computed here over the step of
+    /// length h from `clock`; their states for the other holders.
+    pub fn integrate(&mut self, clock: &Clock, h: f64) -> Result<Vec<PartState>, Fault> {
+        let sc = clock.step_of(h);
+        let gravity = self.split.gravity;
+        let mut out = Vec::new();
+        for (i, s) in self.split.splits.iter_mut().enumerate() {
+            for (q, p) in s.parts.iter_mut().enumerate() {
+                self.sums[i][q] = None;
+                if !self.split.mine[i][q] {
+                    continue;
+                }
+                let n = p
+                    .body
+                    .integrate(&sc, gravity)
+                    .map_err(|f| node_in_whole(f, &p.node))?;
+                let st = &p.body.state;
+                out.push(PartState {
+                    id: self.ids[i],
+                    part: q as u32,
+                    x: st.x[..p.owned].to_vec(),
+                    v: st.v[..p.owned].to_vec(),
+                    w: st.w[..p.owned].to_vec(),
+                    max_move: n.max_move,
+                    max_move_node: p.node[n.max_move_node],
+                });
+                self.sums[i][q] = Some(n);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Phase 2: take the other holders' part states (`imports`: every part not computed
+    /// here, each once), check the largest move of every body, copy the halos, element
+    /// forces of the parts computed here. `clock` is the clock before the step of
+    /// length h. Returns each body's smallest element step over the parts here (None
+    /// for a body with no part here).
+    pub fn forces(
+        &mut self,
+        imports: &[PartState],
+        clock: &Clock,
+        h: f64,
+    ) -> Result<Vec<Option<PartDt>>, SplitError> {
+        let step = clock.after(h).step;
+        let mut got: Vec<Vec<Option<(f64, u32)>>> = self
+            .sums
+            .iter()
+            .map(|s| s.iter().map(|_| None).collect())
+            .collect();
+        for p in imports {
+            let bad = |what: &str| CoreError::Other {
+                body: format!("body {}", p.id),
+                what: format!("part {}: {what}", p.part),
+            };
+            let i = self
+                .ids
+                .iter()
+                .position(|&id| id == p.id)
+                .ok_or_else(|| bad("not in this split group"))?;
+            let q = p.part as usize;
+            if q >= got[i].len() || self.mine(i, q) || got[i][q].is_some() {
+                return Err(bad("not expected here, or twice").into());
+            }
+            let part = &mut self.split.splits[i].parts[q];
+            let o = part.owned;
+            if p.x.len() != o || p.v.len() != o || p.w.len() != o {
+                return Err(bad("wrong node count").into());
+            }
+            let st = &mut part.body.state;
+            st.x[..o].copy_from_slice(&p.x);
+            st.v[..o].copy_from_slice(&p.v);
+            st.w[..o].copy_from_slice(&p.w);
+            got[i][q] = Some((p.max_move, p.max_move_node));
+        }
+        // the largest move of each body over all parts (ties: the lowest node)
+        let mut moves = Vec::with_capacity(self.ids.len());
+        for (i, s) in self.split.splits.iter().enumerate() {
+            let mut m = (0.0f64, u32::MAX);
+            for (q, p) in s.parts.iter().enumerate() {
+                let this = match (&self.sums[i][q], got[i][q]) {
+                    (Some(n), _) => (n.max_move, p.node[n.max_move_node]),
+                    (None, Some(g)) => g,
+                    (None, None) => {
+                        return Err(CoreError::Other {
+                            body: format!("body {}", self.ids[i]),
+                            what: format!("part {q} neither computed here nor imported"),
+                        }
+                        .into())
+                    }
+                };
+                if this.0 > m.0 || (this.0 == m.0 && this.1 < m.1) {
+                    m = this;
+                }
+            }
+            moves.push((m.0, if m.1 == u32::MAX { 0 } else { m.1 as usize }));
+        }
+        check_moves(&self.split.whole, &self.split.contact, &moves, h, step)?;
+        let mut out = vec![None; self.ids.len()];
+        for (i, s) in self.split.splits.iter_mut().enumerate() {
+            s.exchange();
+            for (q, p) in s.parts.iter_mut().enumerate() {
+                self.forces[i][q] = None;
+                if !self.split.mine[i][q] {
+                    continue;
+                }
+                let f = p
+                    .body
+                    .internal_forces(h, step)
+                    .map_err(|f| element_in_whole(f, &p.element))?;
+                let d = PartDt {
+                    id: self.ids[i],
+                    dt: f.dt,
+                    element: p.element.get(f.dt_element).copied().unwrap_or(0),
+                };
+                out[i] = Some(out[i].map_or(d, |o: PartDt| o.min(d)));
+                self.forces[i][q] = Some(f);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Phase 3: contact on the views of the parts here with each body's element step
+    /// over all holders (`dt`, in the group's body order); the share of each body's
+    /// report from the parts here (bodies with no part here: none). `clock`, h: the
+    /// step taken (h = 0 at the start). `reactions`: report the supports' reactions.
+    pub fn contact(
+        &mut self,
+        dt: &[PartDt],
+        h: f64,
+        step: u64,
+        reactions: bool,
+    ) -> Result<Vec<BodyReport>, SplitError> {
+        if dt.len() != self.ids.len() || dt.iter().zip(&self.ids).any(|(d, &id)| d.id != id) {
+            return Err(CoreError::Other {
+                body: "split group".into(),
+                what: "element steps for other bodies than the group's".into(),
+            }
+            .into());
+        }
+        self.dt = dt.to_vec();
+        let limit = self
+            .split
+            .contact(dt.iter().map(|d| d.dt).collect(), h, step)?;
+        let mut out = Vec::new();
+        for (i, s) in self.split.splits.iter().enumerate() {
+            let mut r: Option<BodyReport> = None;
+            let mut reaction: Option<Reaction> = None;
+            for (q, p) in s.parts.iter().enumerate() {
+                let (Some(n), Some(f)) = (&self.sums[i][q], &self.forces[i][q]) else {
+                    continue;
+                };
+                let hot = p.element.get(f.hot_element).copied().unwrap_or(0) as usize;
+                let share = BodyReport {
+                    id: self.ids[i],
+                    energy: p.body.state.energy,
+                    stable_dt: limit[i],
+                    dt_element: dt[i].element as usize,
+                    lo: n.lo,
+                    hi: n.hi,
+                    max_move: n.max_move,
+                    hot_element: hot,
+                    hot_density: f.hot_density,
+                    reaction: None,
+                };
+                if reactions && p.body.def.fixed.iter().any(|&m| m != 0) {
+                    let add = Reaction {
+                        force: n.reaction_force,
+                        moment: n.reaction_moment,
+                        moment_origin: n.reaction_moment_origin,
+                    };
+                    reaction = Some(reaction.map_or(add, |a| add_reaction(a, add)));
+                }
+                r = Some(match r {
+                    None => share,
+                    Some(a) => merge_report(a, share),
+                });
+            }
+            if let Some(mut r) = r {
+                if reactions {
+                    r.reaction = reaction;
+                }
+                out.push(r);
+            }
+        }
+        Ok(out)
+    }
+
+    /// The full states of the parts computed here (for the assembly of whole bodies).
+    pub fn own_states(&self) -> Vec<(u32, u32, BodyState)> {
+        let mut out = Vec::new();
+        for (i, s) in self.split.splits.iter().enumerate() {
+            for (q, p) in s.parts.iter().enumerate() {
+                if self.mine(i, q) {
+                    out.push((self.ids[i], q as u32, p.body.state.clone()));
+                }
+            }
+        }
+        out
+    }
+
+    /// Take the other holders' part states (every part not computed here, full
+    /// states) and assemble the whole bodies from all parts: owned nodes from their
+    /// owners, element data from a part that holds the element (every such part has
+    /// the same bits), energies summed over the parts.
+    pub fn assemble(&mut self, others: Vec<(u32, u32, BodyState)>) -> Result<Vec<Body>, CoreError> {
+        for (id, q, st) in others {
+            let bad = |what: &str| CoreError::Other {
+                body: format!("body {id}"),
+                what: format!("part {q}: {what}"),
+            };
+            let i = self
+                .ids
+                .iter()
+                .position(|&x| x == id)
+                .ok_or_else(|| bad("not in this split group"))?;
+            let q = q as usize;
+            if q >= self.split.mine[i].len() || self.mine(i, q) {
+                return Err(bad("not expected here"));
+            }
+            let p = &mut self.split.splits[i].parts[q];
+            p.body = Body::from_parts(p.body.def.clone(), st)?;
+        }
+        let mut out = Vec::with_capacity(self.ids.len());
+        for (s, whole) in self.split.splits.iter().zip(&self.split.whole) {
+            let mut b = whole.clone();
+            let d = b.def.clone();
+            let nt = d.tris.len();
+            let first_slot = |e: usize| if e < nt { 3 * e } else { 3 * nt + 4 * (e - nt) };
+            let corners = |e: usize| if e < nt { 3 } else { 4 };
+            let half = d.gather_slot.len();
+            let (mut energy, mut inow, mut hnow) = (BodyEnergy::default(), 0.0, 0.0);
+            let w = &mut b.state;
+            let contact = s.parts.iter().any(|p| !p.body.state.f_contact.is_empty());
+            if contact {
+                w.f_contact.resize(w.x.len(), Vec3::zeros());
+            } else {
+                w.f_contact.clear();
+            }
+            for p in &s.parts {
+                let ps = &p.body.state;
+                for (k, &n) in p.node[..p.owned].iter().enumerate() {
+                    let n = n as usize;
+                    (w.x[n], w.v[n], w.w[n]) = (ps.x[k], ps.v[k], ps.w[k]);
+                    if contact {
+                        w.f_contact[n] = ps.f_contact.get(k).copied().unwrap_or_default();
+                    }
+                }
+                let phalf = p.body.def.gather_slot.len();
+                let halves = ps.slots.len() / phalf.max(1);
+                if w.slots.len() < halves * half {
+                    w.slots.resize(halves * half, [0.0; 6]);
+                }
+                let mut local_slot = 0;
+                for (le, &e) in p.element.iter().enumerate() {
+                    let e = e as usize;
+                    w.shell[e] = ps.shell[le];
+                    if e >= nt {
+                        let lq = le - p.body.def.tris.len();
+                        if let (Some(t), Some(s)) =
+                            (w.hourglass.get_mut(e - nt), ps.hourglass.get(lq))
+                        {
+                            *t = *s;
+                        }
+                    }
+                    let c = corners(e);
+                    for hf in 0..halves {
+                        let a = hf * half + first_slot(e);
+                        let la = hf * phalf + local_slot;
+                        w.slots[a..a + c].copy_from_slice(&ps.slots[la..la + c]);
+                    }
+                    local_slot += c;
+                }
+                energy = add_energy(energy, ps.energy);
+                inow += ps.internal_now;
+                hnow += ps.hourglass_now;
+            }
+            w.energy = energy;
+            w.internal_now = inow;
+            w.hourglass_now = hnow;
+            out.push(b);
+        }
+        Ok(out)
+    }
+}
+
+/// Join two holders' shares of one body's report: energies summed (another order than
+/// the whole body's: ulps), the box and the move order-free, the element step and hot
+/// element by value then lowest element.
+pub fn merge_report(a: BodyReport, b: BodyReport) -> BodyReport {
+    let (dt, dt_element) = if b.stable_dt < a.stable_dt
+        || (b.stable_dt == a.stable_dt && b.dt_element < a.dt_element)
+    {
+        (b.stable_dt, b.dt_element)
+    } else {
+        (a.stable_dt, a.dt_element)
+    };
+    let (hot_density, hot_element) = if b.hot_density > a.hot_density
+        || (b.hot_density == a.hot_density && b.hot_element < a.hot_element)
+    {
+        (b.hot_density, b.hot_element)
+    } else {
+        (a.hot_density, a.hot_element)
+    };
+    let reaction = match (a.reaction, b.reaction) {
+        (Some(x), Some(y)) => Some(add_reaction(x, y)),
+        (x, y) => x.or(y),
+    };
+    BodyReport {
+        id: a.id,
+        energy: add_energy(a.energy, b.energy),
+        stable_dt: dt,
+        dt_element,
+        lo: a.lo.inf(&b.lo),
+        hi: a.hi.sup(&b.hi),
+        max_move: a.max_move.max(b.max_move),
+        hot_element,
+        hot_density,
+        reaction,
+    }
+}
+
+fn add_energy(a: BodyEnergy, b: BodyEnergy) -> BodyEnergy {
+    BodyEnergy {
+        kinetic: a.kinetic + b.kinetic,
+        internal: a.internal + b.internal,
+        hourglass: a.hourglass + b.hourglass,
+        contact: a.contact + b.contact,
+        damping: a.damping + b.damping,
+        external: a.external + b.external,
+    }
+}
+
+fn add_reaction(a: Reaction, b: Reaction) -> Reaction {
+    Reaction {
+        force: a.force + b.force,
+        moment: a.moment + b.moment,
+        moment_origin: a.moment_origin + b.moment_origin,
+    }
+}
+
+/// A fault of a part's integration with the whole body's node number.
+fn node_in_whole(mut f: Fault, node: &[u32]) -> Fault {
+    if let Fault::NonFinite { place, .. } = &mut f {
+        if let Some(n) = place
+            .strip_prefix("node ")
+            .and_then(|n| n.parse::<usize>().ok())
+        {
+            if let Some(&g) = node.get(n) {
+                *place = format!("node {g}");
+            }
+        }
+    }
+    f
+}
+
+/// A fault of a part's element pass with the whole body's element number.
+fn element_in_whole(mut f: Fault, element: &[u32]) -> Fault {
+    let map = |e: &mut usize| {
+        if let Some(&g) = element.get(*e) {
+            *e = g as usize;
+        }
+    };
+    match &mut f {
+        Fault::Collapsed { element: e, .. } | Fault::Inverted { element: e, .. } => map(e),
+        Fault::NonFinite { place, .. } => {
+            if let Some(n) = place
+                .strip_prefix("element ")
+                .and_then(|n| n.parse::<usize>().ok())
+            {
+                if let Some(&g) = element.get(n) {
+                    *place = format!("element {g}");
+                }
+            }
+        }
+        _ => {}
+    }
+    f
+}

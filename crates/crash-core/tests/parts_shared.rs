@@ -1,0 +1,194 @@
+//! Domain decomposition over workers (issue 16 point 2, the wiring): a group split
+//! mid-run into parts held by 2 or 3 holders (`SharedGroup`, each computing only its
+//! own parts, the others' owned states imported every step, as the master relays
+//! them) steps bit-identically to the whole group, through the impact of a sphere on a
+//! clamped plate; assembled back into whole bodies it has the whole group's complete
+//! state (element resultants, force slots and contact forces included) and goes on as
+//! a whole group with the same bits.
+
+mod contact_util;
+
+use contact_util::*;
+use crash_core::contact::ContactConfig;
+use crash_core::hash::state_hash;
+use crash_core::partition::{merge_report, PartDt, SharedGroup};
+use crash_core::shapes::{plate, ElementKind};
+use crash_core::{dof, Body, BodyReport, Clock, Group, Vec3};
+
+const SAFETY: f64 = 0.9;
+/// Steps before the split, and steps the split group takes (through the impact).
+const BEFORE: usize = 20;
+const SPLIT_STEPS: usize = 600;
+const AFTER: usize = 20;
+
+fn config() -> ContactConfig {
+    ContactConfig {
+        margin: 1e-3,
+        ..Default::default()
+    }
+}
+
+/// A steel icosphere shell (R 50 mm, t 1 mm, level 3) at 4 m/s onto a plate of 12 x 12
+/// quads clamped on its edges, 0.2 mm beyond contact, off the plate's centre a little.
+fn drop_scene() -> Vec<Body> {
+    let (r, t, tp) = (0.05, 0.001, 0.005);
+    let z0 = r + 0.5 * (t + tp) + 2e-4;
+    let s = sphere(
+        0,
+        r,
+        t,
+        3,
+        Vec3::new(0.003, -0.002, z0),
+        Vec3::new(0.0, 0.0, -4.0),
+    );
+    let lx = 0.2;
+    let mut p = shell(1, &plate(lx, lx, 12, 12, ElementKind::Quad), tp);
+    for i in 0..p.state.x.len() {
+        let x = p.def.x0[i];
+        if x.x.abs() > 0.5 * lx - 1e-9 || x.y.abs() > 0.5 * lx - 1e-9 {
+            p.fix(i, dof::ALL);
+        }
+    }
+    vec![s, p]
+}
+
+fn min_dt(r: &[BodyReport]) -> f64 {
+    r.iter().map(|r| r.stable_dt).fold(f64::INFINITY, f64::min)
+}
+
+/// One step of the whole group; the next dt.
+fn whole_step(g: &mut Group, clock: &mut Clock, dt: f64) -> f64 {
+    let h = SAFETY * dt;
+    let r = g.advance(clock, h).expect("stable");
+    *clock = clock.after(h);
+    min_dt(&r)
+}
+
+/// One step of the holders, relaying as the master does; the merged reports.
+fn shared_step(holders: &mut [SharedGroup], clock: &Clock, h: f64) -> Vec<BodyReport> {
+    let states: Vec<_> = holders
+        .iter_mut()
+        .map(|s| s.integrate(clock, h).expect("integrate"))
+        .collect();
+    let mut dts: Vec<Option<PartDt>> = vec![None; holders[0].ids.len()];
+    for (k, s) in holders.iter_mut().enumerate() {
+        let imports: Vec<_> = states
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .flat_map(|(_, v)| v.iter().cloned())
+            .collect();
+        for (d, mine) in dts
+            .iter_mut()
+            .zip(s.forces(&imports, clock, h).expect("forces"))
+        {
+            *d = match (*d, mine) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            };
+        }
+    }
+    let dts: Vec<PartDt> = dts.into_iter().map(|d| d.expect("every body")).collect();
+    let step = clock.after(h).step;
+    let mut merged: Vec<Option<BodyReport>> = vec![None; dts.len()];
+    for s in holders.iter_mut() {
+        for r in s.contact(&dts, h, step, false).expect("contact") {
+            let i = s.ids.iter().position(|&id| id == r.id).expect("id");
+            merged[i] = Some(match merged[i].take() {
+                Some(a) => merge_report(a, r),
+                None => r,
+            });
+        }
+    }
+    merged.into_iter().map(|r| r.expect("a report")).collect()
+}
+
+fn holders_of(bodies: &[Body], k: usize) -> Vec<SharedGroup> {
+    (0..k)
+        .map(|slot| {
+            // every body in k parts, part q on holder q
+            let parts = vec![k; bodies.len()];
+            let mine = parts
+                .iter()
+                .map(|&n| (0..n).map(|q| q == slot).collect())
+                .collect();
+            SharedGroup::new(bodies, &parts, mine, config(), Vec3::zeros()).expect("split")
+        })
+        .collect()
+}
+
+fn run(k: usize) {
+    let bodies = drop_scene();
+    let mut whole = group(bodies.clone(), config());
+    let mut dt = min_dt(&whole.start().expect("start"));
+    let mut clock = Clock::default();
+    let mut g = group(bodies, config());
+    let mut gdt = min_dt(&g.start().expect("start"));
+    let mut gclock = Clock::default();
+    for _ in 0..BEFORE {
+        dt = whole_step(&mut whole, &mut clock, dt);
+        gdt = whole_step(&mut g, &mut gclock, gdt);
+    }
+    let mut holders = holders_of(&g.bodies, k);
+    let mut contact_steps = 0;
+    for n in 0..SPLIT_STEPS {
+        dt = whole_step(&mut whole, &mut clock, dt);
+        let h = SAFETY * gdt;
+        let r = shared_step(&mut holders, &gclock, h);
+        gdt = min_dt(&r);
+        gclock = gclock.after(h);
+        assert_eq!(
+            gdt.to_bits(),
+            dt.to_bits(),
+            "k = {k}: stable step after split step {n}"
+        );
+        let active: usize = whole.contact_stats().iter().map(|s| s.active_nodes).sum();
+        contact_steps += usize::from(active > 0);
+        if n % 100 == 99 {
+            let others: Vec<_> = holders[1..].iter().flat_map(|s| s.own_states()).collect();
+            let b = holders[0].assemble(others).expect("assemble");
+            assert_eq!(
+                state_hash(&b),
+                state_hash(&whole.bodies),
+                "k = {k}, split step {n}"
+            );
+        }
+    }
+    assert!(
+        contact_steps > 100,
+        "the sphere must hit the plate ({contact_steps} steps)"
+    );
+    // assembled back: the complete state, and the whole group goes on with it
+    let others: Vec<_> = holders[1..].iter().flat_map(|s| s.own_states()).collect();
+    let back = holders[0].assemble(others).expect("assemble");
+    for (a, b) in back.iter().zip(&whole.bodies) {
+        let (s, t) = (&a.state, &b.state);
+        assert!(s.x == t.x && s.v == t.v && s.w == t.w, "k = {k}: nodes");
+        assert!(s.f_contact == t.f_contact, "k = {k}: contact forces");
+        assert!(
+            s.shell == t.shell && s.hourglass == t.hourglass,
+            "k = {k}: resultants"
+        );
+        assert!(s.slots == t.slots, "k = {k}: force slots");
+    }
+    let mut g = group(back, config());
+    for _ in 0..AFTER {
+        dt = whole_step(&mut whole, &mut clock, dt);
+        gdt = whole_step(&mut g, &mut gclock, gdt);
+    }
+    assert_eq!(
+        state_hash(&g.bodies),
+        state_hash(&whole.bodies),
+        "k = {k}: merged back"
+    );
+}
+
+#[test]
+fn a_group_shared_by_two_holders_steps_with_the_whole_groups_bits() {
+    run(2);
+}
+
+#[test]
+fn a_group_shared_by_three_holders_steps_with_the_whole_groups_bits() {
+    run(3);
+}

@@ -1,0 +1,326 @@
+//! Groups split over workers (issue 16 point 2): which groups are split and how, the
+//! two extra exchanges of a step (the master relays part states and element steps, it
+//! keeps none), and the assembly of whole bodies for frames, checkpoints and merging
+//! back.
+//!
+//! A group is split when its estimated cost exceeds the fair share (total / live
+//! workers) by the balance tolerance (`SplitMode::Auto`), or whenever there are two
+//! workers (`SplitMode::Always`, for tests), and only when it holds no kinematic body
+//! or copy and no history node is asked for (their figures are not merged yet). Each
+//! body whose cost exceeds the group's cost over the workers is cut into one part per
+//! live worker (part q on slot q); the smaller bodies stay whole, each on the least
+//! loaded slot so far. Slot 0 is the group's worker (its *home*): it answers for the
+//! bodies (frames, states) from the whole bodies it assembles.
+
+use super::Master;
+use crate::error::MasterError;
+use crate::input::SplitMode;
+use crash_core::partition::{merge_report, PartDt, PartState};
+use crash_core::BodyReport;
+use crash_link::{Command, Reply, SplitSpec, StepReport, WorkerLink};
+use std::collections::BTreeMap;
+
+/// A group split over workers.
+#[derive(Debug, Clone)]
+pub(crate) struct SplitGroup {
+    /// Bodies, part counts, the slot of each part (as in `SplitSpec`).
+    ids: Vec<u32>,
+    parts: Vec<u32>,
+    holder: Vec<Vec<u32>>,
+    /// Worker of each slot; slot 0 is the home.
+    workers: Vec<usize>,
+}
+
+impl SplitGroup {
+    fn spec(&self, slot: usize) -> SplitSpec {
+        SplitSpec {
+            ids: self.ids.clone(),
+            parts: self.parts.clone(),
+            holder: self.holder.clone(),
+            slot: slot as u32,
+        }
+    }
+
+    fn home(&self) -> usize {
+        self.workers[0]
+    }
+}
+
+impl<L: WorkerLink> Master<'_, L> {
+    /// The split of the group `ids` over the live workers (home first), or None when
+    /// the rule leaves it whole.
+    fn plan(&self, ids: &[u32], copies: &[u32], total: f64, live: &[usize]) -> Option<SplitGroup> {
+        let k = live.len();
+        if k < 2 || !copies.is_empty() || !self.results.history.is_empty() {
+            return None;
+        }
+        let idx: Vec<usize> = ids.iter().filter_map(|&id| self.index(id)).collect();
+        if idx.len() != ids.len() || idx.iter().any(|&i| self.info[i].kinematic) {
+            return None;
+        }
+        let cost: f64 = idx.iter().map(|&i| self.cost[i]).sum();
+        let fair = total / k as f64;
+        let large = match self.opts.split {
+            SplitMode::Off => false,
+            SplitMode::Auto => cost > fair * (1.0 + self.opts.balance_tolerance),
+            SplitMode::Always => true,
+        };
+        if !large {
+            return None;
+        }
+        let home = self.worker_of[idx[0]]?;
+        let mut workers = vec![home];
+        workers.extend(live.iter().copied().filter(|&w| w != home));
+        let share = cost / k as f64;
+        let mut load = vec![0.0; k];
+        let (mut parts, mut holder) = (Vec::new(), Vec::new());
+        for &i in &idx {
+            let c = self.cost[i];
+            if c > share && self.info[i].elements >= k {
+                parts.push(k as u32);
+                holder.push((0..k as u32).collect());
+                for l in &mut load {
+                    *l += c / k as f64;
+                }
+            } else {
+                let s = (0..k).fold(0, |a, b| if load[b] < load[a] { b } else { a });
+                load[s] += c;
+                parts.push(1);
+                holder.push(vec![s as u32]);
+            }
+        }
+        if parts.iter().all(|&p| p == 1) && holder.iter().all(|h| h[0] == 0) {
+            return None;
+        }
+        Some(SplitGroup {
+            ids: ids.to_vec(),
+            parts,
+            holder,
+            workers,
+        })
+    }
+
+    /// Split the groups the rule picks (after the start and after every regroup).
+    pub(super) fn split_groups(&mut self) -> Result<(), MasterError> {
+        if self.opts.split == SplitMode::Off || !self.splits.is_empty() {
+            return Ok(());
+        }
+        let live: Vec<usize> = (0..self.links.len()).filter(|&w| self.live[w]).collect();
+        let total: f64 = self.cost.iter().sum();
+        let nw = self.links.len();
+        for k in 0..self.meim.group_count() {
+            let (ids, copies) = (self.meim.group(k).to_vec(), self.meim.copies(k).to_vec());
+            let Some(plan) = self.plan(&ids, &copies, total, &live) else {
+                continue;
+            };
+            let home = plan.home();
+            let mut cmds = vec![Vec::new(); nw];
+            cmds[home].push(Command::Split(plan.spec(0)));
+            let Some(Reply::Unloaded(bodies)) = self.exchange(cmds)?.swap_remove(home).pop() else {
+                return Err(self.bad_reply(home, "Split"));
+            };
+            let mut cmds = vec![Vec::new(); nw];
+            for (slot, &w) in plan.workers.iter().enumerate().skip(1) {
+                cmds[w].push(Command::Share {
+                    at: self.clock,
+                    spec: plan.spec(slot),
+                    bodies: bodies.clone(),
+                });
+            }
+            self.expect_acks(cmds, "Share")?;
+            let cut: Vec<String> = plan
+                .ids
+                .iter()
+                .zip(&plan.parts)
+                .map(|(&id, &p)| format!("{} in {p}", self.name(id)))
+                .collect();
+            tracing::info!(
+                "step {}: group of {} bodies split over workers {:?}: {}",
+                self.clock.step,
+                plan.ids.len(),
+                plan.workers,
+                cut.join(", ")
+            );
+            self.stats.splits += 1;
+            self.splits.push(plan);
+        }
+        Ok(())
+    }
+
+    /// The second and third exchanges of a step for the split groups: the part states
+    /// of phase 1 (taken out of `reps`) relayed to the other holders, the element steps
+    /// merged and sent back, every holder's share of each body's report merged into
+    /// its home's report.
+    pub(super) fn relay_split(&mut self, reps: &mut [StepReport]) -> Result<(), MasterError> {
+        if self.splits.is_empty() {
+            return Ok(());
+        }
+        let nw = self.links.len();
+        let from: Vec<Vec<PartState>> = reps
+            .iter_mut()
+            .map(|r| std::mem::take(&mut r.parts))
+            .collect();
+        let group_of: BTreeMap<u32, usize> = self
+            .splits
+            .iter()
+            .enumerate()
+            .flat_map(|(k, s)| s.ids.iter().map(move |&id| (id, k)))
+            .collect();
+        // phase 2: each holder gets the other holders' parts of its groups
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for (w, c) in cmds.iter_mut().enumerate() {
+            let holds: Vec<usize> = (0..self.splits.len())
+                .filter(|&k| self.splits[k].workers.contains(&w))
+                .collect();
+            if holds.is_empty() {
+                continue;
+            }
+            let imports: Vec<PartState> = from
+                .iter()
+                .enumerate()
+                .filter(|(v, _)| *v != w)
+                .flat_map(|(_, p)| p.iter())
+                .filter(|p| group_of.get(&p.id).is_some_and(|k| holds.contains(k)))
+                .cloned()
+                .collect();
+            c.push(Command::Halo(imports));
+        }
+        let replies = self.exchange(cmds)?;
+        let mut dt: BTreeMap<u32, PartDt> = BTreeMap::new();
+        for (w, r) in replies.into_iter().enumerate() {
+            for reply in r {
+                let Reply::PartDts(d) = reply else {
+                    return Err(self.bad_reply(w, "Halo"));
+                };
+                for d in d {
+                    if !group_of.contains_key(&d.id) || d.dt.is_nan() {
+                        return Err(
+                            self.implausible(w, &format!("an element step of body {}", d.id))
+                        );
+                    }
+                    dt.entry(d.id).and_modify(|a| *a = a.min(d)).or_insert(d);
+                }
+            }
+        }
+        // phase 3: contact with the merged element steps
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for (w, c) in cmds.iter_mut().enumerate() {
+            let ids: Vec<PartDt> = self
+                .splits
+                .iter()
+                .filter(|s| s.workers.contains(&w))
+                .flat_map(|s| s.ids.iter())
+                .filter_map(|id| dt.get(id).copied())
+                .collect();
+            if !ids.is_empty() {
+                c.push(Command::Contact(ids));
+            }
+        }
+        let replies = self.exchange(cmds)?;
+        let mut merged: BTreeMap<u32, BodyReport> = BTreeMap::new();
+        for (w, r) in replies.into_iter().enumerate() {
+            for reply in r {
+                let Reply::Report(rep) = reply else {
+                    return Err(self.bad_reply(w, "Contact"));
+                };
+                for b in rep.bodies {
+                    if !group_of.contains_key(&b.id) {
+                        return Err(self.implausible(w, &format!("a share of body {}", b.id)));
+                    }
+                    let m = match merged.remove(&b.id) {
+                        Some(a) => merge_report(a, b),
+                        None => b,
+                    };
+                    merged.insert(m.id, m);
+                }
+                if let Some(r) = reps.get_mut(w) {
+                    r.compute_ns += rep.compute_ns;
+                }
+                for g in rep.groups {
+                    let home = self
+                        .splits
+                        .get(group_of.get(&g.first).copied().unwrap_or(0));
+                    if let Some(r) = home.and_then(|s| reps.get_mut(s.home())) {
+                        if r.groups.iter().all(|x| x.first != g.first) {
+                            r.groups.push(g);
+                        }
+                    }
+                }
+            }
+        }
+        for s in &self.splits {
+            let home = s.home();
+            for id in &s.ids {
+                if let (Some(b), Some(r)) = (merged.remove(id), reps.get_mut(home)) {
+                    r.bodies.push(b);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Worker `w` computes parts of a split group holding body `id`.
+    pub(super) fn holds_part(&self, w: usize, id: u32) -> bool {
+        self.splits
+            .iter()
+            .any(|s| s.workers.contains(&w) && s.ids.contains(&id))
+    }
+
+    /// Assemble the split groups' whole bodies at their homes (before a frame, a
+    /// checkpoint or merging back).
+    pub(super) fn assemble_splits(&mut self) -> Result<(), MasterError> {
+        if self.splits.is_empty() {
+            return Ok(());
+        }
+        let nw = self.links.len();
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for s in &self.splits {
+            for &w in &s.workers[1..] {
+                if cmds[w].is_empty() {
+                    cmds[w].push(Command::Parts);
+                }
+            }
+        }
+        let mut parts = Vec::new();
+        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+            for reply in r {
+                let Reply::Parts(p) = reply else {
+                    return Err(self.bad_reply(w, "Parts"));
+                };
+                parts.extend(p);
+            }
+        }
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for s in &self.splits {
+            let (these, rest): (Vec<_>, Vec<_>) =
+                parts.into_iter().partition(|p| s.ids.contains(&p.0));
+            parts = rest;
+            match cmds[s.home()].first_mut() {
+                Some(Command::Assemble(a)) => a.extend(these),
+                _ => cmds[s.home()].push(Command::Assemble(these)),
+            }
+        }
+        self.expect_acks(cmds, "Assemble")
+    }
+
+    /// Merge every split group back onto its home (before a regroup).
+    pub(super) fn unsplit(&mut self) -> Result<(), MasterError> {
+        if self.splits.is_empty() {
+            return Ok(());
+        }
+        self.assemble_splits()?;
+        let nw = self.links.len();
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for s in &self.splits {
+            for &w in &s.workers {
+                if cmds[w].is_empty() {
+                    cmds[w].push(Command::Unsplit);
+                }
+            }
+        }
+        self.expect_acks(cmds, "Unsplit")?;
+        tracing::info!("step {}: split groups merged back", self.clock.step);
+        self.splits.clear();
+        Ok(())
+    }
+}

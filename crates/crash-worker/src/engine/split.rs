@@ -1,0 +1,306 @@
+//! Groups split over workers (issue 16 point 2): the worker side of `Split`, `Share`,
+//! the step's second and third exchanges (`Halo`, `Contact`), and the assembly of whole
+//! bodies (`Parts`, `Assemble`, `Unsplit`). The physics is `crash_core::partition::
+//! SharedGroup`; here are the bookkeeping and the checks.
+//!
+//! The worker that held the group when it was split (its *home*) keeps answering for
+//! its bodies: frames, states and merging back read the whole bodies it assembles from
+//! every holder's parts (`Assemble`, at the clock they are asked at). The other holders
+//! hold parts only: their bodies are not theirs (never listed by a Regroup, never in
+//! their frames or states).
+
+use super::Engine;
+use crate::error::EngineError;
+use crash_core::partition::{PartDt, PartState, SharedGroup};
+use crash_core::{Body, BodyState, Clock, Due};
+use crash_link::{BodyLoad, Reply, SplitSpec, StepReport};
+use std::time::Instant;
+
+/// One split group this worker holds parts of.
+#[derive(Debug)]
+pub(crate) struct Shared {
+    g: SharedGroup,
+    /// This worker split the group (it answers for its bodies).
+    home: bool,
+    /// The whole bodies as last assembled (home only), and the clock of the assembly.
+    whole: Vec<Body>,
+    assembled: Option<Clock>,
+    /// Compute time of the step in flight [ns].
+    nanos: u64,
+}
+
+impl Shared {
+    fn first(&self) -> u32 {
+        self.g.ids.first().copied().unwrap_or(0)
+    }
+}
+
+fn mine(spec: &SplitSpec) -> Result<(Vec<usize>, Vec<Vec<bool>>), EngineError> {
+    let bad = |what: &str| EngineError::Shared(what.to_string());
+    if spec.parts.len() != spec.ids.len() || spec.holder.len() != spec.ids.len() {
+        return Err(bad("the split's columns differ in length"));
+    }
+    let parts: Vec<usize> = spec.parts.iter().map(|&k| k as usize).collect();
+    let mut mine = Vec::with_capacity(parts.len());
+    for (k, h) in parts.iter().zip(&spec.holder) {
+        if *k == 0 || h.len() != *k {
+            return Err(bad("a body without parts, or holders not one per part"));
+        }
+        mine.push(h.iter().map(|&w| w == spec.slot).collect());
+    }
+    Ok((parts, mine))
+}
+
+impl Engine {
+    pub(super) fn split_home_ids(&self) -> impl Iterator<Item = u32> + '_ {
+        self.shared
+            .iter()
+            .filter(|s| s.home)
+            .flat_map(|s| s.g.ids.iter().copied())
+    }
+
+    pub(super) fn split_home_bodies(&self) -> impl Iterator<Item = &Body> + '_ {
+        self.shared
+            .iter()
+            .filter(|s| s.home)
+            .flat_map(|s| s.whole.iter())
+    }
+
+    /// Whole bodies of the split groups are current (frames and states read them).
+    pub(super) fn check_assembled(&self) -> Result<(), EngineError> {
+        for s in self.shared.iter().filter(|s| s.home) {
+            let now = match (s.assembled, self.at) {
+                (Some(a), Some(b)) => a.same_as(&b),
+                _ => false,
+            };
+            if !now {
+                return Err(EngineError::Shared(format!(
+                    "the group of body {} was not assembled at this clock",
+                    s.first()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn setup_of(&self) -> Result<&crash_link::Setup, EngineError> {
+        self.setup.as_ref().ok_or(EngineError::NoSetup)
+    }
+
+    /// Split one of this worker's groups; its whole bodies for the other holders.
+    pub(super) fn split(&mut self, spec: SplitSpec) -> Result<Reply, EngineError> {
+        let (parts, mine) = mine(&spec)?;
+        let at = self
+            .groups
+            .iter()
+            .position(|g| {
+                g.copies.is_empty() && g.owned().map(|b| b.def.id).eq(spec.ids.iter().copied())
+            })
+            .ok_or_else(|| {
+                EngineError::Shared(format!("no group {:?} (without copies) here", spec.ids))
+            })?;
+        let setup = self.setup_of()?;
+        let (contact, gravity) = (setup.contact, setup.gravity);
+        let bodies = self.groups[at].bodies.clone();
+        let g = SharedGroup::new(&bodies, &parts, mine, contact, gravity)?;
+        self.groups.remove(at);
+        let out = bodies.iter().cloned().map(BodyLoad::whole).collect();
+        self.shared.push(Shared {
+            g,
+            home: true,
+            whole: bodies,
+            assembled: self.at,
+            nanos: 0,
+        });
+        Ok(Reply::Unloaded(out))
+    }
+
+    /// Hold parts of a group another worker split.
+    pub(super) fn share(
+        &mut self,
+        at: Clock,
+        spec: SplitSpec,
+        bodies: Vec<BodyLoad>,
+    ) -> Result<Reply, EngineError> {
+        self.check_clock(&at)?;
+        let (parts, mine) = mine(&spec)?;
+        if !bodies.iter().map(|b| b.id).eq(spec.ids.iter().copied()) {
+            return Err(EngineError::Shared(
+                "the bodies sent are not the split's".into(),
+            ));
+        }
+        let mut whole = Vec::with_capacity(bodies.len());
+        for b in bodies {
+            let known = self.defs.get(&b.id).cloned();
+            let body = b.into_body(known.as_ref())?;
+            self.defs.insert(body.def.id, body.def.clone());
+            whole.push(body);
+        }
+        let setup = self.setup_of()?;
+        let g = SharedGroup::new(&whole, &parts, mine, setup.contact, setup.gravity)?;
+        self.shared.push(Shared {
+            g,
+            home: false,
+            whole: Vec::new(),
+            assembled: None,
+            nanos: 0,
+        });
+        self.at = Some(at);
+        Ok(Reply::Ack)
+    }
+
+    /// Phase 1 of a step for the split groups (after the whole groups): the states of
+    /// the parts computed here into the report. Some: the fault reply.
+    pub(super) fn step_shared(
+        &mut self,
+        at: &Clock,
+        dt: f64,
+        due: Due,
+        rep: &mut StepReport,
+    ) -> Option<Reply> {
+        self.pending = Some((*at, dt, due));
+        for s in &mut self.shared {
+            let t = Instant::now();
+            let r: Result<Vec<PartState>, _> = s.g.integrate(at, dt);
+            s.nanos = t.elapsed().as_nanos() as u64;
+            match r {
+                Ok(p) => rep.parts.extend(p),
+                Err(fault) => {
+                    self.broken = true;
+                    return Some(Reply::Fault {
+                        group_first: s.first(),
+                        fault,
+                    });
+                }
+            }
+        }
+        None
+    }
+
+    fn in_flight(&self, what: &'static str) -> Result<(Clock, f64, Due), EngineError> {
+        if self.broken {
+            return Err(EngineError::Broken);
+        }
+        self.pending
+            .ok_or_else(|| EngineError::Shared(format!("{what} without a step")))
+    }
+
+    /// Phase 2: the other holders' part states; element forces here.
+    pub(super) fn halo(&mut self, parts: Vec<PartState>) -> Reply {
+        let (at, dt, _) = match self.in_flight("Halo") {
+            Ok(p) => p,
+            Err(e) => return Reply::Error(e.to_string()),
+        };
+        let mut out = Vec::new();
+        for s in &mut self.shared {
+            let t = Instant::now();
+            let mine: Vec<PartState> = parts
+                .iter()
+                .filter(|p| s.g.ids.contains(&p.id))
+                .cloned()
+                .collect();
+            match s.g.forces(&mine, &at, dt) {
+                Ok(d) => out.extend(d.into_iter().flatten()),
+                Err(crash_core::partition::SplitError::Fault(fault)) => {
+                    self.broken = true;
+                    return Reply::Fault {
+                        group_first: s.first(),
+                        fault,
+                    };
+                }
+                Err(e) => return Reply::Error(EngineError::Shared(e.to_string()).to_string()),
+            }
+            s.nanos += t.elapsed().as_nanos() as u64;
+        }
+        Reply::PartDts(out)
+    }
+
+    /// Phase 3: contact with the merged element steps; this worker's share of the
+    /// split bodies' reports.
+    pub(super) fn contact(&mut self, dts: Vec<PartDt>) -> Reply {
+        let (at, dt, due) = match self.in_flight("Contact") {
+            Ok(p) => p,
+            Err(e) => return Reply::Error(e.to_string()),
+        };
+        self.pending = None;
+        let reactions = self.setup.as_ref().is_some_and(|s| s.reactions) && due.reactions;
+        let step = at.after(dt).step;
+        let mut rep = StepReport::default();
+        for s in &mut self.shared {
+            let t = Instant::now();
+            let mine: Vec<PartDt> =
+                s.g.ids
+                    .iter()
+                    .filter_map(|id| dts.iter().find(|d| d.id == *id).copied())
+                    .collect();
+            match s.g.contact(&mine, dt, step, reactions) {
+                Ok(r) => rep.bodies.extend(r),
+                Err(crash_core::partition::SplitError::Fault(fault)) => {
+                    self.broken = true;
+                    return Reply::Fault {
+                        group_first: s.first(),
+                        fault,
+                    };
+                }
+                Err(e) => return Reply::Error(EngineError::Shared(e.to_string()).to_string()),
+            }
+            s.nanos += t.elapsed().as_nanos() as u64;
+            rep.groups.push(crash_link::GroupTime {
+                first: s.first(),
+                nanos: s.nanos,
+            });
+        }
+        // the split groups' compute over the three exchanges (integrate, element forces,
+        // contact): the master adds it to the Step's, so the barrier is the rest
+        rep.compute_ns = self.shared.iter().map(|s| s.nanos).sum();
+        Reply::Report(rep)
+    }
+
+    /// The parts computed here of the groups other workers split.
+    pub(super) fn parts(&self) -> Reply {
+        Reply::Parts(
+            self.shared
+                .iter()
+                .filter(|s| !s.home)
+                .flat_map(|s| s.g.own_states())
+                .collect(),
+        )
+    }
+
+    /// The other holders' parts of the groups split here: assemble the whole bodies.
+    pub(super) fn assemble(
+        &mut self,
+        parts: Vec<(u32, u32, BodyState)>,
+    ) -> Result<Reply, EngineError> {
+        let mut parts = parts;
+        for s in self.shared.iter_mut().filter(|s| s.home) {
+            let (these, rest): (Vec<_>, Vec<_>) =
+                parts.into_iter().partition(|p| s.g.ids.contains(&p.0));
+            parts = rest;
+            s.whole = s.g.assemble(these)?;
+            s.assembled = self.at;
+        }
+        if let Some(p) = parts.first() {
+            return Err(EngineError::Shared(format!(
+                "part {} of body {} belongs to no group split here",
+                p.1, p.0
+            )));
+        }
+        Ok(Reply::Ack)
+    }
+
+    /// Merge the split groups back: the home holds each as a group again (assembled
+    /// at this clock), the other holders forget their parts.
+    pub(super) fn unsplit(&mut self) -> Result<Reply, EngineError> {
+        self.check_assembled()?;
+        for s in std::mem::take(&mut self.shared) {
+            if s.home {
+                let g = self.new_group(s.whole, Vec::new())?;
+                self.groups.push(g);
+            }
+        }
+        self.groups.sort_by_key(|g| g.first());
+        self.pending = None;
+        Ok(Reply::Ack)
+    }
+}

@@ -1,0 +1,149 @@
+//! Groups split over workers by elements (issue 16 point 2): the master loop over
+//! in-process workers with a group cut into parts on several workers gives the state
+//! hash of the single-process core driver, bit for bit (the showcase, many spheres on one
+//! deformable plate, and a scene whose groups change, so split groups are merged back
+//! and split again).
+#![allow(clippy::unwrap_used)] // a test panics on failure
+
+use crash_master::{CostModel, RecordSink, RunInput, RunOptions, SplitMode};
+use crash_tests::procs::{master, out_dir, worker};
+use crash_tests::runs::{driver_reference, input, input_of, resume_local, run_local};
+use std::path::PathBuf;
+use std::time::Duration;
+
+fn opts(split: SplitMode) -> RunOptions {
+    RunOptions {
+        cost: CostModel::Estimated,
+        split,
+        ..RunOptions::default()
+    }
+}
+
+fn scene(rel: &str, end: f64) -> RunInput {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel);
+    let mut inp = input_of(&p);
+    inp.config.end_time = end;
+    inp
+}
+
+/// The final state hash over `workers` in-process workers with `split`, and how many
+/// splits were made.
+fn split_run(inp: &RunInput, workers: usize, split: SplitMode) -> (u64, u64) {
+    let mut sink = RecordSink::default();
+    let stats = run_local(inp.clone(), workers, &mut sink, &opts(split)).unwrap();
+    assert_eq!(Some(stats.final_hash), sink.last_hash);
+    (stats.final_hash, stats.splits)
+}
+
+#[test]
+fn the_showcase_split_over_two_workers_has_the_single_process_state() {
+    let inp = scene("scenes/sphere-on-plate.toml", 1.2e-3);
+    let (_, reference) = driver_reference(&inp);
+    assert_eq!(format!("{reference:016x}"), "137893bb99bd4cec");
+    let (hash, splits) = split_run(&inp, 2, SplitMode::Auto);
+    assert!(splits >= 1, "the showcase's one group must be split");
+    assert_eq!(format!("{hash:016x}"), format!("{reference:016x}"));
+}
+
+/// `crash-master --split auto` over 2 `crash-worker` processes (gRPC on loopback):
+/// the showcase to 1.2 ms ends in the single-process state, and the log names the split.
+#[test]
+fn the_showcase_split_over_two_grpc_workers_has_the_single_process_state() {
+    let out = out_dir("split-grpc");
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes/sphere-on-plate.toml");
+    let extra = [
+        "--split",
+        "auto",
+        "--end-time",
+        "1.2e-3",
+        "--output-interval",
+        "6e-4",
+    ];
+    let (mut m, url) = master(&p, 2, &out, &extra);
+    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+    assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
+    for p in &mut w {
+        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    }
+    assert!(
+        m.log().contains("split over workers [0, 1]")
+            || m.log().contains("split over workers [1, 0]"),
+        "{}",
+        m.log()
+    );
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    assert!(s.fault.is_none(), "{:?}", s.fault);
+    assert_eq!(s.final_state_hash, "137893bb99bd4cec");
+}
+
+#[test]
+fn many_spheres_on_one_plate_split_over_two_workers_have_the_single_process_state() {
+    let inp = scene("scenes/bench/spheres-on-deformable-plate.toml", 3e-4);
+    let (_, reference) = driver_reference(&inp);
+    let (hash, splits) = split_run(&inp, 2, SplitMode::Auto);
+    assert!(splits >= 1, "the one group of 65 bodies must be split");
+    assert_eq!(format!("{hash:016x}"), format!("{reference:016x}"));
+}
+
+#[test]
+fn groups_split_merged_back_and_split_again_keep_the_single_process_state() {
+    let inp = input("ten-spheres-tiny.toml");
+    let (_, reference) = driver_reference(&inp);
+    for workers in [2, 3] {
+        let (hash, splits) = split_run(&inp, workers, SplitMode::Always);
+        assert!(splits >= 2, "{workers} workers: {splits} splits");
+        assert_eq!(hash, reference, "{workers} workers");
+    }
+    // checkpoints every 7 steps: each assembles the split bodies at their homes
+    let mut sink = RecordSink::default();
+    let o = RunOptions {
+        checkpoint_every: 7,
+        ..opts(SplitMode::Always)
+    };
+    let stats = run_local(inp.clone(), 2, &mut sink, &o).unwrap();
+    assert!(stats.splits >= 2);
+    assert!(!sink.checkpoints.is_empty(), "no checkpoint taken");
+    assert_eq!(stats.final_hash, reference, "with checkpoints");
+    // a checkpoint assembled from parts is complete: resumed (split again), the run
+    // ends in the same state
+    let ck = sink.checkpoints[sink.checkpoints.len() / 2].clone();
+    let mut again = RecordSink::default();
+    let resumed = resume_local(inp, ck, 2, &mut again, &opts(SplitMode::Always)).unwrap();
+    assert_eq!(
+        resumed.final_hash, reference,
+        "resumed from a split run's checkpoint"
+    );
+}
+
+/// A physical fault found by a part (tunnelling: the largest move over the parts, its
+/// node named in the whole body) stops the run with exactly the driver's fault.
+#[test]
+fn a_fault_in_a_split_group_is_the_drivers_fault() {
+    let text = std::fs::read_to_string(crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
+        .unwrap()
+        .replace(
+            "penalty_scale = 0.1",
+            "penalty_scale = 0.1\nmargin = 1.0e-5",
+        )
+        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [400.0, 0.0, 0.0]");
+    let scene = crash_scene::parse(&text, "fast.toml").unwrap();
+    let inp = RunInput::from_built(scene.build().unwrap());
+    let mut g = crash_core::Group::new(inp.bodies.all().unwrap(), inp.gravity);
+    g.contact = inp.contact;
+    let expected = crash_core::driver::Run::new(g, inp.config)
+        .unwrap()
+        .run(|_| {})
+        .unwrap_err();
+    assert!(
+        matches!(expected, crash_core::Fault::Tunnelling { .. }),
+        "{expected}"
+    );
+    let mut sink = RecordSink::default();
+    let err = run_local(inp, 2, &mut sink, &opts(SplitMode::Always)).unwrap_err();
+    match &err {
+        crash_master::MasterError::Fault(f) => assert_eq!(f, &expected),
+        other => panic!("{other}"),
+    }
+}
