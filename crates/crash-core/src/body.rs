@@ -195,6 +195,12 @@ pub struct BodyDef {
     /// whole body.
     #[serde(default)]
     pub halo_nodes: usize,
+    /// A part of a split body: per element, true where another part is the element's
+    /// owner (`Partition`). Such an element is computed here too (it touches an owned
+    /// node) but its energies are counted by its owner only, so that the parts' energies
+    /// add up to the whole body's. None for a whole body.
+    #[serde(skip)]
+    pub uncounted: Option<std::sync::Arc<[bool]>>,
 }
 
 /// What a step changes: nodal motion, element resultants and force slots, contact
@@ -343,6 +349,7 @@ impl Body {
                 self_contact: false,
                 kinematic: false,
                 halo_nodes: 0,
+                uncounted: None,
             }),
         })
     }

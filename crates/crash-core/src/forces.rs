@@ -29,9 +29,11 @@ pub fn element_dt(sec: &Section, length: f64) -> f64 {
 pub const CHUNK: usize = 256;
 
 /// What the element loop of one body reports.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ForceSums {
     pub energy: ElemEnergy,
+    /// `BodyDef::uncounted`: elements whose energies another part counts.
+    pub(crate) uncounted: Option<std::sync::Arc<[bool]>>,
     /// Smallest element critical time step (without the safety factor) and its element.
     pub dt: f64,
     pub dt_element: usize,
@@ -44,6 +46,7 @@ impl Default for ForceSums {
     fn default() -> Self {
         Self {
             energy: ElemEnergy::default(),
+            uncounted: None,
             dt: f64::INFINITY,
             dt_element: 0,
             hot_element: 0,
@@ -57,8 +60,10 @@ impl ForceSums {
     /// (internal + hourglass) / area0 and its critical time step.
     #[inline(always)]
     pub(crate) fn add(&mut self, e: usize, internal: f64, hourglass: f64, density: f64, dt: f64) {
-        self.energy.internal += internal;
-        self.energy.hourglass += hourglass;
+        if !self.uncounted.as_ref().is_some_and(|u| u.get(e).copied().unwrap_or(false)) {
+            self.energy.internal += internal;
+            self.energy.hourglass += hourglass;
+        }
         let mut dens = density;
         if dens.is_nan() {
             dens = f64::INFINITY;
@@ -134,6 +139,7 @@ impl Body {
         let (tri_state, quad_state) = self.state.shell.split_at_mut(nt);
 
         // each chunk runs on the SIMD path of this CPU (element::simd)
+        let uncounted = &self.def.uncounted;
         let tri = |ci: usize,
                    els: &[TriElem],
                    states: &mut [ShellState],
@@ -149,6 +155,7 @@ impl Body {
                 nodes,
                 h,
                 first: ci * CHUNK,
+                uncounted,
             })
         };
         let tri_base = self
@@ -186,6 +193,7 @@ impl Body {
                 nodes,
                 h,
                 first: nt + ci * CHUNK,
+                uncounted,
             })
         };
         let quad_base = self

@@ -153,6 +153,7 @@ fn forces_with<S: Runner>(b: &Body) -> (Vec<u64>, Vec<u64>) {
             nodes,
             h: 1e-6,
             first: 0,
+            uncounted: &None,
         })
         .expect("forces");
         let q = S::quad(QuadChunk {
@@ -166,6 +167,7 @@ fn forces_with<S: Runner>(b: &Body) -> (Vec<u64>, Vec<u64>) {
             nodes,
             h: 1e-6,
             first: nt,
+            uncounted: &None,
         })
         .expect("forces");
         for s in [s, q] {

@@ -427,6 +427,8 @@ pub struct TriChunk<'a> {
     pub h: f64,
     /// Body-wide index of the chunk's first element.
     pub first: usize,
+    /// `BodyDef::uncounted` (a part of a split body), else None.
+    pub uncounted: &'a Option<std::sync::Arc<[bool]>>,
 }
 
 impl Lanewise for TriChunk<'_> {
@@ -451,7 +453,10 @@ impl TriChunk<'_> {
             Consts::<f64>::new(self.sec, self.stab),
         );
         let (els, sts, slots, damped) = (self.els, self.states, self.slots, self.damped);
-        let mut sums = ForceSums::default();
+        let mut sums = ForceSums {
+            uncounted: self.uncounted.clone(),
+            ..ForceSums::default()
+        };
         let (mut buf, mut buf1) = (TriLanes::<S>::zero(), TriLanes::<f64>::zero());
         let w = S::W;
         let full = els.len() - els.len() % w;
@@ -506,6 +511,8 @@ pub struct QuadChunk<'a> {
     pub h: f64,
     /// Body-wide index of the chunk's first element.
     pub first: usize,
+    /// `BodyDef::uncounted` (a part of a split body), else None.
+    pub uncounted: &'a Option<std::sync::Arc<[bool]>>,
 }
 
 impl Lanewise for QuadChunk<'_> {
@@ -530,7 +537,10 @@ impl QuadChunk<'_> {
         );
         let (els, sts, hgs) = (self.els, self.states, self.hourglass);
         let (slots, damped) = (self.slots, self.damped);
-        let mut sums = ForceSums::default();
+        let mut sums = ForceSums {
+            uncounted: self.uncounted.clone(),
+            ..ForceSums::default()
+        };
         let (mut buf, mut buf1) = (QuadLanes::<S>::zero(), QuadLanes::<f64>::zero());
         let w = S::W;
         let full = els.len() - els.len() % w;

@@ -106,13 +106,20 @@ impl Split {
                 owner[n as usize] = (q, i as u32);
             }
             let node: Vec<u32> = owned.iter().chain(&halo).copied().collect();
-            parts.push((owned.len(), node, element));
+            // an element's energies are counted by the part owning its first node (a
+            // part that holds it), so that the parts' energies add up to the whole's
+            let uncounted: std::sync::Arc<[bool]> = element
+                .iter()
+                .map(|&e| owner_part[nodes_of(e as usize)[0] as usize] != q)
+                .collect();
+            parts.push((owned.len(), node, element, uncounted));
         }
         let parts = parts
             .into_iter()
-            .map(|(n_owned, node, element)| {
+            .map(|(n_owned, node, element, uncounted)| {
                 let halo_from = node[n_owned..].iter().map(|&n| owner[n as usize]).collect();
-                let body = sub_body(whole, &node, &element, n_owned)?;
+                let mut body = sub_body(whole, &node, &element, n_owned)?;
+                body.def_mut().uncounted = Some(uncounted);
                 Ok(Part {
                     body,
                     owned: n_owned,
