@@ -7,7 +7,7 @@
 mod contact_util;
 
 use contact_util::*;
-use crash_core::contact::ContactConfig;
+use crash_core::contact::{ContactConfig, ContactPass};
 use crash_core::{Body, Run, RunConfig, Vec3};
 
 struct After {
@@ -54,7 +54,17 @@ fn oblique(offset: Vec3, spin: Vec3) -> After {
     s.set_rigid_velocity(v0, spin, c0);
     let p = fixed_plate(1, 0.3, 60, tp, 0.0);
     let mut run = Run::new(
-        group(vec![s, p], ContactConfig::default()),
+        group(
+            vec![s, p],
+            ContactConfig {
+                pass: if std::env::var("CONTACT_PASS").as_deref() == Ok("segments") {
+                    ContactPass::Segments
+                } else {
+                    ContactPass::Nodes
+                },
+                ..Default::default()
+            },
+        ),
         RunConfig {
             end_time: 1.5e-3,
             ..Default::default()
