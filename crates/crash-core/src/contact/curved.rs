@@ -8,7 +8,7 @@
 //! |e|^2 / 8R, the sagitta); on a flat segment it is zero. Along an edge only that edge's
 //! two nodes count, so neighbours share the edge's curve: the surface is continuous.
 
-use super::segment::{Projection, Segment};
+use super::segment::Segment;
 use super::smooth::CREASE_COS;
 use super::surface::{face_vector, Surface};
 use crate::Vec3;
@@ -181,22 +181,6 @@ impl SubTriangle {
         }
     }
 
-    /// Gradient in space of a function of the weights with partials `df`, through the
-    /// in-plane barycentrics of the point's projection on the plane.
-    pub fn gradient(&self, df: &[f64; 4]) -> Vec3 {
-        let (e1, e2) = (self.b - self.a, self.c - self.a);
-        let (p, q, r) = (e1.dot(&e1), e1.dot(&e2), e2.dot(&e2));
-        let det = p * r - q * q;
-        if det <= 0.0 {
-            return Vec3::zeros();
-        }
-        let g1 = (e1 * r - e2 * q) / det;
-        let g2 = (e2 * p - e1 * q) / det;
-        let du: f64 = (0..4).map(|k| df[k] * self.dw_du[k]).sum();
-        let dv: f64 = (0..4).map(|k| df[k] * self.dw_dv[k]).sum();
-        g1 * du + g2 * dv
-    }
-
     /// The inverse metric of the in-plane basis (e1, e2) and its dual vectors g1, g2
     /// (grad u, grad v of a point's projection); None on a degenerate triangle.
     fn dual(&self) -> Option<([[f64; 2]; 2], Vec3, Vec3)> {
@@ -308,29 +292,6 @@ impl SubTriangle {
             out[(sub + 1) % 4] += f[2];
         }
     }
-
-    /// Segment weights of the point where the line through `p` along `m` meets the
-    /// plane, or None when the line is parallel to it or the point lies more than `tol`
-    /// (in barycentric weight) outside the triangle.
-    pub fn line_weights(&self, p: &Vec3, m: &Vec3, base: &[f64; 4], tol: f64) -> Option<[f64; 4]> {
-        let (e1, e2) = (self.b - self.a, self.c - self.a);
-        // p - t m = a + u e1 + v e2  <=>  u e1 + v e2 + t m = p - a
-        let r = p - self.a;
-        let det = e1.dot(&e2.cross(m));
-        if det.abs() <= 1e-300 {
-            return None;
-        }
-        let u = r.dot(&e2.cross(m)) / det;
-        let v = e1.dot(&r.cross(m)) / det;
-        if u < -tol || v < -tol || 1.0 - u - v < -tol {
-            return None;
-        }
-        let mut w = base.to_owned();
-        for k in 0..4 {
-            w[k] += u * self.dw_du[k] + v * self.dw_dv[k];
-        }
-        Some(w)
-    }
 }
 
 /// Weights at the sub-triangle's corner A (u = v = 0) for a projection's sub-triangle.
@@ -340,9 +301,4 @@ pub fn corner_a_weights(seg: &Segment) -> [f64; 4] {
     } else {
         [0.25; 4]
     }
-}
-
-/// The sub-triangle index of a projection (0 for a triangle).
-pub fn sub_of(pr: &Projection) -> usize {
-    pr.sub as usize
 }

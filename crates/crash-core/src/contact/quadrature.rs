@@ -18,10 +18,12 @@ use super::curved::{
 };
 use super::narrow::TIE;
 use super::segment::{project, Projection, Segment};
+use super::stage::{KinLoad, PairStats};
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
+use std::mem::take;
 
 /// Target spacing of the quadrature points as a fraction of the contact distance c:
 /// each (sub-)triangle edge is split into ceil(L / (SPACING c)) parts.
@@ -314,5 +316,83 @@ fn slave_segment(
                 depth: -gap,
             });
         }
+    }
+}
+
+/// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
+/// `sb`): each body slave once with half the weight; stiffness per unit area
+/// kappa = s mu / dt_ref^2 (the soft rule per area, mu the lighter areal mass).
+pub(crate) fn segment_pair(
+    bodies: &mut [Body],
+    ia: usize,
+    ib: usize,
+    sa: &Surface,
+    sb: &Surface,
+    cfg: &ContactConfig,
+    dt_ref: f64,
+) -> PairStats {
+    let (a, b) = (&bodies[ia], &bodies[ib]);
+    let mu = sa.areal_mass.min(sb.areal_mass);
+    let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
+    let first = point_pushes(a, sa, b, sb, cfg, kappa, mu);
+    let second = point_pushes(b, sb, a, sa, cfg, kappa, mu);
+    let mut st = PairStats {
+        a: a.def.id,
+        b: b.def.id,
+        active_nodes: first.len() + second.len(),
+        max_penetration: 0.0,
+        max_penetration_ratio: 0.0,
+        normal_force: 0.0,
+        force_on_a: Vec3::zeros(),
+        kin_a: KinLoad::default(),
+        kin_b: KinLoad::default(),
+    };
+    let thin = a.def.section.thickness.min(b.def.section.thickness);
+    apply_points(bodies, ia, ib, &first, &mut st, true);
+    apply_points(bodies, ib, ia, &second, &mut st, false);
+    st.kin_a.settle_nodes();
+    st.kin_b.settle_nodes();
+    st.max_penetration_ratio = st.max_penetration / thin;
+    st
+}
+
+/// Add the points of one direction of the segment pass: their node forces on the
+/// slave's nodes (body `islave`) and the master's, sequentially in point order; what lands on
+/// a kinematic body goes into the pair's `KinLoad` too.
+fn apply_points(
+    bodies: &mut [Body],
+    islave: usize,
+    imaster: usize,
+    pushes: &[PointPush],
+    st: &mut PairStats,
+    slave_is_a: bool,
+) {
+    let (kin_s, kin_m) = (bodies[islave].def.kinematic, bodies[imaster].def.kinematic);
+    let (mut l_s, mut l_m) = if slave_is_a {
+        (take(&mut st.kin_a), take(&mut st.kin_b))
+    } else {
+        (take(&mut st.kin_b), take(&mut st.kin_a))
+    };
+    for p in pushes {
+        for (body, fs, kin, l) in [
+            (islave, &p.slave_f, kin_s, &mut l_s),
+            (imaster, &p.master_f, kin_m, &mut l_m),
+        ] {
+            let b = &mut bodies[body];
+            for &(n, f) in fs {
+                b.state.f_contact[n as usize] += f;
+                if kin {
+                    l.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
+                }
+            }
+        }
+        st.max_penetration = st.max_penetration.max(p.depth);
+        st.normal_force += p.normal_force;
+        st.force_on_a += if slave_is_a { p.force } else { -p.force };
+    }
+    if slave_is_a {
+        (st.kin_a, st.kin_b) = (l_s, l_m);
+    } else {
+        (st.kin_b, st.kin_a) = (l_s, l_m);
     }
 }

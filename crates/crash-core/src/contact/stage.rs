@@ -12,7 +12,7 @@ use super::config::{
     ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
 };
 use super::narrow::{forces, search, Hit, Normals, Push};
-use super::quadrature::{point_pushes, PointPush};
+use super::quadrature::segment_pair;
 use super::segment::Segment;
 use super::surface::Surface;
 use super::sweep::{closing_speed, first_crossing, mean_velocity};
@@ -43,7 +43,7 @@ pub struct KinLoad {
 }
 
 impl KinLoad {
-    fn push(&mut self, node: u32, f: Vec3, v: Vec3, program: u16) {
+    pub(crate) fn push(&mut self, node: u32, f: Vec3, v: Vec3, program: u16) {
         self.nodes.push((node, f));
         self.power += f.dot(&v);
         if program == NO_PROGRAM {
@@ -73,7 +73,7 @@ impl KinLoad {
     }
 
     /// Sum the pushes per node (kept in hit order by the stable sort).
-    fn settle_nodes(&mut self) {
+    pub(crate) fn settle_nodes(&mut self) {
         if self.nodes.is_empty() {
             return;
         }
@@ -370,43 +370,7 @@ pub(crate) fn contact_forces_given(
             continue;
         }
         if cfg.pass == ContactPass::Segments && !self_pair {
-            // each body slave once, half the weight each way; stiffness per area from
-            // the lighter body's areal mass (the soft rule per unit area)
-            let mu = sa.areal_mass.min(sb.areal_mass);
-            let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
-            let dirs = std::env::var("QP_DIR").unwrap_or_default();
-            let (k1, k2) = match dirs.as_str() {
-                "first" => (2.0 * kappa, 0.0),
-                "second" => (0.0, 2.0 * kappa),
-                _ => (kappa, kappa),
-            };
-            let first = if k1 > 0.0 {
-                point_pushes(a, sa, b, sb, cfg, k1, mu)
-            } else {
-                Vec::new()
-            };
-            let second = if k2 > 0.0 {
-                point_pushes(b, sb, a, sa, cfg, k2, mu)
-            } else {
-                Vec::new()
-            };
-            let mut st = PairStats {
-                a: a.def.id,
-                b: b.def.id,
-                active_nodes: first.len() + second.len(),
-                max_penetration: 0.0,
-                max_penetration_ratio: 0.0,
-                normal_force: 0.0,
-                force_on_a: Vec3::zeros(),
-                kin_a: KinLoad::default(),
-                kin_b: KinLoad::default(),
-            };
-            let thin = a.def.section.thickness.min(b.def.section.thickness);
-            apply_points(bodies, ia, ib, &first, &mut st, true);
-            apply_points(bodies, ib, ia, &second, &mut st, false);
-            st.kin_a.settle_nodes();
-            st.kin_b.settle_nodes();
-            st.max_penetration_ratio = st.max_penetration / thin;
+            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref);
             state.stats.push(st);
             continue;
         }
@@ -539,47 +503,6 @@ fn apply(
         (st.kin_a, st.kin_b) = (l_node, l_seg);
     } else {
         (st.kin_b, st.kin_a) = (l_node, l_seg);
-    }
-}
-
-/// Add the points of one direction of the segment pass: their node forces on the
-/// slave's nodes (body `islave`) and the master's, sequentially in point order; what lands on
-/// a kinematic body goes into the pair's `KinLoad` too.
-fn apply_points(
-    bodies: &mut [Body],
-    islave: usize,
-    imaster: usize,
-    pushes: &[PointPush],
-    st: &mut PairStats,
-    slave_is_a: bool,
-) {
-    let (kin_s, kin_m) = (bodies[islave].def.kinematic, bodies[imaster].def.kinematic);
-    let (mut l_s, mut l_m) = if slave_is_a {
-        (take(&mut st.kin_a), take(&mut st.kin_b))
-    } else {
-        (take(&mut st.kin_b), take(&mut st.kin_a))
-    };
-    for p in pushes {
-        for (body, fs, kin, l) in [
-            (islave, &p.slave_f, kin_s, &mut l_s),
-            (imaster, &p.master_f, kin_m, &mut l_m),
-        ] {
-            let b = &mut bodies[body];
-            for &(n, f) in fs {
-                b.state.f_contact[n as usize] += f;
-                if kin {
-                    l.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
-                }
-            }
-        }
-        st.max_penetration = st.max_penetration.max(p.depth);
-        st.normal_force += p.normal_force;
-        st.force_on_a += if slave_is_a { p.force } else { -p.force };
-    }
-    if slave_is_a {
-        (st.kin_a, st.kin_b) = (l_s, l_m);
-    } else {
-        (st.kin_b, st.kin_a) = (l_s, l_m);
     }
 }
 
