@@ -1,8 +1,6 @@
 //! The curved contact surface of a segment for the segment pass (`quadrature.rs`): the
 //! flat facet plus the quadratic bulge of the nodal normals,
-//!
-//!     h(w) = sum_{i<j} w_i w_j b_ij,   b_ij = e_ij . (n_j - n_i) / 2,   e_ij = x_j - x_i,
-//!
+//! h(w) = sum_{i<j} w_i w_j b_ij, b_ij = e_ij . (n_j - n_i) / 2, e_ij = x_j - x_i,
 //! along the (sub-)triangle's unit normal (w: the segment's shape-function weights). For
 //! nodes on a sphere with radial normals h is the sphere to second order (edge midpoint:
 //! |e|^2 / 8R, the sagitta); on a flat segment it is zero. Along an edge only that edge's
