@@ -27,7 +27,7 @@ use std::mem::take;
 
 /// Target spacing of the quadrature points as a fraction of the contact distance c:
 /// each (sub-)triangle edge is split into ceil(L / (SPACING c)) parts.
-pub const SPACING: f64 = 0.25;
+pub const SPACING: f64 = 0.5;
 /// Most parts per (sub-)triangle edge (bounds the cost on coarse meshes).
 pub const MAX_PARTS: usize = 24;
 /// Master points are looked for this far beyond the flat contact distance, as a share
