@@ -4,7 +4,7 @@
 mod contact_util;
 
 use contact_util::*;
-use crash_core::contact::{ContactConfig, ContactState};
+use crash_core::contact::{ContactConfig, ContactPass, ContactState};
 use crash_core::hash::state_hash;
 use crash_core::{Body, Run, RunConfig, Vec3};
 
@@ -47,8 +47,13 @@ fn bystander() -> Body {
 }
 
 fn run(bodies: Vec<Body>, steps: usize) -> Run {
+    run_with(bodies, steps, ContactPass::Nodes)
+}
+
+fn run_with(bodies: Vec<Body>, steps: usize, pass: ContactPass) -> Run {
     let cfg = ContactConfig {
         margin: 1e-3,
+        pass,
         ..Default::default()
     };
     let mut run = Run::new(
@@ -69,6 +74,15 @@ const STEPS: usize = 300;
 
 #[test]
 fn contact_state_is_bit_identical_for_1_2_and_4_threads() {
+    same_bits_for_1_2_and_4_threads(ContactPass::Nodes);
+}
+
+#[test]
+fn segment_pass_state_is_bit_identical_for_1_2_and_4_threads() {
+    same_bits_for_1_2_and_4_threads(ContactPass::Segments);
+}
+
+fn same_bits_for_1_2_and_4_threads(pass: ContactPass) {
     let hashes: Vec<u64> = [1, 2, 4]
         .iter()
         .map(|&n| {
@@ -77,7 +91,7 @@ fn contact_state_is_bit_identical_for_1_2_and_4_threads() {
                 .build()
                 .expect("pool");
             pool.install(|| {
-                let r = run(pair(), STEPS);
+                let r = run_with(pair(), STEPS, pass);
                 let active: usize = r.group.contact_stats().iter().map(|s| s.active_nodes).sum();
                 println!(
                     "{n} threads: hash {:016x}, active contact nodes {active}",

@@ -4,7 +4,7 @@
 mod contact_util;
 
 use contact_util::*;
-use crash_core::contact::ContactConfig;
+use crash_core::contact::{ContactConfig, ContactPass};
 use crash_core::{Run, RunConfig, Vec3};
 
 #[test]
@@ -57,6 +57,17 @@ fn head_on_spheres_conserve_momentum_and_exchange_velocities() {
 
 #[test]
 fn oblique_impact_conserves_linear_and_angular_momentum() {
+    oblique_impact(ContactPass::Nodes);
+}
+
+/// The segment pass: its node forces are the exact gradient of a potential invariant
+/// under rigid motions, so they sum to zero and have no moment.
+#[test]
+fn oblique_impact_conserves_linear_and_angular_momentum_with_the_segment_pass() {
+    oblique_impact(ContactPass::Segments);
+}
+
+fn oblique_impact(pass: ContactPass) {
     let (r, t): (f64, f64) = (0.1, 0.002);
     let v0 = 2.0;
     // centres half a radius apart sideways, surfaces 0.1 mm apart; spin on one of them
@@ -82,6 +93,7 @@ fn oblique_impact_conserves_linear_and_angular_momentum() {
     b.set_rigid_velocity(vb, Vec3::new(0.0, 20.0, 5.0), cb);
     let cfg = ContactConfig {
         margin: 1e-3,
+        pass,
         ..Default::default()
     };
     let mut run = Run::new(

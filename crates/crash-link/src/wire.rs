@@ -3,7 +3,7 @@
 //! conversions); the clock travels in Step and Load.
 
 use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, SplitSpec, StepReport};
-use crash_core::contact::{ContactConfig, PenaltyKind, SpeedRule};
+use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SpeedRule};
 use crash_core::partition::{PartDt, PartState};
 use crash_core::BodyState;
 use crash_core::{Clock, Due, Vec3};
@@ -33,6 +33,11 @@ fn contact_to_pb(c: &ContactConfig) -> pb::ContactConfig {
             SpeedRule::Stop => "stop",
         }
         .into(),
+        pass: match c.pass {
+            ContactPass::Nodes => "nodes",
+            ContactPass::Segments => "segments",
+        }
+        .into(),
     }
 }
 
@@ -57,6 +62,15 @@ fn contact_from_pb(c: &pb::ContactConfig) -> Result<ContactConfig, ProtoError> {
             other => {
                 return Err(ProtoError::Invalid(format!(
                     "unknown contact speed rule '{other}'"
+                )))
+            }
+        },
+        pass: match c.pass.as_str() {
+            "" | "nodes" => ContactPass::Nodes,
+            "segments" => ContactPass::Segments,
+            other => {
+                return Err(ProtoError::Invalid(format!(
+                    "unknown contact pass '{other}'"
                 )))
             }
         },

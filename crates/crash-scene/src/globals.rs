@@ -3,7 +3,7 @@
 use crate::context::Ctx;
 use crate::error::{ErrorKind, SceneError};
 use crate::schema::{MaterialSpec, SceneFile};
-use crash_core::contact::{ContactConfig, PenaltyKind, SpeedRule};
+use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SpeedRule};
 use crash_core::{CoreError, Material, Vec3};
 use std::collections::BTreeMap;
 
@@ -132,6 +132,18 @@ pub fn globals(
             return Err(ctx.invalid("contact.speed_rule", "must be \"limit_dt\" or \"stop\""))
         }
     };
+    let pass = match c.pass.as_deref() {
+        None => d.pass,
+        Some("nodes") => ContactPass::Nodes,
+        Some("segments") => ContactPass::Segments,
+        Some(_) => return Err(ctx.invalid("contact.pass", "must be \"nodes\" or \"segments\"")),
+    };
+    if pass == ContactPass::Segments && penalty != PenaltyKind::Soft {
+        return Err(ctx.invalid(
+            "contact.pass",
+            "\"segments\" needs contact.penalty = \"soft\" (its stiffness is per area)",
+        ));
+    }
     Ok(Globals {
         end_time,
         safety,
@@ -145,6 +157,7 @@ pub fn globals(
             penalty,
             damping_ratio,
             speed_rule,
+            pass,
         },
         margin_given: c.margin.is_some(),
     })

@@ -93,6 +93,8 @@ pub struct ContactSpec {
     pub damping_ratio: Option<f64>,
     /// "limit_dt" (default) or "stop".
     pub speed_rule: Option<String>,
+    /// "nodes" (default) or "segments".
+    pub pass: Option<String>,
 }
 
 /// Either (young, poisson) or the seed's Lamé pair (lambda1, lambda2).

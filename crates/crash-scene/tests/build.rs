@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use crash_core::body::{dof, NO_PROGRAM};
-use crash_core::contact::PenaltyKind;
+use crash_core::contact::{ContactPass, PenaltyKind};
 use crash_core::Vec3;
 use crash_scene::margin::{MARGIN_ELEMENT_FRACTION, MARGIN_STEPS};
 
@@ -38,6 +38,13 @@ fn defaults_are_applied() {
         .iter()
         .all(|x| x.def.contact && !x.def.self_contact && x.def.mass_damping == 0.0));
     assert_eq!(b.run_config().end_time, 1.0e-3);
+}
+
+#[test]
+fn contact_pass_is_nodes_by_default_and_segments_when_given() {
+    assert_eq!(build(BASE).contact.pass, ContactPass::Nodes);
+    let b = build(&format!("{BASE}\n[contact]\npass = \"segments\"\n"));
+    assert_eq!(b.contact.pass, ContactPass::Segments);
 }
 
 #[test]

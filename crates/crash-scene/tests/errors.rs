@@ -464,6 +464,18 @@ fn unknown_penalty_kind_is_refused() {
 }
 
 #[test]
+fn unknown_contact_pass_and_segments_with_the_element_penalty_are_refused() {
+    let e = error(&format!("{BASE}\n[contact]\npass = \"points\"\n"));
+    assert_eq!(e.kind, ErrorKind::Invalid, "{e}");
+    assert!(e.to_string().contains("contact.pass"), "{e}");
+    let e = error(&format!(
+        "{BASE}\n[contact]\npass = \"segments\"\npenalty = \"element\"\n"
+    ));
+    assert_eq!(e.kind, ErrorKind::Invalid, "{e}");
+    assert!(e.to_string().contains("penalty = \"soft\""), "{e}");
+}
+
+#[test]
 fn duplicate_body_name_is_refused() {
     let e = error(&with("name = \"ball\"", "name = \"plate\""));
     check(

@@ -31,6 +31,18 @@ pub enum SpeedRule {
     Stop,
 }
 
+/// Where contact forces act (docs/theory-contact.md, "Segment pass").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactPass {
+    /// Node to segment, both ways (each body's nodes against the other's segments).
+    #[default]
+    Nodes,
+    /// Quadrature points on each body's curved segments against the other's, half
+    /// weight each way (soft penalty only); self pairs stay node to segment.
+    Segments,
+}
+
 /// Most a node may close on a segment in one step, as a fraction of the contact
 /// distance c = (t_node + t_segment)/2, under `SpeedRule::LimitDt`.
 pub const CLOSING_FRACTION: f64 = 0.2;
@@ -59,6 +71,9 @@ pub struct ContactConfig {
     /// Fast motion: limit the time step by closing speed, or only stop at a crossing.
     #[serde(default)]
     pub speed_rule: SpeedRule,
+    /// Node passes or the segment pass.
+    #[serde(default)]
+    pub pass: ContactPass,
 }
 
 impl Default for ContactConfig {
@@ -70,6 +85,7 @@ impl Default for ContactConfig {
             penalty: PenaltyKind::Soft,
             damping_ratio: 0.0,
             speed_rule: SpeedRule::LimitDt,
+            pass: ContactPass::Nodes,
         }
     }
 }
@@ -128,6 +144,12 @@ impl ContactConfig {
                 self.damping_ratio,
                 "must be in [0, 1]",
             ));
+        }
+        if self.pass == ContactPass::Segments && self.penalty != PenaltyKind::Soft {
+            return Err(CoreError::Other {
+                body: "contact".into(),
+                what: "pass = segments needs penalty = soft (its stiffness is per area)".into(),
+            });
         }
         Ok(())
     }

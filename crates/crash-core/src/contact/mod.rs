@@ -4,7 +4,9 @@
 
 pub mod broad;
 pub mod config;
+pub mod curved;
 pub mod narrow;
+pub mod quadrature;
 pub mod segment;
 pub mod smooth;
 pub mod stage;
@@ -14,7 +16,8 @@ pub mod verlet;
 
 pub use broad::{candidate_pairs, BodyBox};
 pub use config::{
-    ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY, SOFT_SCALE_LIMIT,
+    ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
+    SOFT_SCALE_LIMIT,
 };
 pub use segment::{project, segments, Projection, Segment};
 pub use stage::{

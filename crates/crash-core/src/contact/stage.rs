@@ -8,8 +8,11 @@
 //! with a contact add anything, so a body's forces depend only on the bodies it touches.
 
 use super::broad::{candidate_pairs, BodyBox};
-use super::config::{ContactConfig, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY};
+use super::config::{
+    ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
+};
 use super::narrow::{forces, search, Hit, Normals, Push};
+use super::quadrature::segment_pair;
 use super::segment::Segment;
 use super::surface::Surface;
 use super::sweep::{closing_speed, first_crossing, mean_velocity};
@@ -40,7 +43,7 @@ pub struct KinLoad {
 }
 
 impl KinLoad {
-    fn push(&mut self, node: u32, f: Vec3, v: Vec3, program: u16) {
+    pub(crate) fn push(&mut self, node: u32, f: Vec3, v: Vec3, program: u16) {
         self.nodes.push((node, f));
         self.power += f.dot(&v);
         if program == NO_PROGRAM {
@@ -70,7 +73,7 @@ impl KinLoad {
     }
 
     /// Sum the pushes per node (kept in hit order by the stable sort).
-    fn settle_nodes(&mut self) {
+    pub(crate) fn settle_nodes(&mut self) {
         if self.nodes.is_empty() {
             return;
         }
@@ -364,6 +367,11 @@ pub(crate) fn contact_forces_given(
         }
         let dt_ref = REFERENCE_SAFETY * pair_dt;
         if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
+            continue;
+        }
+        if cfg.pass == ContactPass::Segments && !self_pair {
+            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref);
+            state.stats.push(st);
             continue;
         }
         let lists_a = state.lists.entry((a.def.id, b.def.id)).or_default();

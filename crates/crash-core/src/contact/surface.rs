@@ -68,6 +68,8 @@ pub struct Surface {
     pub inv_k: f64,
     /// Smallest node mass of the body.
     pub min_mass: f64,
+    /// Mass per initial segment area of the body [kg/m^2] (the segment pass's stiffness).
+    pub areal_mass: f64,
     /// Node adjacency (CSR) for self-contact exclusion.
     pub adj_start: Vec<u32>,
     pub adj: Vec<u32>,
@@ -148,6 +150,7 @@ impl Surface {
         let x0 = &body.def.x0;
         let mut k_unit = Vec::with_capacity(segs.len());
         let mut seg_mass = Vec::with_capacity(segs.len());
+        let mut total_area = 0.0;
         for s in &segs {
             let p: Vec<Vec3> = s.nodes().iter().map(|&n| x0[n as usize]).collect();
             let (area, len) = if s.count == 3 {
@@ -160,6 +163,7 @@ impl Surface {
                 let area = 0.5 * (p[2] - p[0]).cross(&(p[3] - p[1])).norm();
                 (area, (p[2] - p[0]).norm().max((p[3] - p[1]).norm()))
             };
+            total_area += area;
             k_unit.push(ep * area / len);
             let m = s
                 .nodes()
@@ -184,6 +188,11 @@ impl Surface {
             mass_per_k,
             inv_k,
             min_mass: body.def.mass.iter().copied().fold(f64::INFINITY, f64::min),
+            areal_mass: if total_area > 0.0 {
+                body.def.mass.iter().sum::<f64>() / total_area
+            } else {
+                0.0
+            },
             adj_start,
             adj,
             inc_start,
@@ -331,6 +340,15 @@ impl Surface {
         } else {
             Vec3::zeros()
         }
+    }
+
+    /// The segments incident to node `n`, in the summation order of its nodal normal.
+    pub fn incident(&self, n: u32) -> &[u32] {
+        let (a, b) = (
+            self.inc_start[n as usize] as usize,
+            self.inc_start[n as usize + 1] as usize,
+        );
+        &self.inc[a..b]
     }
 
     /// Is segment `j` excluded from self-contact with node `i` (it holds the node or one

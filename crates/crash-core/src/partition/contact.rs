@@ -34,8 +34,8 @@ use crate::clock::Clock;
 use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, pairs_of};
 use crate::contact::surface::Surface;
 use crate::contact::sweep::mean_velocity;
-use crate::contact::SpeedRule;
 use crate::contact::{body_bounds, check_moves, ContactConfig, ContactState, PenaltyKind};
+use crate::contact::{ContactPass, SpeedRule};
 use crate::error::{CoreError, Fault};
 use crate::Vec3;
 use rstar::primitives::Rectangle;
@@ -121,6 +121,14 @@ impl GroupSplit {
         gravity: Vec3,
         rule: ViewRule,
     ) -> Result<Self, CoreError> {
+        if contact.pass == ContactPass::Segments {
+            // a view's reach and ring are sized for node hits; the segment pass reaches
+            // farther (points between nodes, normals' neighbours): not done
+            return Err(CoreError::Other {
+                body: "contact".into(),
+                what: "contact.pass = segments does not run on bodies split into parts".into(),
+            });
+        }
         let splits = bodies
             .iter()
             .zip(parts)

@@ -1,0 +1,302 @@
+//! The curved contact surface of a segment for the segment pass (`quadrature.rs`): the
+//! flat facet plus the quadratic bulge of the nodal normals,
+//! h(w) = sum_{i<j} w_i w_j b_ij, b_ij = e_ij . (n_j - n_i) / 2, e_ij = x_j - x_i,
+//! along the (sub-)triangle's unit normal (w: the segment's shape-function weights). For
+//! nodes on a sphere with radial normals h is the sphere to second order (edge midpoint:
+//! |e|^2 / 8R, the sagitta); on a flat segment it is zero. Along an edge only that edge's
+//! two nodes count, so neighbours share the edge's curve: the surface is continuous.
+
+use super::segment::Segment;
+use super::smooth::CREASE_COS;
+use super::surface::{face_vector, Surface};
+use crate::Vec3;
+
+/// The corner normals of a segment: nodal normals, or the segment's own normal at a
+/// corner on a crease (more than 30 degrees off), where a bulge would not be the surface;
+/// and which corners took their nodal normal.
+pub fn corner_normals(seg: &Segment, surf: &Surface, x: &[Vec3]) -> ([Vec3; 4], [bool; 4]) {
+    let f = face_vector(seg, x);
+    let l = f.norm();
+    let ns = if l > 0.0 { f / l } else { Vec3::zeros() };
+    let mut out = [ns; 4];
+    let mut nodal = [false; 4];
+    for (k, &n) in seg.nodes().iter().enumerate() {
+        let nn = surf.nodal_normal(n, x);
+        if nn.dot(&ns) >= CREASE_COS {
+            out[k] = nn;
+            nodal[k] = true;
+        }
+    }
+    (out, nodal)
+}
+
+/// Adds (d n / d x)^T tau to `out` for n = F / |F|, F the sum of the face vectors of
+/// `segs` (a nodal normal, or one segment's own normal).
+fn unit_sum_pullback(
+    segs: &[u32],
+    surf: &Surface,
+    x: &[Vec3],
+    tau: &Vec3,
+    out: &mut Vec<(u32, Vec3)>,
+) {
+    let mut f = Vec3::zeros();
+    for &j in segs {
+        f += face_vector(&surf.segments[j as usize], x);
+    }
+    let l = f.norm();
+    if l <= 0.0 {
+        return;
+    }
+    let n = f / l;
+    let t = (tau - n * n.dot(tau)) / l;
+    for &j in segs {
+        let s = &surf.segments[j as usize];
+        let [a, b, c, d] = s.nodes.map(|i| x[i as usize]);
+        if s.count == 3 {
+            // F = (b - a) x (c - a)
+            let db = (c - a).cross(&t);
+            let dc = t.cross(&(b - a));
+            out.push((s.nodes[0], -(db + dc)));
+            out.push((s.nodes[1], db));
+            out.push((s.nodes[2], dc));
+        } else {
+            // F = (c - a) x (d - b)
+            let dc = (d - b).cross(&t);
+            let dd = t.cross(&(c - a));
+            out.push((s.nodes[0], -dc));
+            out.push((s.nodes[1], -dd));
+            out.push((s.nodes[2], dc));
+            out.push((s.nodes[3], dd));
+        }
+    }
+}
+
+/// Adds scale * dh/dx (h at fixed weights w) to `out`: through the edge vectors of the
+/// segment and through its corner normals (nodal normals reach the nodes of the
+/// corners' incident segments).
+#[allow(clippy::too_many_arguments)]
+pub fn bulge_pullback(
+    seg: &Segment,
+    j: u32,
+    surf: &Surface,
+    x: &[Vec3],
+    normals: &[Vec3; 4],
+    nodal: &[bool; 4],
+    w: &[f64; 4],
+    scale: f64,
+    out: &mut Vec<(u32, Vec3)>,
+) {
+    let n = seg.count as usize;
+    let xs = seg.nodes.map(|i| x[i as usize]);
+    for k in 0..n {
+        let mut dx = Vec3::zeros();
+        let mut dn = Vec3::zeros();
+        for m in 0..n {
+            if m != k {
+                let ww = 0.5 * w[k] * w[m] * scale;
+                dx += (normals[k] - normals[m]) * ww;
+                dn += (xs[k] - xs[m]) * ww;
+            }
+        }
+        out.push((seg.nodes[k], dx));
+        if nodal[k] {
+            unit_sum_pullback(surf.incident(seg.nodes[k]), surf, x, &dn, out);
+        } else {
+            unit_sum_pullback(&[j], surf, x, &dn, out);
+        }
+    }
+}
+
+/// The pair coefficients b_ij of a segment (row-major 4 x 4, symmetric, zero diagonal).
+pub fn coefficients(seg: &Segment, x: &[Vec3], normals: &[Vec3; 4]) -> [[f64; 4]; 4] {
+    let mut b = [[0.0; 4]; 4];
+    let n = seg.count as usize;
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let e = x[seg.nodes[j] as usize] - x[seg.nodes[i] as usize];
+            let v = 0.5 * e.dot(&(normals[j] - normals[i]));
+            b[i][j] = v;
+            b[j][i] = v;
+        }
+    }
+    b
+}
+
+/// h(w) and its partial derivatives dh/dw_k.
+pub fn bulge(b: &[[f64; 4]; 4], w: &[f64; 4]) -> (f64, [f64; 4]) {
+    let mut dh = [0.0; 4];
+    for (i, d) in dh.iter_mut().enumerate() {
+        *d = (0..4).map(|j| w[j] * b[i][j]).sum();
+    }
+    let h = 0.5 * (0..4).map(|i| w[i] * dh[i]).sum::<f64>();
+    (h, dh)
+}
+
+/// The (sub-)triangle (A, B, C) of a segment holding a projection, with the derivatives
+/// of the segment weights w along its barycentric u (towards B) and v (towards C).
+#[derive(Debug, Clone, Copy)]
+pub struct SubTriangle {
+    pub a: Vec3,
+    pub b: Vec3,
+    pub c: Vec3,
+    pub dw_du: [f64; 4],
+    pub dw_dv: [f64; 4],
+}
+
+pub fn sub_triangle(seg: &Segment, x: &[Vec3], sub: usize) -> SubTriangle {
+    let xs = seg.nodes.map(|i| x[i as usize]);
+    if seg.count == 3 {
+        return SubTriangle {
+            a: xs[0],
+            b: xs[1],
+            c: xs[2],
+            dw_du: [-1.0, 1.0, 0.0, 0.0],
+            dw_dv: [-1.0, 0.0, 1.0, 0.0],
+        };
+    }
+    let (k, k1) = (sub % 4, (sub + 1) % 4);
+    let mut dw_du = [-0.25; 4];
+    let mut dw_dv = [-0.25; 4];
+    dw_du[k] += 1.0;
+    dw_dv[k1] += 1.0;
+    SubTriangle {
+        a: (xs[0] + xs[1] + xs[2] + xs[3]) * 0.25,
+        b: xs[k],
+        c: xs[k1],
+        dw_du,
+        dw_dv,
+    }
+}
+
+impl SubTriangle {
+    pub fn unit_normal(&self) -> Vec3 {
+        let n = (self.b - self.a).cross(&(self.c - self.a));
+        let l = n.norm();
+        if l > 0.0 {
+            n / l
+        } else {
+            Vec3::zeros()
+        }
+    }
+
+    /// The inverse metric of the in-plane basis (e1, e2) and its dual vectors g1, g2
+    /// (grad u, grad v of a point's projection); None on a degenerate triangle.
+    fn dual(&self) -> Option<([[f64; 2]; 2], Vec3, Vec3)> {
+        let (e1, e2) = (self.b - self.a, self.c - self.a);
+        let (p, q, r) = (e1.dot(&e1), e1.dot(&e2), e2.dot(&e2));
+        let det = p * r - q * q;
+        if det <= 0.0 {
+            return None;
+        }
+        let gi = [[r / det, -q / det], [-q / det, p / det]];
+        Some((
+            gi,
+            e1 * gi[0][0] + e2 * gi[0][1],
+            e1 * gi[1][0] + e2 * gi[1][1],
+        ))
+    }
+
+    /// Derivatives of a function f(w) of the weights of the projection of a point x on
+    /// the plane, with partials `df`, by the corners A, B, C: x - P = `rho` (normal to
+    /// the plane), (u, v) the projection's barycentrics. Translation invariant: they
+    /// sum to minus the gradient by x.
+    pub fn corner_gradients(
+        &self,
+        df: &[f64; 4],
+        bary: &[f64; 3],
+        rho: &Vec3,
+    ) -> (Vec3, [Vec3; 3]) {
+        let zeros = bary.iter().filter(|&&b| b <= 0.0).count();
+        if zeros >= 2 {
+            // at a corner: the weights do not move
+            return (Vec3::zeros(), [Vec3::zeros(); 3]);
+        }
+        // corner weight vectors relative to corner A's (only differences are used)
+        let corner_w = |k: usize| -> [f64; 4] {
+            match k {
+                0 => [0.0; 4],
+                1 => self.dw_du,
+                _ => self.dw_dv,
+            }
+        };
+        if zeros == 1 {
+            // on the edge from corner i to corner j: P = X_i + t e, w(t)
+            let z = (0..3).find(|&k| bary[k] <= 0.0).unwrap_or(0);
+            let (i, j) = ((z + 1) % 3, (z + 2) % 3);
+            let xs = [self.a, self.b, self.c];
+            let e = xs[j] - xs[i];
+            let ee = e.dot(&e);
+            if ee <= 0.0 {
+                return (Vec3::zeros(), [Vec3::zeros(); 3]);
+            }
+            let t = bary[j];
+            // dw/dt = W_j - W_i
+            let (wi, wj) = (corner_w(i), corner_w(j));
+            let ft: f64 = (0..4).map(|q| df[q] * (wj[q] - wi[q])).sum();
+            let grad = e * (ft / ee);
+            let mut c = [Vec3::zeros(); 3];
+            c[i] = (-e * (1.0 - t) - rho) * (ft / ee);
+            c[j] = (-e * t + rho) * (ft / ee);
+            return (grad, c);
+        }
+        let Some((gi, g1, g2)) = self.dual() else {
+            return (Vec3::zeros(), [Vec3::zeros(); 3]);
+        };
+        let (u, v) = (bary[1], bary[2]);
+        let fu: f64 = (0..4).map(|k| df[k] * self.dw_du[k]).sum();
+        let fv: f64 = (0..4).map(|k| df[k] * self.dw_dv[k]).sum();
+        let grad = g1 * fu + g2 * fv;
+        // d(u, v) = G^-1 [de1 . rho, de2 . rho] - (g1, g2) . dP_w
+        let r1 = rho * (fu * gi[0][0] + fv * gi[1][0]);
+        let r2 = rho * (fu * gi[0][1] + fv * gi[1][1]);
+        (
+            grad,
+            [
+                -grad * (1.0 - u - v) - r1 - r2,
+                -grad * u + r1,
+                -grad * v + r2,
+            ],
+        )
+    }
+
+    /// (d n / d corner)^T t for the unit normal n of the triangle and a vector t: the
+    /// force a load t on a point carried along n at unit distance puts on A, B, C.
+    pub fn normal_pullback(&self, t: &Vec3) -> [Vec3; 3] {
+        let (e1, e2) = (self.b - self.a, self.c - self.a);
+        let m = e1.cross(&e2);
+        let l = m.norm();
+        if l <= 0.0 {
+            return [Vec3::zeros(); 3];
+        }
+        let n = m / l;
+        let tt = t - n * n.dot(t);
+        let db = e2.cross(&tt) / l;
+        let dc = tt.cross(&e1) / l;
+        [-(db + dc), db, dc]
+    }
+
+    /// Spread per-corner vectors of (A, B, C) onto the segment's nodes (a quad's centroid
+    /// A to its four corners equally).
+    pub fn spread(&self, seg: &Segment, sub: usize, f: &[Vec3; 3], out: &mut [Vec3; 4]) {
+        if seg.count == 3 {
+            for k in 0..3 {
+                out[k] += f[k];
+            }
+        } else {
+            for o in out.iter_mut() {
+                *o += f[0] * 0.25;
+            }
+            out[sub % 4] += f[1];
+            out[(sub + 1) % 4] += f[2];
+        }
+    }
+}
+
+/// Weights at the sub-triangle's corner A (u = v = 0) for a projection's sub-triangle.
+pub fn corner_a_weights(seg: &Segment) -> [f64; 4] {
+    if seg.count == 3 {
+        [1.0, 0.0, 0.0, 0.0]
+    } else {
+        [0.25; 4]
+    }
+}
