@@ -60,7 +60,11 @@ impl ForceSums {
     /// (internal + hourglass) / area0 and its critical time step.
     #[inline(always)]
     pub(crate) fn add(&mut self, e: usize, internal: f64, hourglass: f64, density: f64, dt: f64) {
-        if !self.uncounted.as_ref().is_some_and(|u| u.get(e).copied().unwrap_or(false)) {
+        if !self
+            .uncounted
+            .as_ref()
+            .is_some_and(|u| u.get(e).copied().unwrap_or(false))
+        {
             self.energy.internal += internal;
             self.energy.hourglass += hourglass;
         }

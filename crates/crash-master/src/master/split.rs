@@ -6,7 +6,8 @@
 //! A group is split when its estimated cost exceeds the fair share (total / live
 //! workers) by the balance tolerance (`SplitMode::Auto`), or whenever there are two
 //! workers (`SplitMode::Always`, for tests), and only when it holds no kinematic body
-//! or copy and no history node is asked for (their figures are not merged yet). Each
+//! or copy, no history node is asked for (their figures are not merged yet) and the
+//! contact pass is the node pass (the segment pass does not run on parts). Each
 //! body whose cost exceeds the group's cost over the workers is cut into one part per
 //! live worker (part q on slot q); the smaller bodies stay whole, each on the least
 //! loaded slot so far. Slot 0 is the group's worker (its *home*): it answers for the
@@ -15,6 +16,7 @@
 use super::Master;
 use crate::error::MasterError;
 use crate::input::SplitMode;
+use crash_core::contact::ContactPass;
 use crash_core::partition::{merge_report, PartDt, PartState};
 use crash_core::BodyReport;
 use crash_link::{Command, Reply, SplitSpec, StepReport, WorkerLink};
@@ -51,7 +53,9 @@ impl<L: WorkerLink> Master<'_, L> {
     /// the rule leaves it whole.
     fn plan(&self, ids: &[u32], copies: &[u32], total: f64, live: &[usize]) -> Option<SplitGroup> {
         let k = live.len();
-        if k < 2 || !copies.is_empty() || !self.results.history.is_empty() {
+        // the segment contact pass does not run on parts (partition::contact)
+        let segments = self.contact.enabled && self.contact.pass == ContactPass::Segments;
+        if k < 2 || segments || !copies.is_empty() || !self.results.history.is_empty() {
             return None;
         }
         let idx: Vec<usize> = ids.iter().filter_map(|&id| self.index(id)).collect();
