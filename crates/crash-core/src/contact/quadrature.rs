@@ -18,7 +18,7 @@ use super::curved::{
 };
 use super::narrow::TIE;
 use super::segment::{project, Projection, Segment};
-use super::stage::{KinLoad, PairStats};
+use super::stage::PairStats;
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
@@ -336,17 +336,7 @@ pub(crate) fn segment_pair(
     let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
     let first = point_pushes(a, sa, b, sb, cfg, kappa, mu);
     let second = point_pushes(b, sb, a, sa, cfg, kappa, mu);
-    let mut st = PairStats {
-        a: a.def.id,
-        b: b.def.id,
-        active_nodes: first.len() + second.len(),
-        max_penetration: 0.0,
-        max_penetration_ratio: 0.0,
-        normal_force: 0.0,
-        force_on_a: Vec3::zeros(),
-        kin_a: KinLoad::default(),
-        kin_b: KinLoad::default(),
-    };
+    let mut st = PairStats::empty(a.def.id, b.def.id, first.len() + second.len());
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, ia, ib, &first, &mut st, true);
     apply_points(bodies, ib, ia, &second, &mut st, false);

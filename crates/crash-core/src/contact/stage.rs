@@ -114,6 +114,21 @@ pub struct PairStats {
 }
 
 impl PairStats {
+    /// The statistics of pair (a, b) before any push is booked.
+    pub(crate) fn empty(a: u32, b: u32, active_nodes: usize) -> Self {
+        Self {
+            a,
+            b,
+            active_nodes,
+            max_penetration: 0.0,
+            max_penetration_ratio: 0.0,
+            normal_force: 0.0,
+            force_on_a: Vec3::zeros(),
+            kin_a: KinLoad::default(),
+            kin_b: KinLoad::default(),
+        }
+    }
+
     /// A copy for a step report: the per-node loads on kinematic bodies only when
     /// `nodes` (a frame follows), so other steps neither copy nor send them.
     pub fn for_report(&self, nodes: bool) -> Self {
@@ -428,17 +443,7 @@ pub(crate) fn contact_forces_given(
                 node: nb_,
             },
         );
-        let mut st = PairStats {
-            a: a.def.id,
-            b: b.def.id,
-            active_nodes: first.len() + second.len(),
-            max_penetration: 0.0,
-            max_penetration_ratio: 0.0,
-            normal_force: 0.0,
-            force_on_a: Vec3::zeros(),
-            kin_a: KinLoad::default(),
-            kin_b: KinLoad::default(),
-        };
+        let mut st = PairStats::empty(a.def.id, b.def.id, first.len() + second.len());
         let thin = a.def.section.thickness.min(b.def.section.thickness);
         let segs_b: Vec<Segment> = first
             .iter()

@@ -177,6 +177,18 @@ impl Engine {
         None
     }
 
+    /// The reply to a split group's failure: a fault of the run (the engine is broken
+    /// until the master rolls back), or an error of the command.
+    fn failed(&mut self, group_first: u32, e: crash_core::partition::SplitError) -> Reply {
+        match e {
+            crash_core::partition::SplitError::Fault(fault) => {
+                self.broken = true;
+                Reply::Fault { group_first, fault }
+            }
+            e => Reply::Error(EngineError::Shared(e.to_string()).to_string()),
+        }
+    }
+
     fn in_flight(&self, what: &'static str) -> Result<(Clock, f64, Due), EngineError> {
         if self.broken {
             return Err(EngineError::Broken);
@@ -201,14 +213,10 @@ impl Engine {
                 .collect();
             match s.g.forces(&mine, &at, dt) {
                 Ok(d) => out.extend(d.into_iter().flatten()),
-                Err(crash_core::partition::SplitError::Fault(fault)) => {
-                    self.broken = true;
-                    return Reply::Fault {
-                        group_first: s.first(),
-                        fault,
-                    };
+                Err(e) => {
+                    let first = s.first();
+                    return self.failed(first, e);
                 }
-                Err(e) => return Reply::Error(EngineError::Shared(e.to_string()).to_string()),
             }
             s.nanos += t.elapsed().as_nanos() as u64;
         }
@@ -235,14 +243,10 @@ impl Engine {
                     .collect();
             match s.g.contact(&mine, dt, step, reactions) {
                 Ok(r) => rep.bodies.extend(r),
-                Err(crash_core::partition::SplitError::Fault(fault)) => {
-                    self.broken = true;
-                    return Reply::Fault {
-                        group_first: s.first(),
-                        fault,
-                    };
+                Err(e) => {
+                    let first = s.first();
+                    return self.failed(first, e);
                 }
-                Err(e) => return Reply::Error(EngineError::Shared(e.to_string()).to_string()),
             }
             s.nanos += t.elapsed().as_nanos() as u64;
             rep.groups.push(crash_link::GroupTime {
