@@ -35,6 +35,18 @@ pub struct FrameBody {
     /// its smallest body id). Written as the cell fields `worker` and `group`.
     #[serde(default)]
     pub placement: Option<Placement>,
+    /// For a body of a group split over workers (set by the master): the worker and the
+    /// part of each element (cell fields `worker` and `part`; else `placement` holds
+    /// for every element and the part is 0).
+    #[serde(default)]
+    pub parts: Option<PartCells>,
+}
+
+/// Where each element of a split body is computed: its part and that part's worker.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PartCells {
+    pub worker: Vec<u32>,
+    pub part: Vec<u32>,
 }
 
 /// The worker and group of a body at one frame.
@@ -70,6 +82,7 @@ impl FrameBody {
             m: res.iter().map(|r| r.m).collect(),
             f_contact,
             placement: None,
+            parts: None,
         }
     }
 

@@ -24,7 +24,7 @@ pub use checkpoint::{
     write_checkpoint_keyed, CheckpointKey,
 };
 pub use error::IoError;
-pub use frame::{Frame, FrameBody, Placement};
+pub use frame::{Frame, FrameBody, PartCells, Placement};
 pub use frame_writer::BackgroundSeries;
 pub use history::{
     read_contacts_csv, read_energy_csv, ContactHistory, ContactRow, EnergyHistory, EnergyRow,

@@ -198,9 +198,20 @@ pub const ARRAYS: &[ArrayDef] = {
             Values::I64(Box::new(per_element(b, b.id as i64)))
         })),
         // where the element was computed (-1: not known to the writer)
-        steady(def(CellData, "worker", 1, |b, _| {
-            let w = b.placement.map_or(-1, |p| p.worker as i64);
-            Values::I64(Box::new(per_element(b, w)))
+        steady(def(CellData, "worker", 1, |b, _| match &b.parts {
+            Some(p) => Values::I64(Box::new(p.worker.iter().map(|&w| w as i64))),
+            None => {
+                let w = b.placement.map_or(-1, |p| p.worker as i64);
+                Values::I64(Box::new(per_element(b, w)))
+            }
+        })),
+        // the part of a body split over workers (0: whole; -1: not known to the writer)
+        steady(def(CellData, "part", 1, |b, _| match &b.parts {
+            Some(p) => Values::I64(Box::new(p.part.iter().map(|&q| q as i64))),
+            None => {
+                let q = b.placement.map_or(-1, |_| 0);
+                Values::I64(Box::new(per_element(b, q)))
+            }
         })),
         steady(def(CellData, "group", 1, |b, _| {
             let g = b.placement.map_or(-1, |p| p.group as i64);

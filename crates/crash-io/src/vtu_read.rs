@@ -1,10 +1,12 @@
 //! Reads back a .vtu written by crash into a `Frame`, for `crash render` and tests: the
 //! appended raw data of today's files (zlib-compressed or not, Float64 or Float32) and
 //! the inline ascii or base64 arrays of older ones. Body names are not stored in the .vtu
-//! and come back empty; initial positions come back as x - displacement.
+//! and come back empty; initial positions come back as x - displacement. The cells'
+//! `worker`, `group` and `part` come back as the placement and, for a split body, the
+//! part cells.
 
 use crate::error::{AtPath, IoError};
-use crate::frame::{Frame, FrameBody};
+use crate::frame::{Frame, FrameBody, PartCells, Placement};
 use crate::vtu::{names, VTK_QUAD, VTK_TRIANGLE};
 use base64::Engine;
 use crash_core::Vec3;
@@ -315,6 +317,11 @@ fn piece_bodies(r: &Reader, piece: Node) -> Result<Vec<FrameBody>, IoError> {
     let bm = take(&mut cd, names::BENDING, &r)?.floats();
     let th = take(&mut cd, names::THICKNESS, &r)?.floats();
     let cid = take(&mut cd, names::BODY_ID, &r)?.ints();
+    // where elements were computed (written by crash since the cluster; optional)
+    let mut placed = |name: &str| -> Option<Vec<i64>> {
+        cd.remove(name).map(|a| a.ints()).filter(|a| a.len() == nc)
+    };
+    let (worker, group, part) = (placed("worker"), placed("group"), placed("part"));
     let conn = take(&mut cells, "connectivity", &r)?.ints();
     let offsets = take(&mut cells, "offsets", &r)?.ints();
     let types = take(&mut cells, "types", &r)?.ints();
@@ -364,6 +371,7 @@ fn piece_bodies(r: &Reader, piece: Node) -> Result<Vec<FrameBody>, IoError> {
             m: Vec::new(),
             f_contact: vecs(&fc, start..end),
             placement: None,
+            parts: None,
         };
         let uu = vecs(&u, start..end);
         b.x0 = b.x.iter().zip(&uu).map(|(x, u)| x - u).collect();
@@ -428,6 +436,24 @@ fn piece_bodies(r: &Reader, piece: Node) -> Result<Vec<FrameBody>, IoError> {
                 .iter()
                 .map(|&c| [bm[3 * c], bm[3 * c + 1], bm[3 * c + 2]])
                 .collect();
+            let at = |a: &Option<Vec<i64>>, c: usize| a.as_ref().map_or(-1, |a| a[c]);
+            if let Some(&c) = order.first() {
+                if let (Ok(worker), Ok(group)) =
+                    (u32::try_from(at(&worker, c)), u32::try_from(at(&group, c)))
+                {
+                    b.placement = Some(Placement { worker, group });
+                }
+            }
+            // a split body: some element in a part other than 0
+            if order.iter().any(|&c| at(&part, c) > 0) {
+                let of = |a: &Option<Vec<i64>>| -> Vec<u32> {
+                    order.iter().map(|&c| at(a, c).max(0) as u32).collect()
+                };
+                b.parts = Some(PartCells {
+                    worker: of(&worker),
+                    part: of(&part),
+                });
+            }
             b
         })
         .collect();

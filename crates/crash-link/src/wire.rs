@@ -208,6 +208,7 @@ fn frame_body_from_pb(p: &pb::FrameBody) -> Result<FrameBody, ProtoError> {
         m: p.m.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         f_contact,
         placement: None,
+        parts: None,
     })
 }
 

@@ -57,6 +57,7 @@ impl<L: WorkerLink> Master<'_, L> {
             for mut b in bodies {
                 hash.add(b.id, &b.x, &b.v, &b.w);
                 b.placement = self.placement_of(b.id);
+                b.parts = self.split_cells(b.id);
                 if self.is_kinematic(b.id) {
                     match self.kinematic_contact(b.id, b.x.len()) {
                         Some(f) => b.f_contact = f,

@@ -17,9 +17,10 @@ use super::Master;
 use crate::error::MasterError;
 use crate::input::SplitMode;
 use crash_core::contact::ContactPass;
-use crash_core::partition::{merge_report, PartDt, PartState};
+use crash_core::partition::{merge_report, partition_body, PartDt, PartState};
 use crash_core::BodyReport;
-use crash_link::{Command, Reply, SplitSpec, StepReport, WorkerLink};
+use crash_io::PartCells;
+use crash_link::{BodyLoad, Command, Reply, SplitSpec, StepReport, WorkerLink};
 use std::collections::BTreeMap;
 
 /// A group split over workers.
@@ -31,6 +32,8 @@ pub(crate) struct SplitGroup {
     holder: Vec<Vec<u32>>,
     /// Worker of each slot; slot 0 is the home.
     workers: Vec<usize>,
+    /// The worker and part of each element of each body (the frames' cell fields).
+    cells: BTreeMap<u32, PartCells>,
 }
 
 impl SplitGroup {
@@ -45,6 +48,34 @@ impl SplitGroup {
 
     fn home(&self) -> usize {
         self.workers[0]
+    }
+
+    /// The part of each element of the bodies (cut as every holder cuts them:
+    /// `partition_body` is deterministic) and the worker holding it.
+    fn cells_of(&self, bodies: &[BodyLoad]) -> BTreeMap<u32, PartCells> {
+        let mut out = BTreeMap::new();
+        for b in bodies {
+            let (Some(i), Some(def)) = (self.ids.iter().position(|&id| id == b.id), &b.def) else {
+                continue;
+            };
+            let part = match self.parts[i] {
+                1 => vec![0; def.element_count()],
+                k => match partition_body(def, k as usize) {
+                    Ok(p) => p.part_of,
+                    // the holders refuse the same cut; nothing to show
+                    Err(_) => continue,
+                },
+            };
+            let worker = part
+                .iter()
+                .map(|&q| {
+                    let slot = self.holder[i].get(q as usize).copied().unwrap_or(0);
+                    self.workers.get(slot as usize).copied().unwrap_or(0) as u32
+                })
+                .collect();
+            out.insert(b.id, PartCells { worker, part });
+        }
+        out
     }
 }
 
@@ -101,6 +132,7 @@ impl<L: WorkerLink> Master<'_, L> {
             parts,
             holder,
             workers,
+            cells: BTreeMap::new(),
         })
     }
 
@@ -123,6 +155,8 @@ impl<L: WorkerLink> Master<'_, L> {
             let Some(Reply::Unloaded(bodies)) = self.exchange(cmds)?.swap_remove(home).pop() else {
                 return Err(self.bad_reply(home, "Split"));
             };
+            let mut plan = plan;
+            plan.cells = plan.cells_of(&bodies);
             let mut cmds = vec![Vec::new(); nw];
             for (slot, &w) in plan.workers.iter().enumerate().skip(1) {
                 cmds[w].push(Command::Share {
@@ -261,6 +295,11 @@ impl<L: WorkerLink> Master<'_, L> {
             }
         }
         Ok(())
+    }
+
+    /// The worker and part of each element of body `id` when its group is split.
+    pub(super) fn split_cells(&self, id: u32) -> Option<PartCells> {
+        self.splits.iter().find_map(|s| s.cells.get(&id).cloned())
     }
 
     /// Worker `w` computes parts of a split group holding body `id`.

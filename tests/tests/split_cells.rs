@@ -1,0 +1,74 @@
+//! What a user sees of a group split over workers (issue 16 point 5): each frame's
+//! `worker` and `part` cells give, for every element of a split body, the part that
+//! computes it and that part's worker. Invariants on the showcase split over 2
+//! in-process workers (the sphere cut in 2, the plate whole): the sphere's elements
+//! fall in parts 0 and 1, each part on one worker, the two on different workers, the
+//! cut balanced; the plate is one part on one worker; the frames read back as written.
+#![allow(clippy::unwrap_used)] // a test panics on failure
+
+use crash_tests::fixtures::scene;
+use crash_tests::procs::{bin, out_dir, Proc};
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[test]
+fn every_element_of_a_split_body_names_its_part_and_that_parts_worker() {
+    let out = out_dir("split-cells");
+    let sc = scene("sphere-on-plate.toml");
+    let args = [
+        "run",
+        sc.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--no-pictures",
+        "--workers",
+        "2",
+        "--threads",
+        "1",
+        "--split",
+        "auto",
+        "--end-time",
+        "2e-5",
+    ];
+    let mut p = Proc::spawn("crash", &bin("crash"), &args);
+    assert!(p.wait(Duration::from_secs(300)).success(), "{}", p.log());
+    let mut frames: Vec<PathBuf> = std::fs::read_dir(out.join("frames"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "vtu"))
+        .collect();
+    frames.sort();
+    let last = crash_io::read_vtu(frames.last().unwrap()).unwrap();
+    let (split, whole): (Vec<_>, Vec<_>) = last.bodies.iter().partition(|b| b.parts.is_some());
+    assert_eq!(
+        (split.len(), whole.len()),
+        (1, 1),
+        "the sphere split, the plate whole"
+    );
+    let sphere = split[0];
+    let cells = sphere.parts.as_ref().unwrap();
+    let n = sphere.tris.len() + sphere.quads.len();
+    assert_eq!((cells.part.len(), cells.worker.len()), (n, n));
+    assert_eq!(
+        cells.part.iter().copied().collect::<BTreeSet<u32>>(),
+        BTreeSet::from([0, 1])
+    );
+    let mut worker_of_part = [BTreeSet::new(), BTreeSet::new()];
+    for (&q, &w) in cells.part.iter().zip(&cells.worker) {
+        worker_of_part[q as usize].insert(w);
+    }
+    assert!(
+        worker_of_part.iter().all(|w| w.len() == 1),
+        "{worker_of_part:?}"
+    );
+    assert_ne!(worker_of_part[0], worker_of_part[1]);
+    // RCB by cost halves the sphere's elements (all triangles: equal weights)
+    let in0 = cells.part.iter().filter(|&&q| q == 0).count();
+    assert!(in0.abs_diff(n - in0) <= 1, "parts of {in0} and {}", n - in0);
+    // the plate: whole, on the group's home, which computes part 0 of the sphere
+    let plate = whole[0];
+    let home = plate.placement.unwrap().worker;
+    assert!(worker_of_part[0].contains(&home), "plate on worker {home}");
+}
