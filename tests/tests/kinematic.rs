@@ -7,10 +7,8 @@
 
 use crash_master::{CostModel, RecordSink, RunOptions};
 use crash_tests::fixtures::test_scene;
-use crash_tests::procs::{bin, out_dir, Proc};
 use crash_tests::runs::{input, run_local};
 use std::collections::{BTreeMap, BTreeSet};
-use std::time::Duration;
 
 const SCENE: &str = "ten-spheres-tiny.toml";
 
@@ -87,23 +85,11 @@ fn groups_never_contain_a_kinematic_touch_as_a_link_between_two_bodies() {
 /// of summary.json, with their workers; the frames carry `worker` and `group` cells.
 #[test]
 fn groups_csv_is_consistent_with_summary_json() {
-    let out = out_dir("kinematic-groups-csv");
-    let scene = test_scene(SCENE);
-    let mut p = Proc::spawn(
-        "crash",
-        &bin("crash"),
-        &[
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--workers",
-            "2",
-            "--quiet",
-            "--no-pictures",
-        ],
+    let out = crash_tests::cli::crash_run(
+        &test_scene(SCENE),
+        "kinematic-groups-csv",
+        &["--workers", "2"],
     );
-    assert!(p.wait(Duration::from_secs(300)).success(), "{}", p.log());
     let summary = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
     let c = &summary.cluster;
     assert_eq!(c.workers, 2);

@@ -4,14 +4,11 @@
 //! is its own test; the reference (`crash run --threads 1`) is computed once.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
+use crash_tests::cli::{crash_run as run, final_hash as hash_of, grpc_run};
 use crash_tests::fixtures::test_scene;
-use crash_tests::procs::{bin, master, out_dir, worker, Proc};
-use std::path::Path;
 use std::sync::OnceLock;
-use std::time::Duration;
 
 const SCENE: &str = "ten-spheres-tiny.toml";
-const TIMEOUT: Duration = Duration::from_secs(300);
 
 /// `crash run SCENE ARGS` into a fresh directory; its summary's final state hash.
 fn crash_run(tag: &str, args: &[&str]) -> String {
@@ -19,27 +16,7 @@ fn crash_run(tag: &str, args: &[&str]) -> String {
 }
 
 fn crash_run_scene(name: &str, tag: &str, args: &[&str]) -> String {
-    let out = out_dir(&format!("modes-{tag}"));
-    let scene = test_scene(name);
-    let mut all = vec![
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--no-pictures",
-    ];
-    all.extend_from_slice(args);
-    let mut p = Proc::spawn("crash", &bin("crash"), &all);
-    assert!(p.wait(TIMEOUT).success(), "{}", p.log());
-    hash_of(&out)
-}
-
-fn hash_of(out: &Path) -> String {
-    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
-    assert!(s.fault.is_none(), "{:?}", s.fault);
-    assert!(!s.final_state_hash.is_empty());
-    s.final_state_hash
+    hash_of(&run(&test_scene(name), &format!("modes-{tag}"), args))
 }
 
 fn reference() -> &'static str {
@@ -62,13 +39,7 @@ fn three_in_process_workers_give_the_single_thread_state() {
 
 #[test]
 fn two_grpc_workers_give_the_single_thread_state() {
-    let out = out_dir("modes-grpc");
-    let (mut m, url) = master(&test_scene(SCENE), 2, &out, &[]);
-    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
-    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
-    for p in &mut w {
-        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
-    }
+    let out = grpc_run(&test_scene(SCENE), "modes-grpc", 2, &[]);
     assert_eq!(hash_of(&out), reference());
 }
 
@@ -86,13 +57,7 @@ fn segment_pass_gives_the_single_thread_state_in_every_mode() {
     assert_eq!(crash_run_scene(SEG, "seg-threads2", &threads2), one);
     let workers3 = ["--workers", "3", "--threads", "1", "--allow-warnings"];
     assert_eq!(crash_run_scene(SEG, "seg-workers3", &workers3), one);
-    let out = out_dir("modes-seg-grpc");
-    let (mut m, url) = master(&test_scene(SEG), 2, &out, &[]);
-    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
-    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
-    for p in &mut w {
-        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
-    }
+    let out = grpc_run(&test_scene(SEG), "modes-seg-grpc", 2, &[]);
     assert_eq!(hash_of(&out), one);
     println!("segment pass, ten-spheres-tiny: {one}");
 }

@@ -80,18 +80,7 @@ fn scene() -> &'static Path {
 }
 
 fn run(tag: &str, input: &Path, args: &[&str]) -> PathBuf {
-    let out = out_dir(&format!("results-{tag}"));
-    let mut all = vec![
-        "run",
-        input.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--no-pictures",
-    ];
-    all.extend_from_slice(args);
-    crash(&all);
-    out
+    crash_tests::cli::crash_run(input, &format!("results-{tag}"), args)
 }
 
 fn reference() -> &'static Path {

@@ -6,23 +6,13 @@
 //! cut balanced; the plate is one part on one worker; the frames read back as written.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
+use crash_tests::cli::{crash_run, last_frame};
 use crash_tests::fixtures::scene;
-use crash_tests::procs::{bin, out_dir, Proc};
 use std::collections::BTreeSet;
-use std::path::PathBuf;
-use std::time::Duration;
 
 #[test]
 fn every_element_of_a_split_body_names_its_part_and_that_parts_worker() {
-    let out = out_dir("split-cells");
-    let sc = scene("sphere-on-plate.toml");
     let args = [
-        "run",
-        sc.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--no-pictures",
         "--workers",
         "2",
         "--threads",
@@ -32,15 +22,8 @@ fn every_element_of_a_split_body_names_its_part_and_that_parts_worker() {
         "--end-time",
         "2e-5",
     ];
-    let mut p = Proc::spawn("crash", &bin("crash"), &args);
-    assert!(p.wait(Duration::from_secs(300)).success(), "{}", p.log());
-    let mut frames: Vec<PathBuf> = std::fs::read_dir(out.join("frames"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "vtu"))
-        .collect();
-    frames.sort();
-    let last = crash_io::read_vtu(frames.last().unwrap()).unwrap();
+    let out = crash_run(&scene("sphere-on-plate.toml"), "split-cells", &args);
+    let last = last_frame(&out);
     let (split, whole): (Vec<_>, Vec<_>) = last.bodies.iter().partition(|b| b.parts.is_some());
     assert_eq!(
         (split.len(), whole.len()),
