@@ -147,6 +147,43 @@ fn a_worker_killed_at_a_random_step_leaves_the_fault_free_hash_and_output_seed_3
     a_killed_worker_is_replaced_by_the_survivor(3);
 }
 
+/// A worker holding parts of a split group (`--split always`: every group of deformable
+/// bodies is cut over both workers) is killed while the group is split: the survivor
+/// takes everything from the last checkpoint and the run ends in the fault-free state.
+/// Energies of split bodies are summed in another order (docs/architecture-cluster.md),
+/// so the output is checked to parse with every row and frame once, and the hash to be
+/// the fault-free run's.
+#[test]
+fn a_worker_killed_while_holding_parts_of_a_split_group_leaves_the_fault_free_hash() {
+    let expected = reference();
+    let args = ["--checkpoint-seconds", "0.5", "--split", "always"];
+    let (mut m, mut w, out) = start("faults-split-kill", 2, &args);
+    m.expect_line("split over workers", Duration::from_secs(120));
+    // past the first checkpoint (a loss before it ends the run: docs/reliability.md)
+    std::thread::sleep(Duration::from_millis(1200));
+    // a split group spans both workers: either one holds parts
+    let pid = w[1].pid();
+    w[1].kill();
+    assert!(m.wait(TIMEOUT).success(), "{}", m.log());
+    let log = m.log();
+    let lost_at = log.find("lost worker").unwrap_or(0);
+    let before = &log[..lost_at];
+    // the last change of the split before the loss was a split, not a merge back
+    let (split_at, merged_at) = (
+        before.rfind("split over workers"),
+        before.rfind("split groups merged back"),
+    );
+    assert!(
+        split_at > merged_at && log.contains(&format!("(pid {pid} on")),
+        "the kill must have hit a split group:\n{log}"
+    );
+    assert!(log.contains("continuing from step"), "{log}");
+    let got = files(&out);
+    assert_eq!(got.hash, expected.hash);
+    assert_eq!(got.frames, expected.frames);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 #[test]
 fn a_stopped_worker_is_dropped_after_the_heartbeat_timeout_and_the_run_ends_as_without_fault() {
     let expected = reference();
