@@ -12,6 +12,7 @@
 pub mod auth;
 pub mod command;
 pub mod link;
+pub mod spin;
 pub mod text;
 pub mod version;
 pub mod wire;
@@ -19,6 +20,7 @@ pub mod wire;
 pub use auth::{HelloFields, Secret, SecretError, SECRET_ENV};
 pub use command::{BodyLoad, Command, GroupTime, Reply, Setup, SplitSpec, StepReport};
 pub use link::{LinkError, WorkerLink};
+pub use spin::IdleSpinner;
 pub use text::escape_peer;
 pub use version::{check_version, VersionError, PROTOCOL_VERSION};
 

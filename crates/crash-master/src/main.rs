@@ -81,6 +81,12 @@ struct Args {
     /// fair share of the work), always. Same bits either way.
     #[arg(long, default_value = "off", value_name = "WHEN")]
     split: crash_master::SplitMode,
+    /// Keep a CPU awake between messages with one lowest-priority (SCHED_IDLE)
+    /// spinning thread: on virtual machines whose idle vCPUs take tens of microseconds
+    /// to wake it cuts the per-step barrier (docs/scaling.md); it costs a core's idle
+    /// time. Linux only.
+    #[arg(long)]
+    idle_spin: bool,
     /// Write a restart file OUT/restart.ckp (replaced atomically) every N steps, and at
     /// every timed checkpoint (--checkpoint-seconds) too. It is
     /// continued with `crash-master --resume OUT/restart.ckp` on any number of workers,
@@ -154,6 +160,7 @@ fn main() -> ExitCode {
     }
     let args = Args::parse();
     let out = args.out.clone();
+    let _spin = crash_link::spin::start_if(args.idle_spin, "crash-master");
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

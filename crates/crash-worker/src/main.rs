@@ -41,6 +41,12 @@ struct Args {
     /// Announce this protocol version instead of the built-in one (tests of refusal).
     #[arg(long, hide = true)]
     protocol_version: Option<u32>,
+    /// Keep a CPU awake between messages with one lowest-priority (SCHED_IDLE)
+    /// spinning thread: on virtual machines whose idle vCPUs take tens of microseconds
+    /// to wake it cuts the per-step barrier (docs/scaling.md); it costs a core's idle
+    /// time. Linux only.
+    #[arg(long)]
+    idle_spin: bool,
     /// Sleep this long before each step [ms] (tests of a slow but alive worker).
     #[arg(long, hide = true, default_value_t = 0)]
     step_delay_ms: u64,
@@ -101,6 +107,7 @@ fn main() -> ExitCode {
         "crash-worker: {} element kernels, {threads} threads",
         crash_core::element::simd::path_name()
     );
+    let _spin = crash_link::spin::start_if(args.idle_spin, "crash-worker");
     let mut opts = crash_worker::WorkerOptions::new(master, threads);
     opts.connect_timeout = Duration::from_secs_f64(args.connect_timeout.max(0.0));
     if let Some(p) = args.secret_file.as_deref() {
