@@ -206,3 +206,31 @@ fn a_group_shared_by_two_holders_steps_with_the_whole_groups_bits() {
 fn a_group_shared_by_three_holders_steps_with_the_whole_groups_bits() {
     run(3);
 }
+
+/// The contact pass a step leaves pending must run before the next step's element
+/// forces (or the next step would read stale contact forces), and only once.
+#[test]
+fn a_split_step_refuses_to_skip_or_repeat_its_pending_contact_pass() {
+    let bodies = drop_scene();
+    let mut holders = holders_of(&bodies, 2);
+    let clock = Clock::default();
+    let h = 1e-8;
+    let mut pending = None;
+    shared_step(&mut holders, &mut pending, &clock, h);
+    assert!(holders.iter().all(|s| s.contact_pending()));
+    let dts = pending.take().expect("element steps");
+    // the next step's element forces before the contact pass: refused
+    let states = holders[1].integrate(&clock.after(h), h).expect("integrate");
+    assert!(holders[0]
+        .forces(&states, &clock.after(h), h, false)
+        .is_err());
+    // the pass runs once; a second one has nothing to run
+    holders[0].contact(&dts).expect("contact");
+    assert!(!holders[0].contact_pending());
+    assert!(holders[0].contact(&dts).is_err());
+    // element steps of other bodies than the group's: refused
+    let mut wrong = dts.clone();
+    wrong.reverse();
+    assert!(holders[1].contact(&wrong).is_err());
+    assert!(holders[1].contact_pending());
+}
