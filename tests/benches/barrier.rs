@@ -136,6 +136,7 @@ fn echo(c: &mut Criterion) {
                 dt: 1e-9,
                 kin_nodes: false,
                 due: crash_core::Due::ALL,
+                contact: Vec::new(),
             })
             .unwrap();
             let Reply::Report(_) = l.recv().unwrap() else {
@@ -162,6 +163,7 @@ fn barrier(c: &mut Criterion) {
                             dt: 1e-9,
                             kin_nodes: false,
                             due: crash_core::Due::ALL,
+                            contact: Vec::new(),
                         })
                         .unwrap();
                     }
@@ -197,6 +199,7 @@ fn loaded(c: &mut Criterion) {
                 dt: 1e-8,
                 kin_nodes: false,
                 due: crash_core::Due::ALL,
+                contact: Vec::new(),
             })
             .unwrap();
             let Reply::Report(r) = l.recv().unwrap() else {

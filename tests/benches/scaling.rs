@@ -5,7 +5,7 @@
 //! - `crash run --threads 1` and `crash run --threads 2` (one process),
 //! - `crash-master` + 1 and + 2 `crash-worker` processes x 1 thread (gRPC on loopback),
 //! - `crash-master --split auto` + 2 workers: a group above its fair share is split
-//!   over both workers by elements (three exchanges per step instead of one).
+//!   over both workers by elements (two exchanges per step instead of one).
 //!
 //! Prints, per mode, the median wall time of the run (summary.json `wall_time_s`: from
 //! the first command to the last frame), ns per element-cycle, the speed-up over

@@ -158,9 +158,22 @@ fn a_worker_killed_while_holding_parts_of_a_split_group_leaves_the_fault_free_ha
     let expected = reference();
     let args = ["--checkpoint-seconds", "0.5", "--split", "always"];
     let (mut m, mut w, out) = start("faults-split-kill", 2, &args);
-    m.expect_line("split over workers", Duration::from_secs(120));
-    // past the first checkpoint (a loss before it ends the run: docs/reliability.md)
-    std::thread::sleep(Duration::from_millis(1200));
+    // a split after the start, so past the first checkpoint (a loss before it ends the
+    // run: docs/reliability.md); the kill follows at once, long before the groups
+    // change again (hundreds of steps at 2 ms each)
+    let t = Instant::now();
+    while !m
+        .log()
+        .lines()
+        .any(|l| l.contains("split over workers") && !l.contains("step 0:"))
+    {
+        assert!(
+            t.elapsed() < TIMEOUT,
+            "no split after the start:\n{}",
+            m.log()
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
     // a split group spans both workers: either one holds parts
     let pid = w[1].pid();
     w[1].kill();

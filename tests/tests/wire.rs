@@ -233,6 +233,11 @@ fn step_report_round_trips_bit_exact() {
         probes,
         bodies,
         parts: vec![part_state()],
+        part_dts: vec![PartDt {
+            id: 3,
+            dt: 2.5e-7,
+            element: 41,
+        }],
         groups: vec![GroupTime {
             first: 0,
             nanos: 12345,
@@ -314,6 +319,7 @@ fn commands_round_trip() {
                 reactions: true,
                 probes: false,
             },
+            contact: Vec::new(),
         },
         Command::Unload {
             ids: vec![5, 2],
@@ -461,6 +467,13 @@ fn split_group_commands_and_replies_round_trip_bit_exact() {
         },
         Command::Halo(vec![part_state(), part_state()]),
         Command::Contact(dts.clone()),
+        Command::Step {
+            at: Clock::default().after(1e-7),
+            dt: 2e-7,
+            kin_nodes: false,
+            due: crash_core::Due::ALL,
+            contact: dts.clone(),
+        },
         Command::Parts,
         Command::Assemble(states.clone()),
         Command::Unsplit,
@@ -472,7 +485,11 @@ fn split_group_commands_and_replies_round_trip_bit_exact() {
                 .unwrap();
         assert_eq!(format!("{back:?}"), format!("{c:?}"));
     }
-    for r in [Reply::PartDts(dts), Reply::Parts(states)] {
+    let halo = Reply::Report(StepReport {
+        part_dts: dts,
+        ..Default::default()
+    });
+    for r in [halo, Reply::Parts(states)] {
         let bytes = reply_to_pb(&r).encode_to_vec();
         let back =
             reply_from_pb(&crash_proto::pb::WorkerMessage::decode(bytes.as_slice()).unwrap())

@@ -64,13 +64,32 @@ fn whole_step(g: &mut Group, clock: &mut Clock, dt: f64) -> f64 {
     min_dt(&r)
 }
 
-/// One step of the holders, relaying as the master does; the merged reports.
-fn shared_step(holders: &mut [SharedGroup], clock: &Clock, h: f64) -> Vec<BodyReport> {
+/// The contact pass a step left pending, with the merged element steps (the master
+/// sends them with the next step, or before an assembly).
+fn flush(holders: &mut [SharedGroup], pending: &mut Option<Vec<PartDt>>) {
+    if let Some(dts) = pending.take() {
+        for s in holders.iter_mut() {
+            s.contact(&dts).expect("contact");
+        }
+    }
+}
+
+/// One step of the holders, relaying as the master does (two exchanges: the pending
+/// contact pass and the integration, then the element forces); the merged reports.
+fn shared_step(
+    holders: &mut [SharedGroup],
+    pending: &mut Option<Vec<PartDt>>,
+    clock: &Clock,
+    h: f64,
+) -> Vec<BodyReport> {
+    flush(holders, pending);
     let states: Vec<_> = holders
         .iter_mut()
         .map(|s| s.integrate(clock, h).expect("integrate"))
         .collect();
-    let mut dts: Vec<Option<PartDt>> = vec![None; holders[0].ids.len()];
+    let n = holders[0].ids.len();
+    let mut dts: Vec<Option<PartDt>> = vec![None; n];
+    let mut merged: Vec<Option<BodyReport>> = vec![None; n];
     for (k, s) in holders.iter_mut().enumerate() {
         let imports: Vec<_> = states
             .iter()
@@ -78,21 +97,12 @@ fn shared_step(holders: &mut [SharedGroup], clock: &Clock, h: f64) -> Vec<BodyRe
             .filter(|(j, _)| *j != k)
             .flat_map(|(_, v)| v.iter().cloned())
             .collect();
-        for (d, mine) in dts
-            .iter_mut()
-            .zip(s.forces(&imports, clock, h).expect("forces"))
-        {
-            *d = match (*d, mine) {
-                (Some(a), Some(b)) => Some(a.min(b)),
-                (a, b) => a.or(b),
-            };
+        let (shares, mine) = s.forces(&imports, clock, h, false).expect("forces");
+        for d in mine {
+            let i = s.ids.iter().position(|&id| id == d.id).expect("id");
+            dts[i] = Some(dts[i].map_or(d, |a| a.min(d)));
         }
-    }
-    let dts: Vec<PartDt> = dts.into_iter().map(|d| d.expect("every body")).collect();
-    let step = clock.after(h).step;
-    let mut merged: Vec<Option<BodyReport>> = vec![None; dts.len()];
-    for s in holders.iter_mut() {
-        for r in s.contact(&dts, h, step, false).expect("contact") {
+        for r in shares {
             let i = s.ids.iter().position(|&id| id == r.id).expect("id");
             merged[i] = Some(match merged[i].take() {
                 Some(a) => merge_report(a, r),
@@ -100,6 +110,7 @@ fn shared_step(holders: &mut [SharedGroup], clock: &Clock, h: f64) -> Vec<BodyRe
             });
         }
     }
+    *pending = Some(dts.into_iter().map(|d| d.expect("every body")).collect());
     merged.into_iter().map(|r| r.expect("a report")).collect()
 }
 
@@ -130,11 +141,12 @@ fn run(k: usize) {
         gdt = whole_step(&mut g, &mut gclock, gdt);
     }
     let mut holders = holders_of(&g.bodies, k);
+    let mut pending = None;
     let mut contact_steps = 0;
     for n in 0..SPLIT_STEPS {
         dt = whole_step(&mut whole, &mut clock, dt);
         let h = SAFETY * gdt;
-        let r = shared_step(&mut holders, &gclock, h);
+        let r = shared_step(&mut holders, &mut pending, &gclock, h);
         gdt = min_dt(&r);
         gclock = gclock.after(h);
         assert_eq!(
@@ -145,6 +157,7 @@ fn run(k: usize) {
         let active: usize = whole.contact_stats().iter().map(|s| s.active_nodes).sum();
         contact_steps += usize::from(active > 0);
         if n % 100 == 99 {
+            flush(&mut holders, &mut pending);
             let others: Vec<_> = holders[1..].iter().flat_map(|s| s.own_states()).collect();
             let b = holders[0].assemble(others).expect("assemble");
             assert_eq!(
@@ -159,6 +172,7 @@ fn run(k: usize) {
         "the sphere must hit the plate ({contact_steps} steps)"
     );
     // assembled back: the complete state, and the whole group goes on with it
+    flush(&mut holders, &mut pending);
     let others: Vec<_> = holders[1..].iter().flat_map(|s| s.own_states()).collect();
     let back = holders[0].assemble(others).expect("assemble");
     for (a, b) in back.iter().zip(&whole.bodies) {
@@ -191,4 +205,32 @@ fn a_group_shared_by_two_holders_steps_with_the_whole_groups_bits() {
 #[test]
 fn a_group_shared_by_three_holders_steps_with_the_whole_groups_bits() {
     run(3);
+}
+
+/// The contact pass a step leaves pending must run before the next step's element
+/// forces (or the next step would read stale contact forces), and only once.
+#[test]
+fn a_split_step_refuses_to_skip_or_repeat_its_pending_contact_pass() {
+    let bodies = drop_scene();
+    let mut holders = holders_of(&bodies, 2);
+    let clock = Clock::default();
+    let h = 1e-8;
+    let mut pending = None;
+    shared_step(&mut holders, &mut pending, &clock, h);
+    assert!(holders.iter().all(|s| s.contact_pending()));
+    let dts = pending.take().expect("element steps");
+    // the next step's element forces before the contact pass: refused
+    let states = holders[1].integrate(&clock.after(h), h).expect("integrate");
+    assert!(holders[0]
+        .forces(&states, &clock.after(h), h, false)
+        .is_err());
+    // the pass runs once; a second one has nothing to run
+    holders[0].contact(&dts).expect("contact");
+    assert!(!holders[0].contact_pending());
+    assert!(holders[0].contact(&dts).is_err());
+    // element steps of other bodies than the group's: refused
+    let mut wrong = dts.clone();
+    wrong.reverse();
+    assert!(holders[1].contact(&wrong).is_err());
+    assert!(holders[1].contact_pending());
 }

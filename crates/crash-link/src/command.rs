@@ -101,12 +101,16 @@ pub enum Command {
     /// Take the step of length `dt` that starts at clock `at`. `kin_nodes`: report the
     /// pass's per-node forces on kinematic bodies (`KinLoad::nodes`): a frame follows.
     /// `due`: report reactions and history nodes (when Setup turned them on): their
-    /// result rows follow this step.
+    /// result rows follow this step. `contact`: every split body's element step over
+    /// all its parts in the last step (the minimum of the `StepReport::part_dts`), for
+    /// the contact pass that step left pending (empty when none is: no split group, or
+    /// a `Contact` ran it).
     Step {
         at: Clock,
         dt: f64,
         kin_nodes: bool,
         due: Due,
+        contact: Vec<PartDt>,
     },
     /// What an output frame shows of these bodies (held by the worker).
     Frame(Vec<u32>),
@@ -127,13 +131,14 @@ pub enum Command {
         spec: SplitSpec,
         bodies: Vec<BodyLoad>,
     },
-    /// Second exchange of a step for workers holding parts: the other holders' part
-    /// states (`StepReport::parts`) of every split group this worker holds parts of.
-    /// Answered by `PartDts`.
+    /// Second (and last) exchange of a step for workers holding parts: the other
+    /// holders' part states (`StepReport::parts`) of every split group this worker
+    /// holds parts of. Answered by a `Report` with this worker's share of each split
+    /// body's report and `part_dts`; the contact pass is left for the next Step.
     Halo(Vec<PartState>),
-    /// Third exchange: each split body's element step over all its parts (the master's
-    /// minimum of the `PartDts`); contact, then a `Report` with this worker's share of
-    /// each split body's report.
+    /// Run the pending contact pass of the split groups now, with each split body's
+    /// element step over all its parts (as the next Step would carry them): before
+    /// the whole bodies are assembled (frames, checkpoints, merging back). `Ack`.
     Contact(Vec<PartDt>),
     /// The full states of the parts this worker computes (of every split group), for
     /// the assembly of whole bodies. Answered by `Parts`.
@@ -193,6 +198,9 @@ pub struct StepReport {
     /// Owned states of the parts of split groups this worker computes (a Step): the
     /// master relays them to the other holders (`Command::Halo`).
     pub parts: Vec<PartState>,
+    /// Each split body's smallest element step over the parts computed here (a
+    /// Halo): the master's minimum goes back with the next Step (`Step::contact`).
+    pub part_dts: Vec<PartDt>,
 }
 
 #[derive(Debug, Clone)]
@@ -205,8 +213,6 @@ pub enum Reply {
     Frame(Vec<FrameBody>),
     /// (id, state) of every body held, sorted by id.
     States(Vec<(u32, BodyState)>),
-    /// Each split body's smallest element step over the parts here (`Halo`).
-    PartDts(Vec<PartDt>),
     /// (body id, part, state) of the parts this worker computes (`Parts`).
     Parts(Vec<(u32, u32, BodyState)>),
     /// A physical fault in the group whose smallest body id is `group_first`.

@@ -17,7 +17,10 @@ use thiserror::Error;
 /// history nodes are due (sent only for steps whose result rows are written); velocity
 /// programs carry their kind (prescribed displacement, stride 8). v9: groups split over
 /// workers (Split, Share, Halo, Contact, Parts, Assemble, Unsplit; Report.parts).
-pub const PROTOCOL_VERSION: u32 = 9;
+/// v10: a split step is two exchanges: Halo is answered by a Report (the shares and
+/// Report.part_dts), Step carries the element steps for the pending contact pass,
+/// Contact runs it before an assembly (Ack); the PartDts reply is gone.
+pub const PROTOCOL_VERSION: u32 = 10;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -277,12 +277,14 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
             dt,
             kin_nodes,
             due,
+            contact,
         } => PbCommand::Step(pb::Step {
             at: Some(clock_to_pb(at)),
             dt: *dt,
             kin_nodes: *kin_nodes,
             reactions: due.reactions,
             probes: due.probes,
+            contact: (!contact.is_empty()).then(|| part_dts_to_pb(contact)),
         }),
         Command::Frame(ids) => PbCommand::Frame(pb::FrameRequest { ids: ids.clone() }),
         Command::States(ids) => PbCommand::States(pb::StatesRequest { ids: ids.clone() }),
@@ -500,6 +502,10 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                     reactions: s.reactions,
                     probes: s.probes,
                 },
+                contact: match &s.contact {
+                    Some(d) => part_dts_from_pb(d)?,
+                    None => Vec::new(),
+                },
             },
             PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
             PbCommand::States(s) => Command::States(s.ids.clone()),
@@ -538,8 +544,8 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
             codec_nanos: rep.codec_ns,
             probes: (!rep.probes.is_empty()).then(|| probes_to_pb(&rep.probes)),
             parts: (!rep.parts.is_empty()).then(|| part_states_to_pb(&rep.parts)),
+            part_dts: (!rep.part_dts.is_empty()).then(|| part_dts_to_pb(&rep.part_dts)),
         }),
-        Reply::PartDts(d) => PbReply::PartDts(part_dts_to_pb(d)),
         Reply::Parts(p) => PbReply::Parts(part_bodies_to_pb(p)),
         Reply::Unloaded(bodies) => PbReply::Unloaded(pb::BodyLoads {
             bodies: bodies.iter().map(|b| load_to_pb(b, true)).collect(),
@@ -599,7 +605,6 @@ pub fn reply_from_pb(msg: &pb::WorkerMessage) -> Result<Reply, ProtoError> {
                     pb::failure::Kind::Error(e) => Reply::Error(e.clone()),
                 }
             }
-            PbReply::PartDts(d) => Reply::PartDts(part_dts_from_pb(d)?),
             PbReply::Parts(p) => Reply::Parts(part_bodies_from_pb(p)?),
             PbReply::Hello(_) => return Err(ProtoError::Invalid("a second Hello".into())),
         },
@@ -636,5 +641,9 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
             None => Vec::new(),
         },
         parts: part_states_from_pb(r.parts.as_ref())?,
+        part_dts: match &r.part_dts {
+            Some(d) => part_dts_from_pb(d)?,
+            None => Vec::new(),
+        },
     })
 }

@@ -54,7 +54,7 @@ pub struct Engine {
     /// Groups split over workers that this worker holds parts of (`split.rs`).
     shared: Vec<split::Shared>,
     /// The step in flight for the split groups: its clock, length and what is due
-    /// (set by Step, read by Halo and Contact).
+    /// (set by Step, read by Halo).
     pending: Option<(Clock, f64, crash_core::Due)>,
 }
 
@@ -138,6 +138,7 @@ impl Engine {
                 dt,
                 kin_nodes,
                 due,
+                contact,
             } => {
                 if let Err(e) = self.check_clock(&at) {
                     Err(e)
@@ -146,7 +147,7 @@ impl Engine {
                 } else {
                     let mut reply = self.run(|g| g.advance_with(&at, dt, due), kin_nodes);
                     if let Reply::Report(rep) = &mut reply {
-                        if let Some(fault) = self.step_shared(&at, dt, due, rep) {
+                        if let Some(fault) = self.step_shared(&at, dt, due, &contact, rep) {
                             return fault;
                         }
                     }
@@ -483,6 +484,7 @@ impl Engine {
             codec_ns: 0,
             probes: Vec::new(),
             parts: Vec::new(),
+            part_dts: Vec::new(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.first();

@@ -42,6 +42,10 @@ use rstar::primitives::Rectangle;
 use rstar::{RTree, AABB};
 use std::collections::BTreeMap;
 
+/// The closing-speed step of each candidate pair of different bodies (by body ids;
+/// None where they do not close), a figure of the whole bodies.
+pub type Closing = BTreeMap<(u32, u32), Option<f64>>;
+
 /// Why a split group cannot step: a fault of the run (as the whole group would have
 /// it), or a contact view that cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -210,19 +214,30 @@ impl GroupSplit {
         h: f64,
         step: u64,
     ) -> Result<Vec<f64>, SplitError> {
+        let (dt, closing) = self.figures(&element_dt);
+        self.views_pass(&element_dt, &closing, h, step)?;
+        Ok(dt)
+    }
+
+    /// The global figures of a step, from the whole bodies gathered from the parts:
+    /// body boxes (min/max over the parts' owned nodes), candidate pairs, the
+    /// closing-speed step of each pair (by body ids, None where they do not close) and
+    /// each body's stable step: `element_dt` limited by the contact (element-form and
+    /// closing-speed steps). None of it reads a contact force, so it is known before
+    /// the contact pass (`partition::shared` sends it with the element pass's report).
+    /// A holder of some parts passes the element steps of its parts only (infinite for
+    /// a body with no part here): a pair is skipped here only if neither body has a
+    /// part here, so every pair's limits reach the shares of the bodies it holds.
+    pub(super) fn figures(&mut self, element_dt: &[f64]) -> (Vec<f64>, Closing) {
         let cfg = self.contact;
         for (s, b) in self.splits.iter().zip(&mut self.whole) {
             s.gather_into(b);
         }
-        let mut dt = element_dt.clone();
+        let mut dt = element_dt.to_vec();
+        let mut closing = BTreeMap::new();
         if !cfg.enabled {
-            for p in self.splits.iter_mut().flat_map(|s| &mut s.parts) {
-                p.body.state.f_contact.clear();
-            }
-            return Ok(dt);
+            return (dt, closing);
         }
-        // global figures: body boxes (min/max over the parts' owned nodes), pairs, the
-        // closing-speed step of each pair, each body's contact stable step
         let bounds: Vec<(Vec3, Vec3)> = self
             .splits
             .iter()
@@ -241,7 +256,6 @@ impl GroupSplit {
             .collect();
         let pairs = pairs_of(&self.whole, &cfg, &bounds);
         let mut mean_v: BTreeMap<usize, Vec3> = BTreeMap::new();
-        let mut closing = BTreeMap::new();
         for &(ia, ib) in &pairs {
             let (a, b) = (&self.whole[ia], &self.whole[ib]);
             if cfg.penalty == PenaltyKind::Element {
@@ -265,6 +279,26 @@ impl GroupSplit {
                 }
                 closing.insert((a.def.id, b.def.id), d);
             }
+        }
+        (dt, closing)
+    }
+
+    /// The contact pass of the parts computed here, on their views, at the positions
+    /// `figures` gathered: `element_dt[i]` body i's element critical step over all its
+    /// parts (the soft penalty's reference step reads it), `closing` from `figures`.
+    pub(super) fn views_pass(
+        &mut self,
+        element_dt: &[f64],
+        closing: &Closing,
+        h: f64,
+        step: u64,
+    ) -> Result<(), SplitError> {
+        let cfg = self.contact;
+        if !cfg.enabled {
+            for p in self.splits.iter_mut().flat_map(|s| &mut s.parts) {
+                p.body.state.f_contact.clear();
+            }
+            return Ok(());
         }
         if self.views.is_empty() || self.moved_beyond_skin() {
             self.build_views()?;
@@ -295,7 +329,7 @@ impl GroupSplit {
                     &vbounds,
                     h,
                     step,
-                    Some(&closing),
+                    Some(closing),
                 )
                 .map_err(|f| in_whole(f, view))?;
                 let part = &mut self.splits[i].parts[q];
@@ -311,7 +345,7 @@ impl GroupSplit {
                 }
             }
         }
-        Ok(dt)
+        Ok(())
     }
 
     fn moved_beyond_skin(&self) -> bool {

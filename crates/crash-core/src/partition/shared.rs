@@ -1,23 +1,29 @@
 //! A split group shared between workers (issue 16 point 2, the wiring). Every holder
 //! keeps all parts of the group (`GroupSplit`) but computes only its own (`mine`); the
 //! others are containers for the owned states that arrive from their holders. One step
-//! is three exchanges, the master relaying:
+//! is two exchanges, the master relaying; the contact pass of a step runs at the start
+//! of the next one:
 //!
-//! 1. `integrate`: the holder's parts update their owned nodes and return them
-//!    (`PartState`: x, v, w and the largest move).
+//! 1. `contact` (the previous step's, when one is pending: with each body's element
+//!    step over all holders, the soft penalty's reference step) then `integrate`: the
+//!    holder's parts update their owned nodes and return them (`PartState`: x, v, w
+//!    and the largest move).
 //! 2. `forces`: the other holders' `PartState`s fill the other parts (so the whole
 //!    bodies, the halos and the contact views are current everywhere), the tunnelling
 //!    guard runs on the largest move over all parts, the holder's parts compute their
-//!    element forces; returns each body's smallest element step over its parts here.
-//! 3. `contact`: with each body's element step (the minimum over all holders: the soft
-//!    penalty's reference step reads it), the contact stage on the holder's views, then
-//!    the holder's share of each body's report (`merge_reports` joins the shares).
+//!    element forces, then the global figures (body boxes, pairs, closing-speed steps)
+//!    give each body's stable step without any contact force; returns the holder's
+//!    share of each body's report and each body's smallest element step over the parts
+//!    here. The contact pass is left pending: its reference step needs every holder's
+//!    element steps, which the master sends with the next step (or with a `Contact`
+//!    before the whole bodies are assembled).
 //!
 //! Every holder holds the whole bodies' x, v, w after step 2, so the global figures
 //! (body boxes, pairs, each body's mass-weighted mean velocity for the closing-speed
 //! step, the view rebuild rule) are computed from the same numbers in the same order
 //! on every holder: no order-free reduction is needed.
 
+use super::contact::Closing;
 use super::GroupSplit;
 use crate::body::{Body, BodyEnergy, BodyState};
 use crate::clock::Clock;
@@ -76,8 +82,17 @@ pub struct SharedGroup {
     sums: Vec<Vec<Option<NodeSums>>>,
     /// Per body and part: the element sums of the last force pass (own parts only).
     forces: Vec<Vec<Option<ForceSums>>>,
-    /// Per body: the element step over all holders (phase 3's input).
-    dt: Vec<PartDt>,
+    /// The contact pass the last `forces` left for the next step.
+    pending: Option<Pending>,
+}
+
+/// A contact pass left for later: the step's length and number, and the closing-speed
+/// steps of its global figures.
+#[derive(Debug, Clone)]
+struct Pending {
+    h: f64,
+    step: u64,
+    closing: Closing,
 }
 
 impl SharedGroup {
@@ -113,7 +128,7 @@ impl SharedGroup {
             ids,
             sums,
             forces,
-            dt: Vec::new(),
+            pending: None,
         })
     }
 
@@ -121,8 +136,15 @@ impl SharedGroup {
         self.split.mine[i][q]
     }
 
+    /// A contact pass is pending (`forces` ran, `contact` not yet): integrating or
+    /// assembling now would read stale contact forces.
+    pub fn contact_pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
     /// Phase 1: integrate the owned nodes of the parts computed here over the step of
-    /// length h from `clock`; their states for the other holders.
+    /// length h from `clock`; their states for the other holders. The pending contact
+    /// pass, if any, must have run (`contact`).
     pub fn integrate(&mut self, clock: &Clock, h: f64) -> Result<Vec<PartState>, Fault> {
         let sc = clock.step_of(h);
         let gravity = self.split.gravity;
@@ -155,15 +177,26 @@ impl SharedGroup {
 
     /// Phase 2: take the other holders' part states (`imports`: every part not computed
     /// here, each once), check the largest move of every body, copy the halos, element
-    /// forces of the parts computed here. `clock` is the clock before the step of
-    /// length h. Returns each body's smallest element step over the parts here (None
-    /// for a body with no part here).
+    /// forces of the parts computed here, the global figures. `clock` is the clock
+    /// before the step of length h; `reactions`: report the supports' reactions.
+    /// Returns the share of each body's report from the parts here (bodies with no
+    /// part here: none; the stable step is the element step of the parts here limited
+    /// by the contact, so the minimum over the shares is the body's), and each body's
+    /// smallest element step over the parts here. Leaves the contact pass pending.
     pub fn forces(
         &mut self,
         imports: &[PartState],
         clock: &Clock,
         h: f64,
-    ) -> Result<Vec<Option<PartDt>>, SplitError> {
+        reactions: bool,
+    ) -> Result<(Vec<BodyReport>, Vec<PartDt>), SplitError> {
+        if self.pending.is_some() {
+            return Err(CoreError::Other {
+                body: "split group".into(),
+                what: "a step's element forces before the last contact pass".into(),
+            }
+            .into());
+        }
         let step = clock.after(h).step;
         let mut got: Vec<Vec<Option<(f64, u32)>>> = self
             .sums
@@ -239,32 +272,12 @@ impl SharedGroup {
                 self.forces[i][q] = Some(f);
             }
         }
-        Ok(out)
-    }
-
-    /// Phase 3: contact on the views of the parts here with each body's element step
-    /// over all holders (`dt`, in the group's body order); the share of each body's
-    /// report from the parts here (bodies with no part here: none). `clock`, h: the
-    /// step taken (h = 0 at the start). `reactions`: report the supports' reactions.
-    pub fn contact(
-        &mut self,
-        dt: &[PartDt],
-        h: f64,
-        step: u64,
-        reactions: bool,
-    ) -> Result<Vec<BodyReport>, SplitError> {
-        if dt.len() != self.ids.len() || dt.iter().zip(&self.ids).any(|(d, &id)| d.id != id) {
-            return Err(CoreError::Other {
-                body: "split group".into(),
-                what: "element steps for other bodies than the group's".into(),
-            }
-            .into());
-        }
-        self.dt = dt.to_vec();
-        let limit = self
-            .split
-            .contact(dt.iter().map(|d| d.dt).collect(), h, step)?;
-        let mut out = Vec::new();
+        let local: Vec<f64> = out
+            .iter()
+            .map(|d| d.map_or(f64::INFINITY, |d| d.dt))
+            .collect();
+        let (limit, closing) = self.split.figures(&local);
+        let mut shares = Vec::new();
         for (i, s) in self.split.splits.iter().enumerate() {
             let mut r: Option<BodyReport> = None;
             let mut reaction: Option<Reaction> = None;
@@ -277,7 +290,7 @@ impl SharedGroup {
                     id: self.ids[i],
                     energy: p.body.state.energy,
                     stable_dt: limit[i],
-                    dt_element: dt[i].element as usize,
+                    dt_element: out[i].map_or(0, |d| d.element as usize),
                     lo: n.lo,
                     hi: n.hi,
                     max_move: n.max_move,
@@ -302,10 +315,32 @@ impl SharedGroup {
                 if reactions {
                     r.reaction = reaction;
                 }
-                out.push(r);
+                shares.push(r);
             }
         }
-        Ok(out)
+        self.pending = Some(Pending { h, step, closing });
+        Ok((shares, out.into_iter().flatten().collect()))
+    }
+
+    /// The pending contact pass (left by `forces`) on the views of the parts here, with
+    /// each body's element step over all holders (`dt`, in the group's body order).
+    pub fn contact(&mut self, dt: &[PartDt]) -> Result<(), SplitError> {
+        if dt.len() != self.ids.len() || dt.iter().zip(&self.ids).any(|(d, &id)| d.id != id) {
+            return Err(CoreError::Other {
+                body: "split group".into(),
+                what: "element steps for other bodies than the group's".into(),
+            }
+            .into());
+        }
+        let Some(p) = self.pending.take() else {
+            return Err(CoreError::Other {
+                body: "split group".into(),
+                what: "no contact pass pending".into(),
+            }
+            .into());
+        };
+        let edt: Vec<f64> = dt.iter().map(|d| d.dt).collect();
+        self.split.views_pass(&edt, &p.closing, p.h, p.step)
     }
 
     /// The full states of the parts computed here (for the assembly of whole bodies).

@@ -153,6 +153,9 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     last_frame_step: Option<u64>,
     /// Groups split over workers (`split`).
     splits: Vec<split::SplitGroup>,
+    /// Every split body's element step over all its parts in the last step, for the
+    /// contact pass it left pending (empty when none is): the next Step carries it.
+    split_contact: Vec<crash_core::partition::PartDt>,
     pub(crate) stats: RunStats,
 }
 
@@ -260,6 +263,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             frames: 0,
             last_frame_step: None,
             splits: Vec::new(),
+            split_contact: Vec::new(),
             stats: RunStats::default(),
         })
     }

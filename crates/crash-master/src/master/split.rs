@@ -1,7 +1,9 @@
 //! Groups split over workers (issue 16 point 2): which groups are split and how, the
-//! two extra exchanges of a step (the master relays part states and element steps, it
-//! keeps none), and the assembly of whole bodies for frames, checkpoints and merging
-//! back.
+//! one extra exchange of a step (the master relays the part states of the Step's
+//! reports in a Halo and keeps the minimum of the element steps the Halo's reports
+//! carry, for the contact pass the next Step runs first), and the assembly of whole
+//! bodies for frames, checkpoints and merging back (after that contact pass: a
+//! `Contact` with those element steps).
 //!
 //! A group is split when its estimated cost exceeds the fair share (total / live
 //! workers) by the balance tolerance (`SplitMode::Auto`), or whenever there are two
@@ -185,10 +187,11 @@ impl<L: WorkerLink> Master<'_, L> {
         Ok(())
     }
 
-    /// The second and third exchanges of a step for the split groups: the part states
-    /// of phase 1 (taken out of `reps`) relayed to the other holders, the element steps
-    /// merged and sent back, every holder's share of each body's report merged into
-    /// its home's report.
+    /// The second exchange of a step for the split groups: the part states of phase 1
+    /// (taken out of `reps`) relayed to the other holders, every holder's share of each
+    /// body's report merged into its home's report (the element step and its element
+    /// from the minimum over the holders), the element steps kept for the contact pass
+    /// the next Step (or an assembly) runs.
     pub(super) fn relay_split(&mut self, reps: &mut [StepReport]) -> Result<(), MasterError> {
         if self.splits.is_empty() {
             return Ok(());
@@ -204,7 +207,7 @@ impl<L: WorkerLink> Master<'_, L> {
             .enumerate()
             .flat_map(|(k, s)| s.ids.iter().map(move |&id| (id, k)))
             .collect();
-        // phase 2: each holder gets the other holders' parts of its groups
+        // each holder gets the other holders' parts of its groups
         let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
         for (w, c) in cmds.iter_mut().enumerate() {
             let holds: Vec<usize> = (0..self.splits.len())
@@ -225,12 +228,13 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let replies = self.exchange(cmds)?;
         let mut dt: BTreeMap<u32, PartDt> = BTreeMap::new();
+        let mut merged: BTreeMap<u32, BodyReport> = BTreeMap::new();
         for (w, r) in replies.into_iter().enumerate() {
             for reply in r {
-                let Reply::PartDts(d) = reply else {
+                let Reply::Report(rep) = reply else {
                     return Err(self.bad_reply(w, "Halo"));
                 };
-                for d in d {
+                for d in rep.part_dts {
                     if !group_of.contains_key(&d.id) || d.dt.is_nan() {
                         return Err(
                             self.implausible(w, &format!("an element step of body {}", d.id))
@@ -238,29 +242,6 @@ impl<L: WorkerLink> Master<'_, L> {
                     }
                     dt.entry(d.id).and_modify(|a| *a = a.min(d)).or_insert(d);
                 }
-            }
-        }
-        // phase 3: contact with the merged element steps
-        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
-        for (w, c) in cmds.iter_mut().enumerate() {
-            let ids: Vec<PartDt> = self
-                .splits
-                .iter()
-                .filter(|s| s.workers.contains(&w))
-                .flat_map(|s| s.ids.iter())
-                .filter_map(|id| dt.get(id).copied())
-                .collect();
-            if !ids.is_empty() {
-                c.push(Command::Contact(ids));
-            }
-        }
-        let replies = self.exchange(cmds)?;
-        let mut merged: BTreeMap<u32, BodyReport> = BTreeMap::new();
-        for (w, r) in replies.into_iter().enumerate() {
-            for reply in r {
-                let Reply::Report(rep) = reply else {
-                    return Err(self.bad_reply(w, "Contact"));
-                };
                 for b in rep.bodies {
                     if !group_of.contains_key(&b.id) {
                         return Err(self.implausible(w, &format!("a share of body {}", b.id)));
@@ -286,20 +267,48 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
+        let mut pending = Vec::with_capacity(dt.len());
         for s in &self.splits {
             let home = s.home();
             for id in &s.ids {
-                if let (Some(b), Some(r)) = (merged.remove(id), reps.get_mut(home)) {
+                let Some(d) = dt.get(id).copied() else {
+                    return Err(self.implausible(home, &format!("no element step of body {id}")));
+                };
+                pending.push(d);
+                if let (Some(mut b), Some(r)) = (merged.remove(id), reps.get_mut(home)) {
+                    // the shares' steps are limited alike by the contact; the element
+                    // that sets the element step is the minimum's over all holders
+                    b.dt_element = d.element as usize;
                     r.bodies.push(b);
                 }
             }
         }
+        self.split_contact = pending;
         Ok(())
     }
 
     /// The worker and part of each element of body `id` when its group is split.
     pub(super) fn split_cells(&self, id: u32) -> Option<PartCells> {
         self.splits.iter().find_map(|s| s.cells.get(&id).cloned())
+    }
+
+    /// Run the contact pass the last step left pending on every holder, with the
+    /// element steps kept from it (before the whole bodies are assembled).
+    fn flush_split_contact(&mut self) -> Result<(), MasterError> {
+        if self.split_contact.is_empty() {
+            return Ok(());
+        }
+        let dts = std::mem::take(&mut self.split_contact);
+        let nw = self.links.len();
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for s in &self.splits {
+            for &w in &s.workers {
+                if cmds[w].is_empty() {
+                    cmds[w].push(Command::Contact(dts.clone()));
+                }
+            }
+        }
+        self.expect_acks(cmds, "Contact")
     }
 
     /// Worker `w` computes parts of a split group holding body `id`.
@@ -315,6 +324,7 @@ impl<L: WorkerLink> Master<'_, L> {
         if self.splits.is_empty() {
             return Ok(());
         }
+        self.flush_split_contact()?;
         let nw = self.links.len();
         let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
         for s in &self.splits {

@@ -105,6 +105,8 @@ impl<L: WorkerLink> Master<'_, L> {
             reactions: spcforc,
             probes: nodout,
         };
+        // split groups: the element steps for the contact pass the last step left
+        let contact = std::mem::take(&mut self.split_contact);
         let reps = {
             let _s = tracing::debug_span!("barrier").entered();
             let mut reps = self.reports_of(
@@ -113,10 +115,11 @@ impl<L: WorkerLink> Master<'_, L> {
                     dt: h,
                     kin_nodes,
                     due,
+                    contact: contact.clone(),
                 },
                 "Step",
             )?;
-            // split groups: two more exchanges (split.rs)
+            // split groups: one more exchange (split.rs)
             self.relay_split(&mut reps)?;
             reps
         };

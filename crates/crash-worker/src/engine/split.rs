@@ -1,6 +1,8 @@
 //! Groups split over workers (issue 16 point 2): the worker side of `Split`, `Share`,
-//! the step's second and third exchanges (`Halo`, `Contact`), and the assembly of whole
-//! bodies (`Parts`, `Assemble`, `Unsplit`). The physics is `crash_core::partition::
+//! the split groups' part of a `Step` (the previous step's pending contact pass with
+//! the element steps the Step carries, then the integration), the step's second
+//! exchange (`Halo`), the contact pass before an assembly (`Contact`), and the
+//! assembly of whole bodies (`Parts`, `Assemble`, `Unsplit`). The physics is `crash_core::partition::
 //! SharedGroup`; here are the bookkeeping and the checks.
 //!
 //! The worker that held the group when it was split (its *home*) keeps answering for
@@ -33,6 +35,20 @@ impl Shared {
     fn first(&self) -> u32 {
         self.g.ids.first().copied().unwrap_or(0)
     }
+}
+
+/// The element steps of the bodies of `g`, in its order, from the master's list.
+fn dts_of(g: &SharedGroup, all: &[PartDt]) -> Result<Vec<PartDt>, EngineError> {
+    g.ids
+        .iter()
+        .map(|id| {
+            all.iter().find(|d| d.id == *id).copied().ok_or_else(|| {
+                EngineError::Shared(format!(
+                    "no element step of split body {id} for its pending contact pass"
+                ))
+            })
+        })
+        .collect()
 }
 
 fn mine(spec: &SplitSpec) -> Result<(Vec<usize>, Vec<Vec<bool>>), EngineError> {
@@ -149,18 +165,32 @@ impl Engine {
         Ok(Reply::Ack)
     }
 
-    /// Phase 1 of a step for the split groups (after the whole groups): the states of
-    /// the parts computed here into the report. Some: the fault reply.
+    /// Phase 1 of a step for the split groups (after the whole groups): the pending
+    /// contact pass of the previous step with the element steps `contact` (every split
+    /// body's, merged by the master), then the integration; the states of the parts
+    /// computed here into the report. Some: the reply of a failure.
     pub(super) fn step_shared(
         &mut self,
         at: &Clock,
         dt: f64,
         due: Due,
+        contact: &[PartDt],
         rep: &mut StepReport,
     ) -> Option<Reply> {
         self.pending = Some((*at, dt, due));
-        for s in &mut self.shared {
+        for k in 0..self.shared.len() {
+            let s = &mut self.shared[k];
             let t = Instant::now();
+            if s.g.contact_pending() {
+                let r = match dts_of(&s.g, contact) {
+                    Ok(d) => s.g.contact(&d),
+                    Err(e) => return Some(Reply::Error(e.to_string())),
+                };
+                if let Err(e) = r {
+                    let first = s.first();
+                    return Some(self.failed(first, e));
+                }
+            }
             let r: Result<Vec<PartState>, _> = s.g.integrate(at, dt);
             s.nanos = t.elapsed().as_nanos() as u64;
             match r {
@@ -197,13 +227,17 @@ impl Engine {
             .ok_or_else(|| EngineError::Shared(format!("{what} without a step")))
     }
 
-    /// Phase 2: the other holders' part states; element forces here.
+    /// Phase 2: the other holders' part states; element forces here, and this
+    /// worker's share of the split bodies' reports with their element steps over the
+    /// parts here (`StepReport::part_dts`). The contact pass stays pending.
     pub(super) fn halo(&mut self, parts: Vec<PartState>) -> Reply {
-        let (at, dt, _) = match self.in_flight("Halo") {
+        let (at, dt, due) = match self.in_flight("Halo") {
             Ok(p) => p,
             Err(e) => return Reply::Error(e.to_string()),
         };
-        let mut out = Vec::new();
+        self.pending = None;
+        let reactions = self.setup.as_ref().is_some_and(|s| s.reactions) && due.reactions;
+        let mut rep = StepReport::default();
         for s in &mut self.shared {
             let t = Instant::now();
             let mine: Vec<PartState> = parts
@@ -211,38 +245,11 @@ impl Engine {
                 .filter(|p| s.g.ids.contains(&p.id))
                 .cloned()
                 .collect();
-            match s.g.forces(&mine, &at, dt) {
-                Ok(d) => out.extend(d.into_iter().flatten()),
-                Err(e) => {
-                    let first = s.first();
-                    return self.failed(first, e);
+            match s.g.forces(&mine, &at, dt, reactions) {
+                Ok((shares, d)) => {
+                    rep.bodies.extend(shares);
+                    rep.part_dts.extend(d);
                 }
-            }
-            s.nanos += t.elapsed().as_nanos() as u64;
-        }
-        Reply::PartDts(out)
-    }
-
-    /// Phase 3: contact with the merged element steps; this worker's share of the
-    /// split bodies' reports.
-    pub(super) fn contact(&mut self, dts: Vec<PartDt>) -> Reply {
-        let (at, dt, due) = match self.in_flight("Contact") {
-            Ok(p) => p,
-            Err(e) => return Reply::Error(e.to_string()),
-        };
-        self.pending = None;
-        let reactions = self.setup.as_ref().is_some_and(|s| s.reactions) && due.reactions;
-        let step = at.after(dt).step;
-        let mut rep = StepReport::default();
-        for s in &mut self.shared {
-            let t = Instant::now();
-            let mine: Vec<PartDt> =
-                s.g.ids
-                    .iter()
-                    .filter_map(|id| dts.iter().find(|d| d.id == *id).copied())
-                    .collect();
-            match s.g.contact(&mine, dt, step, reactions) {
-                Ok(r) => rep.bodies.extend(r),
                 Err(e) => {
                     let first = s.first();
                     return self.failed(first, e);
@@ -254,14 +261,54 @@ impl Engine {
                 nanos: s.nanos,
             });
         }
-        // the split groups' compute over the three exchanges (integrate, element forces,
-        // contact): the master adds it to the Step's, so the barrier is the rest
+        // the split groups' compute over the step (contact of the last step and
+        // integration in the Step, element forces here): the master adds it to the
+        // Step's, so the barrier is the rest
         rep.compute_ns = self.shared.iter().map(|s| s.nanos).sum();
         Reply::Report(rep)
     }
 
+    /// The pending contact pass of every split group held here, before an assembly
+    /// (the master sends the element steps the next Step would carry).
+    pub(super) fn contact(&mut self, dts: Vec<PartDt>) -> Reply {
+        if self.broken {
+            return Reply::Error(EngineError::Broken.to_string());
+        }
+        for k in 0..self.shared.len() {
+            let s = &mut self.shared[k];
+            if !s.g.contact_pending() {
+                continue;
+            }
+            let t = Instant::now();
+            let r = match dts_of(&s.g, &dts) {
+                Ok(d) => s.g.contact(&d),
+                Err(e) => return Reply::Error(e.to_string()),
+            };
+            s.nanos += t.elapsed().as_nanos() as u64;
+            if let Err(e) = r {
+                let first = s.first();
+                return self.failed(first, e);
+            }
+        }
+        Reply::Ack
+    }
+
+    /// No contact pass is pending (an assembly reads the contact forces).
+    fn check_no_contact_pending(&self) -> Result<(), EngineError> {
+        match self.shared.iter().find(|s| s.g.contact_pending()) {
+            Some(s) => Err(EngineError::Shared(format!(
+                "the contact pass of the group of body {} is pending: Contact first",
+                s.first()
+            ))),
+            None => Ok(()),
+        }
+    }
+
     /// The parts computed here of the groups other workers split.
     pub(super) fn parts(&self) -> Reply {
+        if let Err(e) = self.check_no_contact_pending() {
+            return Reply::Error(e.to_string());
+        }
         Reply::Parts(
             self.shared
                 .iter()
@@ -276,6 +323,7 @@ impl Engine {
         &mut self,
         parts: Vec<(u32, u32, BodyState)>,
     ) -> Result<Reply, EngineError> {
+        self.check_no_contact_pending()?;
         let mut parts = parts;
         for s in self.shared.iter_mut().filter(|s| s.home) {
             let (these, rest): (Vec<_>, Vec<_>) =
