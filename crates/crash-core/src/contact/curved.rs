@@ -14,14 +14,16 @@ use crate::Vec3;
 /// The corner normals of a segment: nodal normals, or the segment's own normal at a
 /// corner on a crease (more than 30 degrees off), where a bulge would not be the surface;
 /// and which corners took their nodal normal.
-pub fn corner_normals(seg: &Segment, surf: &Surface, x: &[Vec3]) -> ([Vec3; 4], [bool; 4]) {
+/// `field`: the body's nodal normals (`smooth::nodal_normals`, the same bits as
+/// `Surface::nodal_normal` node by node), computed once per pass.
+pub fn corner_normals(seg: &Segment, field: &[Vec3], x: &[Vec3]) -> ([Vec3; 4], [bool; 4]) {
     let f = face_vector(seg, x);
     let l = f.norm();
     let ns = if l > 0.0 { f / l } else { Vec3::zeros() };
     let mut out = [ns; 4];
     let mut nodal = [false; 4];
     for (k, &n) in seg.nodes().iter().enumerate() {
-        let nn = surf.nodal_normal(n, x);
+        let nn = field[n as usize];
         if nn.dot(&ns) >= CREASE_COS {
             out[k] = nn;
             nodal[k] = true;
@@ -120,6 +122,31 @@ pub fn coefficients(seg: &Segment, x: &[Vec3], normals: &[Vec3; 4]) -> [[f64; 4]
         }
     }
     b
+}
+
+/// The largest |h| of a segment: sum_{i<j} |b_ij| / 4 (weights w >= 0 summing to 1 give
+/// w_i w_j <= 1/4).
+pub fn bulge_bound(b: &[[f64; 4]; 4]) -> f64 {
+    let mut s = 0.0;
+    for (i, row) in b.iter().enumerate() {
+        for v in &row[i + 1..] {
+            s += v.abs();
+        }
+    }
+    0.25 * s
+}
+
+/// The largest bulge bound over a body's segments at the current positions (`field`:
+/// its nodal normals): how far its curved surface can stand off its flat facets.
+pub fn body_bulge_bound(surf: &Surface, field: &[Vec3], x: &[Vec3]) -> f64 {
+    use rayon::prelude::*;
+    surf.segments
+        .par_iter()
+        .map(|seg| {
+            let (normals, _) = corner_normals(seg, field, x);
+            bulge_bound(&coefficients(seg, x, &normals))
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 /// h(w) and its partial derivatives dh/dw_k.
