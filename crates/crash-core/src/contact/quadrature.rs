@@ -14,17 +14,17 @@
 
 use super::config::ContactConfig;
 use super::curved::{
-    body_bulge_bound, bulge, bulge_pullback, coefficients, corner_a_weights, corner_normals,
-    sub_triangle,
+    bulge, bulge_parts, coefficients, corner_a_weights, corner_normals, loose_bulge_bound,
+    near_bulge_bound, node_box, normal_pullback, normal_rate, sub_triangle, NormalOf,
 };
 use super::narrow::TIE;
 use super::segment::{project, Projection, Segment};
-use super::smooth::nodal_normals;
-use super::stage::PairStats;
+use super::stage::{KinLoad, PairStats};
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::mem::take;
 
 /// Target spacing of the quadrature points as a fraction of the contact distance c:
@@ -39,19 +39,39 @@ pub const BULGE_REACH: f64 = 0.25;
 /// Slave segments per task.
 const SEG_CHUNK: usize = 256;
 
-/// One active quadrature point.
+/// One active quadrature point: its forces on the corner nodes of its two segments. The
+/// bulge terms through the corner normals are not here: they go to `NormalLoad`s,
+/// summed per normal and pulled back once per pass.
 #[derive(Debug, Clone)]
 pub struct PointPush {
     pub slave_seg: u32,
     pub master_seg: u32,
-    /// Forces on the slave's and the master's nodes [N] (they sum to zero; a node may
-    /// appear more than once).
-    pub slave_f: Vec<(u32, Vec3)>,
-    pub master_f: Vec<(u32, Vec3)>,
+    /// Forces on the slave's and the master's corner nodes [N] (the first `*_count`).
+    pub slave_f: [(u32, Vec3); 4],
+    pub slave_count: u8,
+    pub master_f: [(u32, Vec3); 4],
+    pub master_count: u8,
     /// Resultant force on the slave [N].
     pub force: Vec3,
     pub normal_force: f64,
     pub depth: f64,
+}
+
+/// A load on one unit normal of a body (the derivative of the potential by that normal,
+/// at one point) [N]: `curved::normal_pullback` turns it into node forces.
+#[derive(Debug, Clone, Copy)]
+pub struct NormalLoad {
+    pub of: NormalOf,
+    pub tau: Vec3,
+}
+
+/// The points of one direction of the pass, and the loads they put on the slave's and
+/// the master's normals, all in point order.
+#[derive(Debug, Default)]
+pub struct Points {
+    pub pushes: Vec<PointPush>,
+    pub slave_loads: Vec<NormalLoad>,
+    pub master_loads: Vec<NormalLoad>,
 }
 
 /// Points of one (sub-)triangle split into n x n: barycentric (u, v) of the small
@@ -66,16 +86,6 @@ fn points(n: usize) -> impl Iterator<Item = (f64, f64)> {
             up.into_iter().chain(down)
         })
     })
-}
-
-fn seg_box(seg: &Segment, x: &[Vec3]) -> (Vec3, Vec3) {
-    let mut lo = x[seg.nodes[0] as usize];
-    let mut hi = lo;
-    for &n in &seg.nodes()[1..] {
-        lo = lo.inf(&x[n as usize]);
-        hi = hi.sup(&x[n as usize]);
-    }
-    (lo, hi)
 }
 
 fn box_gap(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
@@ -101,13 +111,11 @@ pub fn point_pushes(
     ssurf: &Surface,
     mb: &Body,
     msurf: &Surface,
-    normals: (&[Vec3], &[Vec3]),
     bulges: (f64, f64),
     cfg: &ContactConfig,
     kappa: f64,
     mu: f64,
-) -> Vec<PointPush> {
-    let (snorm, mnorm) = normals;
+) -> Points {
     let (hs_max, hm_max) = bulges;
     let c = 0.5 * (sb.def.section.thickness + mb.def.section.thickness);
     // a point is in contact only within c plus the master's bulge of its flat segments;
@@ -118,17 +126,17 @@ pub fn point_pushes(
     let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
-    let chunks: Vec<Vec<PointPush>> = ssurf
+    let chunks: Vec<Points> = ssurf
         .segments
         .par_chunks(SEG_CHUNK)
         .enumerate()
         .map(|(ci, segs)| {
-            let mut out = Vec::new();
+            let mut out = Points::default();
             let mut cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
             for (k, seg) in segs.iter().enumerate() {
                 let js = (ci * SEG_CHUNK + k) as u32;
-                let sbx = seg_box(seg, xs_);
+                let sbx = node_box(seg, xs_);
                 if box_gap(&sbx, &mbox) > 0.0 {
                     continue;
                 }
@@ -142,11 +150,11 @@ pub fn point_pushes(
                 masters.clear();
                 for &j in &cand {
                     let ms = &msurf.segments[j as usize];
-                    let bx = seg_box(ms, xm);
+                    let bx = node_box(ms, xm);
                     if box_gap(&sbx, &bx) >= box_reach {
                         continue;
                     }
-                    let (normals, nodal) = corner_normals(ms, mnorm, xm);
+                    let (normals, nodal) = corner_normals(ms, msurf, xm);
                     masters.push(Master {
                         j,
                         bx,
@@ -159,21 +167,25 @@ pub fn point_pushes(
                     continue;
                 }
                 slave_segment(
-                    sb, ssurf, snorm, js, seg, mb, msurf, &masters, c, reach, kappa, mu, cfg,
-                    &mut out,
+                    sb, ssurf, js, seg, mb, msurf, &masters, c, reach, kappa, mu, cfg, &mut out,
                 );
             }
             out
         })
         .collect();
-    chunks.into_iter().flatten().collect()
+    let mut all = Points::default();
+    for ch in chunks {
+        all.pushes.extend(ch.pushes);
+        all.slave_loads.extend(ch.slave_loads);
+        all.master_loads.extend(ch.master_loads);
+    }
+    all
 }
 
 #[allow(clippy::too_many_arguments)]
 fn slave_segment(
     sb: &Body,
     ssurf: &Surface,
-    snorm: &[Vec3],
     js: u32,
     seg: &Segment,
     mb: &Body,
@@ -184,11 +196,11 @@ fn slave_segment(
     kappa: f64,
     mu: f64,
     cfg: &ContactConfig,
-    out: &mut Vec<PointPush>,
+    out: &mut Points,
 ) {
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
-    let (sn, s_nodal) = corner_normals(seg, snorm, xs_);
+    let (sn, s_nodal) = corner_normals(seg, ssurf, xs_);
     let sb_coef = coefficients(seg, xs_, &sn);
     let subs = if seg.count == 3 { 1 } else { 4 };
     for sub in 0..subs {
@@ -259,57 +271,42 @@ fn slave_segment(
             let rho = xa - pr.point;
             let (gw, cg) = mt.corner_gradients(&dhm, &pr.bary, &rho);
             let grad = dir - gw * side;
-            let mut gm: Vec<(u32, Vec3)> = Vec::with_capacity(32);
+            // g by the master's corner nodes: the closest point's distance, the bulge
+            // through the projection's weights and through the edges; the part through
+            // the corner normals as loads on those normals
+            let mut gm = [Vec3::zeros(); 4];
             for q in 0..ms.count as usize {
-                gm.push((ms.nodes[q], -dir * pr.weights[q]));
+                gm[q] = -dir * pr.weights[q];
             }
-            let mut spread = [Vec3::zeros(); 4];
-            mt.spread(ms, pr.sub as usize, &cg.map(|g| -g * side), &mut spread);
-            for q in 0..ms.count as usize {
-                gm.push((ms.nodes[q], spread[q]));
+            mt.spread(ms, pr.sub as usize, &cg.map(|g| -g * side), &mut gm);
+            let (direct, m_tau) = bulge_parts(ms, xm, &m.normals, &pr.weights, -side);
+            for q in 0..4 {
+                gm[q] += direct[q];
             }
-            bulge_pullback(
-                ms,
-                m.j,
-                msurf,
-                xm,
-                &m.normals,
-                &m.nodal,
-                &pr.weights,
-                -side,
-                &mut gm,
-            );
             // the slave point moves with the facet, along its normal by hs, and with hs
-            let mut spread = [Vec3::zeros(); 4];
+            let mut gs = [Vec3::zeros(); 4];
             for q in 0..seg.count as usize {
-                spread[q] = grad * w[q];
+                gs[q] = grad * w[q];
             }
             let pb = st.normal_pullback(&grad);
-            st.spread(seg, sub, &pb.map(|g| g * hs), &mut spread);
-            let mut gs: Vec<(u32, Vec3)> = Vec::with_capacity(32);
-            for q in 0..seg.count as usize {
-                gs.push((seg.nodes[q], spread[q]));
+            st.spread(seg, sub, &pb.map(|g| g * hs), &mut gs);
+            let (direct, s_tau) = bulge_parts(seg, xs_, &sn, &w, grad.dot(&nsub));
+            for q in 0..4 {
+                gs[q] += direct[q];
             }
-            bulge_pullback(
-                seg,
-                js,
-                ssurf,
-                xs_,
-                &sn,
-                &s_nodal,
-                &w,
-                grad.dot(&nsub),
-                &mut gs,
-            );
             let k = wa;
             let mut phi = k * (-gap);
             if cfg.damping_ratio > 0.0 {
                 let mut gdot = 0.0;
-                for (nd, g) in &gs {
-                    gdot += g.dot(&sb.state.v[*nd as usize]);
+                for q in 0..seg.count as usize {
+                    gdot += gs[q].dot(&sb.state.v[seg.nodes[q] as usize]);
+                    let of = NormalOf::of_corner(seg, js, &s_nodal, q);
+                    gdot += s_tau[q].dot(&normal_rate(of, ssurf, xs_, &sb.state.v));
                 }
-                for (nd, g) in &gm {
-                    gdot += g.dot(&mb.state.v[*nd as usize]);
+                for q in 0..ms.count as usize {
+                    gdot += gm[q].dot(&mb.state.v[ms.nodes[q] as usize]);
+                    let of = NormalOf::of_corner(ms, m.j, &m.nodal, q);
+                    gdot += m_tau[q].dot(&normal_rate(of, msurf, xm, &mb.state.v));
                 }
                 let ma = mu * area0 / (n * n) as f64;
                 phi -= 2.0 * cfg.damping_ratio * (k * ma).sqrt() * gdot;
@@ -317,14 +314,27 @@ fn slave_segment(
             if !(phi > 0.0 && phi.is_finite()) {
                 continue;
             }
-            let fnorm = phi * grad.norm();
-            out.push(PointPush {
+            for q in 0..seg.count as usize {
+                out.slave_loads.push(NormalLoad {
+                    of: NormalOf::of_corner(seg, js, &s_nodal, q),
+                    tau: s_tau[q] * phi,
+                });
+            }
+            for q in 0..ms.count as usize {
+                out.master_loads.push(NormalLoad {
+                    of: NormalOf::of_corner(ms, m.j, &m.nodal, q),
+                    tau: m_tau[q] * phi,
+                });
+            }
+            out.pushes.push(PointPush {
                 slave_seg: js,
                 master_seg: m.j,
-                slave_f: gs.into_iter().map(|(nd, g)| (nd, g * phi)).collect(),
-                master_f: gm.into_iter().map(|(nd, g)| (nd, g * phi)).collect(),
+                slave_f: std::array::from_fn(|q| (seg.nodes[q], gs[q] * phi)),
+                slave_count: seg.count,
+                master_f: std::array::from_fn(|q| (ms.nodes[q], gm[q] * phi)),
+                master_count: ms.count,
                 force: grad * phi,
-                normal_force: fnorm,
+                normal_force: phi * grad.norm(),
                 depth: -gap,
             });
         }
@@ -346,21 +356,57 @@ pub(crate) fn segment_pair(
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
     let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
-    // nodal normals once per pass (the same bits as `Surface::nodal_normal`) and how far
-    // each body's curved surface can stand off its facets
-    let (na, nb) = (nodal_normals(a), nodal_normals(b));
-    let ha = body_bulge_bound(sa, &na, &a.state.x);
-    let hb = body_bulge_bound(sb, &nb, &b.state.x);
-    let first = point_pushes(a, sa, b, sb, (&na, &nb), (ha, hb), cfg, kappa, mu);
-    let second = point_pushes(b, sb, a, sa, (&nb, &na), (hb, ha), cfg, kappa, mu);
-    let mut st = PairStats::empty(a.def.id, b.def.id, first.len() + second.len());
+    // how far each body's curved surface can stand off its facets where the other body
+    // is near: exact bounds over the segments within reach of the other's node box
+    // (grown by the loose bounds of both), so the search misses no point of a coarse mesh
+    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+    let grow = c * (1.0 + BULGE_REACH)
+        + loose_bulge_bound(sa, &a.state.x)
+        + loose_bulge_bound(sb, &b.state.x);
+    let ha = near_bulge_bound(sa, &a.state.x, &sb.bounds(), grow);
+    let hb = near_bulge_bound(sb, &b.state.x, &sa.bounds(), grow);
+    let first = point_pushes(a, sa, b, sb, (ha, hb), cfg, kappa, mu);
+    let second = point_pushes(b, sb, a, sa, (hb, ha), cfg, kappa, mu);
+    let mut st = PairStats::empty(a.def.id, b.def.id, first.pushes.len() + second.pushes.len());
     let thin = a.def.section.thickness.min(b.def.section.thickness);
-    apply_points(bodies, ia, ib, &first, &mut st, true);
-    apply_points(bodies, ib, ia, &second, &mut st, false);
+    apply_points(bodies, ia, ib, &first.pushes, &mut st, true);
+    apply_points(bodies, ib, ia, &second.pushes, &mut st, false);
+    // the loads on each body's normals, summed per normal (in point order), then pulled
+    // back once per normal in normal order
+    let on_a = first.slave_loads.iter().chain(&second.master_loads);
+    let on_b = first.master_loads.iter().chain(&second.slave_loads);
+    let mut buf = Vec::new();
+    for (ib_, loads, surf, is_a) in [
+        (ia, on_a.collect::<Vec<_>>(), sa, true),
+        (ib, on_b.collect(), sb, false),
+    ] {
+        let mut sums: BTreeMap<NormalOf, Vec3> = BTreeMap::new();
+        for l in loads {
+            *sums.entry(l.of).or_insert_with(Vec3::zeros) += l.tau;
+        }
+        buf.clear();
+        for (of, tau) in &sums {
+            normal_pullback(*of, surf, &bodies[ib_].state.x, tau, &mut buf);
+        }
+        let kin = if is_a { &mut st.kin_a } else { &mut st.kin_b };
+        add_forces(&mut bodies[ib_], &buf, kin);
+    }
     st.kin_a.settle_nodes();
     st.kin_b.settle_nodes();
     st.max_penetration_ratio = st.max_penetration / thin;
     st
+}
+
+/// Add node forces to a body's `f_contact` in order; on a kinematic body they go into
+/// the pair's `KinLoad` too.
+fn add_forces(b: &mut Body, forces: &[(u32, Vec3)], kin: &mut KinLoad) {
+    let is_kin = b.def.kinematic;
+    for &(n, f) in forces {
+        b.state.f_contact[n as usize] += f;
+        if is_kin {
+            kin.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
+        }
+    }
 }
 
 /// Add the points of one direction of the segment pass: their node forces on the
@@ -374,25 +420,22 @@ fn apply_points(
     st: &mut PairStats,
     slave_is_a: bool,
 ) {
-    let (kin_s, kin_m) = (bodies[islave].def.kinematic, bodies[imaster].def.kinematic);
     let (mut l_s, mut l_m) = if slave_is_a {
         (take(&mut st.kin_a), take(&mut st.kin_b))
     } else {
         (take(&mut st.kin_b), take(&mut st.kin_a))
     };
     for p in pushes {
-        for (body, fs, kin, l) in [
-            (islave, &p.slave_f, kin_s, &mut l_s),
-            (imaster, &p.master_f, kin_m, &mut l_m),
-        ] {
-            let b = &mut bodies[body];
-            for &(n, f) in fs {
-                b.state.f_contact[n as usize] += f;
-                if kin {
-                    l.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
-                }
-            }
-        }
+        add_forces(
+            &mut bodies[islave],
+            &p.slave_f[..p.slave_count as usize],
+            &mut l_s,
+        );
+        add_forces(
+            &mut bodies[imaster],
+            &p.master_f[..p.master_count as usize],
+            &mut l_m,
+        );
         st.max_penetration = st.max_penetration.max(p.depth);
         st.normal_force += p.normal_force;
         st.force_on_a += if slave_is_a { p.force } else { -p.force };
