@@ -194,19 +194,19 @@ pub fn bulge_bound(b: &[[f64; 4]; 4]) -> f64 {
     0.25 * s
 }
 
-/// A loose bound on any segment's bulge, from the largest node box: corner normals lie
-/// within the crease angle (30 degrees) of the segment's normal, so |n_j - n_i| <= 1,
-/// |b_ij| <= |e_ij| / 2 and |h| <= sum |e_ij| / 8 <= (pairs / 8) x the box diagonal.
-pub fn loose_bulge_bound(surf: &Surface, x: &[Vec3]) -> f64 {
-    use rayon::prelude::*;
+/// A loose bound on any segment's bulge, from the largest node box (`boxes`, by
+/// segment): corner normals lie within the crease angle (30 degrees) of the segment's
+/// normal, so |n_j - n_i| <= 1, |b_ij| <= |e_ij| / 2 and |h| <= sum |e_ij| / 8 <=
+/// (pairs / 8) x the box diagonal.
+pub fn loose_bulge_bound(surf: &Surface, boxes: &[(Vec3, Vec3)]) -> f64 {
     surf.segments
-        .par_iter()
-        .map(|seg| {
-            let (lo, hi) = node_box(seg, x);
+        .iter()
+        .zip(boxes)
+        .map(|(seg, (lo, hi))| {
             let pairs = if seg.count == 3 { 3.0 } else { 6.0 };
             (hi - lo).norm_squared() * (pairs * pairs / 64.0)
         })
-        .reduce(|| 0.0, f64::max)
+        .fold(0.0, f64::max)
         .sqrt()
 }
 
@@ -225,15 +225,21 @@ pub fn node_box(seg: &Segment, x: &[Vec3]) -> (Vec3, Vec3) {
 /// `grow` of the box `near` (the other body's, grown by what a bulge can add): how far
 /// its curved surface can stand off its facets where contact can happen. Max is
 /// order-free: the same bits on any thread count.
-pub fn near_bulge_bound(surf: &Surface, x: &[Vec3], near: &(Vec3, Vec3), grow: f64) -> f64 {
+pub fn near_bulge_bound(
+    surf: &Surface,
+    x: &[Vec3],
+    boxes: &[(Vec3, Vec3)],
+    near: &(Vec3, Vec3),
+    grow: f64,
+) -> f64 {
     use rayon::prelude::*;
     surf.segments
         .par_iter()
-        .filter(|seg| {
-            let (lo, hi) = node_box(seg, x);
+        .zip(boxes)
+        .filter(|(_, (lo, hi))| {
             (0..3).all(|d| hi[d] >= near.0[d] - grow && lo[d] <= near.1[d] + grow)
         })
-        .map(|seg| {
+        .map(|(seg, _)| {
             let (normals, _) = corner_normals(seg, surf, x);
             bulge_bound(&coefficients(seg, x, &normals))
         })

@@ -109,8 +109,10 @@ struct Master {
 pub fn point_pushes(
     sb: &Body,
     ssurf: &Surface,
+    sboxes: &[(Vec3, Vec3)],
     mb: &Body,
     msurf: &Surface,
+    mboxes: &[(Vec3, Vec3)],
     bulges: (f64, f64),
     cfg: &ContactConfig,
     kappa: f64,
@@ -124,7 +126,6 @@ pub fn point_pushes(
     let box_reach = reach + hs_max;
     let (mlo, mhi) = msurf.bounds();
     let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
-    let xs_ = &sb.state.x;
     let xm = &mb.state.x;
     let chunks: Vec<Points> = ssurf
         .segments
@@ -136,7 +137,7 @@ pub fn point_pushes(
             let mut masters: Vec<Master> = Vec::new();
             for (k, seg) in segs.iter().enumerate() {
                 let js = (ci * SEG_CHUNK + k) as u32;
-                let sbx = node_box(seg, xs_);
+                let sbx = sboxes[js as usize];
                 if box_gap(&sbx, &mbox) > 0.0 {
                     continue;
                 }
@@ -150,7 +151,7 @@ pub fn point_pushes(
                 masters.clear();
                 for &j in &cand {
                     let ms = &msurf.segments[j as usize];
-                    let bx = node_box(ms, xm);
+                    let bx = mboxes[j as usize];
                     if box_gap(&sbx, &bx) >= box_reach {
                         continue;
                     }
@@ -341,6 +342,12 @@ fn slave_segment(
     }
 }
 
+/// The node box of every segment of a body, by segment (once per pass: the bounds, the
+/// culls and the searches of both directions read them).
+fn seg_boxes(surf: &Surface, x: &[Vec3]) -> Vec<(Vec3, Vec3)> {
+    surf.segments.par_iter().map(|s| node_box(s, x)).collect()
+}
+
 /// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
 /// `sb`): each body slave once with half the weight; stiffness per unit area
 /// kappa = s mu / dt_ref^2 (the soft rule per area, mu the lighter areal mass).
@@ -360,13 +367,14 @@ pub(crate) fn segment_pair(
     // is near: exact bounds over the segments within reach of the other's node box
     // (grown by the loose bounds of both), so the search misses no point of a coarse mesh
     let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let grow = c * (1.0 + BULGE_REACH)
-        + loose_bulge_bound(sa, &a.state.x)
-        + loose_bulge_bound(sb, &b.state.x);
-    let ha = near_bulge_bound(sa, &a.state.x, &sb.bounds(), grow);
-    let hb = near_bulge_bound(sb, &b.state.x, &sa.bounds(), grow);
-    let first = point_pushes(a, sa, b, sb, (ha, hb), cfg, kappa, mu);
-    let second = point_pushes(b, sb, a, sa, (hb, ha), cfg, kappa, mu);
+    let boxes_a = seg_boxes(sa, &a.state.x);
+    let boxes_b = seg_boxes(sb, &b.state.x);
+    let grow =
+        c * (1.0 + BULGE_REACH) + loose_bulge_bound(sa, &boxes_a) + loose_bulge_bound(sb, &boxes_b);
+    let ha = near_bulge_bound(sa, &a.state.x, &boxes_a, &sb.bounds(), grow);
+    let hb = near_bulge_bound(sb, &b.state.x, &boxes_b, &sa.bounds(), grow);
+    let first = point_pushes(a, sa, &boxes_a, b, sb, &boxes_b, (ha, hb), cfg, kappa, mu);
+    let second = point_pushes(b, sb, &boxes_b, a, sa, &boxes_a, (hb, ha), cfg, kappa, mu);
     let mut st = PairStats::empty(a.def.id, b.def.id, first.pushes.len() + second.pushes.len());
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, ia, ib, &first.pushes, &mut st, true);
