@@ -14,8 +14,9 @@
 
 use super::config::ContactConfig;
 use super::curved::{
-    bulge, bulge_parts, coefficients, corner_a_weights, corner_normals, loose_bulge_bound,
-    near_bulge_bound, node_box, normal_pullback, normal_rate, sub_triangle, NormalOf,
+    bulge, bulge_bound, bulge_parts, coefficients, corner_a_weights, corner_normals,
+    loose_bulge_bound, near_bulge_bound, node_box, normal_pullback, normal_rate, sub_triangle,
+    NormalOf,
 };
 use super::narrow::TIE;
 use super::segment::{project, Projection, Segment};
@@ -74,17 +75,16 @@ pub struct Points {
     pub master_loads: Vec<NormalLoad>,
 }
 
-/// Points of one (sub-)triangle split into n x n: barycentric (u, v) of the small
-/// triangles' centroids; each carries 1/n^2 of the area.
-fn points(n: usize) -> impl Iterator<Item = (f64, f64)> {
+/// Points of one (sub-)triangle split into n x n, strip i of n (u between i/n and
+/// (i+1)/n): barycentric (u, v) of the small triangles' centroids; each carries 1/n^2 of
+/// the area. Strips 0..n in turn give every point once.
+fn strip_points(n: usize, i: usize) -> impl Iterator<Item = (f64, f64)> {
     let nf = n as f64;
-    (0..n).flat_map(move |i| {
-        (0..n - i).flat_map(move |j| {
-            let up = Some(((i as f64 + 1.0 / 3.0) / nf, (j as f64 + 1.0 / 3.0) / nf));
-            let down =
-                (i + j + 1 < n).then(|| ((i as f64 + 2.0 / 3.0) / nf, (j as f64 + 2.0 / 3.0) / nf));
-            up.into_iter().chain(down)
-        })
+    (0..n - i).flat_map(move |j| {
+        let up = Some(((i as f64 + 1.0 / 3.0) / nf, (j as f64 + 1.0 / 3.0) / nf));
+        let down =
+            (i + j + 1 < n).then(|| ((i as f64 + 2.0 / 3.0) / nf, (j as f64 + 2.0 / 3.0) / nf));
+        up.into_iter().chain(down)
     })
 }
 
@@ -203,6 +203,8 @@ fn slave_segment(
     let xm = &mb.state.x;
     let (sn, s_nodal) = corner_normals(seg, ssurf, xs_);
     let sb_coef = coefficients(seg, xs_, &sn);
+    let hs_bound = bulge_bound(&sb_coef);
+    let mut near: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
     for sub in 0..subs {
         let st = sub_triangle(seg, xs_, sub);
@@ -219,125 +221,149 @@ fn slave_segment(
         let wa = (kappa * area0) / (n * n) as f64;
         let nsub = st.unit_normal();
         let base = corner_a_weights(seg);
-        for (u, v) in points(n) {
-            let mut w = base;
-            for q in 0..4 {
-                w[q] += u * st.dw_du[q] + v * st.dw_dv[q];
+        let flat_at = |u: f64, v: f64| st.a + (st.b - st.a) * u + (st.c - st.a) * v;
+        for i in 0..n {
+            // the masters that can reach some point of this strip: the strip's corners'
+            // box grown by the slave's bulge bound holds its points; a master farther than
+            // `reach` from it would be skipped at every point
+            let (u0, u1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+            let mut lo = flat_at(u0, 0.0);
+            let mut hi = lo;
+            for p in [
+                flat_at(u1, 0.0),
+                flat_at(u0, 1.0 - u0),
+                flat_at(u1, 1.0 - u1),
+            ] {
+                lo = lo.inf(&p);
+                hi = hi.sup(&p);
             }
-            let flat = st.a + (st.b - st.a) * u + (st.c - st.a) * v;
-            let (hs, _) = bulge(&sb_coef, &w);
-            let xa = flat + nsub * hs;
-            // closest master segment (ties within TIE c: lowest index; `masters` sorted)
-            let mut best: Option<(Projection, usize)> = None;
-            let mut dmin = f64::INFINITY;
-            for (mi, m) in masters.iter().enumerate() {
-                let lb = box_gap(&(xa, xa), &m.bx);
-                if lb >= reach || lb > dmin + TIE * c {
+            let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
+            near.clear();
+            near.extend((0..masters.len()).filter(|&mi| box_gap(&strip, &masters[mi].bx) < reach));
+            if near.is_empty() {
+                continue;
+            }
+            for (u, v) in strip_points(n, i) {
+                let mut w = base;
+                for q in 0..4 {
+                    w[q] += u * st.dw_du[q] + v * st.dw_dv[q];
+                }
+                let flat = st.a + (st.b - st.a) * u + (st.c - st.a) * v;
+                let (hs, _) = bulge(&sb_coef, &w);
+                let xa = flat + nsub * hs;
+                // closest master segment (ties within TIE c: lowest index; `masters` sorted)
+                let mut best: Option<(Projection, usize)> = None;
+                let mut dmin = f64::INFINITY;
+                for &mi in near.iter() {
+                    let m = &masters[mi];
+                    let lb = box_gap(&(xa, xa), &m.bx);
+                    if lb >= reach || lb > dmin + TIE * c {
+                        continue;
+                    }
+                    let pr = project(&xa, &msurf.segments[m.j as usize], xm);
+                    if pr.dist.is_nan() {
+                        continue;
+                    }
+                    let better = match &best {
+                        None => true,
+                        Some((b, _)) => pr.dist < b.dist - TIE * c,
+                    };
+                    dmin = dmin.min(pr.dist);
+                    if better {
+                        best = Some((pr, mi));
+                    }
+                }
+                let Some((pr, mi)) = best else { continue };
+                if pr.dist >= reach || pr.dist <= 1e-9 * c {
                     continue;
                 }
-                let pr = project(&xa, &msurf.segments[m.j as usize], xm);
-                if pr.dist.is_nan() {
-                    continue;
-                }
-                let better = match &best {
-                    None => true,
-                    Some((b, _)) => pr.dist < b.dist - TIE * c,
+                let m = &masters[mi];
+                let ms = &msurf.segments[m.j as usize];
+                let mt = sub_triangle(ms, xm, pr.sub as usize);
+                let dir = (xa - pr.point) / pr.dist;
+                let side = if dir.dot(&mt.unit_normal()) >= 0.0 {
+                    1.0
+                } else {
+                    -1.0
                 };
-                dmin = dmin.min(pr.dist);
-                if better {
-                    best = Some((pr, mi));
+                let (hm, dhm) = bulge(&m.b, &pr.weights);
+                let gap = pr.dist - side * hm - c;
+                if gap >= 0.0 {
+                    continue;
                 }
-            }
-            let Some((pr, mi)) = best else { continue };
-            if pr.dist >= reach || pr.dist <= 1e-9 * c {
-                continue;
-            }
-            let m = &masters[mi];
-            let ms = &msurf.segments[m.j as usize];
-            let mt = sub_triangle(ms, xm, pr.sub as usize);
-            let dir = (xa - pr.point) / pr.dist;
-            let side = if dir.dot(&mt.unit_normal()) >= 0.0 {
-                1.0
-            } else {
-                -1.0
-            };
-            let (hm, dhm) = bulge(&m.b, &pr.weights);
-            let gap = pr.dist - side * hm - c;
-            if gap >= 0.0 {
-                continue;
-            }
-            // exact gradient of g: by the slave point, by the master's nodes (the
-            // closest point's distance; the bulge through the projection's weights, the
-            // edges and the corner normals)
-            let rho = xa - pr.point;
-            let (gw, cg) = mt.corner_gradients(&dhm, &pr.bary, &rho);
-            let grad = dir - gw * side;
-            // g by the master's corner nodes: the closest point's distance, the bulge
-            // through the projection's weights and through the edges; the part through
-            // the corner normals as loads on those normals
-            let mut gm = [Vec3::zeros(); 4];
-            for q in 0..ms.count as usize {
-                gm[q] = -dir * pr.weights[q];
-            }
-            mt.spread(ms, pr.sub as usize, &cg.map(|g| -g * side), &mut gm);
-            let (direct, m_tau) = bulge_parts(ms, xm, &m.normals, &pr.weights, -side);
-            for q in 0..4 {
-                gm[q] += direct[q];
-            }
-            // the slave point moves with the facet, along its normal by hs, and with hs
-            let mut gs = [Vec3::zeros(); 4];
-            for q in 0..seg.count as usize {
-                gs[q] = grad * w[q];
-            }
-            let pb = st.normal_pullback(&grad);
-            st.spread(seg, sub, &pb.map(|g| g * hs), &mut gs);
-            let (direct, s_tau) = bulge_parts(seg, xs_, &sn, &w, grad.dot(&nsub));
-            for q in 0..4 {
-                gs[q] += direct[q];
-            }
-            let k = wa;
-            let mut phi = k * (-gap);
-            if cfg.damping_ratio > 0.0 {
-                let mut gdot = 0.0;
+                // exact gradient of g: by the slave point, by the master's nodes (the
+                // closest point's distance; the bulge through the projection's weights, the
+                // edges and the corner normals)
+                let rho = xa - pr.point;
+                let (gw, cg) = mt.corner_gradients(&dhm, &pr.bary, &rho);
+                let grad = dir - gw * side;
+                // g by the master's corner nodes: the closest point's distance, the bulge
+                // through the projection's weights and through the edges; the part through
+                // the corner normals as loads on those normals
+                let mut gm = [Vec3::zeros(); 4];
+                for q in 0..ms.count as usize {
+                    gm[q] = -dir * pr.weights[q];
+                }
+                mt.spread(ms, pr.sub as usize, &cg.map(|g| -g * side), &mut gm);
+                let (direct, m_tau) = bulge_parts(ms, xm, &m.normals, &pr.weights, -side);
+                for q in 0..4 {
+                    gm[q] += direct[q];
+                }
+                // the slave point moves with the facet, along its normal by hs, and with hs
+                let mut gs = [Vec3::zeros(); 4];
                 for q in 0..seg.count as usize {
-                    gdot += gs[q].dot(&sb.state.v[seg.nodes[q] as usize]);
-                    let of = NormalOf::of_corner(seg, js, &s_nodal, q);
-                    gdot += s_tau[q].dot(&normal_rate(of, ssurf, xs_, &sb.state.v));
+                    gs[q] = grad * w[q];
+                }
+                let pb = st.normal_pullback(&grad);
+                st.spread(seg, sub, &pb.map(|g| g * hs), &mut gs);
+                let (direct, s_tau) = bulge_parts(seg, xs_, &sn, &w, grad.dot(&nsub));
+                for q in 0..4 {
+                    gs[q] += direct[q];
+                }
+                let k = wa;
+                let mut phi = k * (-gap);
+                if cfg.damping_ratio > 0.0 {
+                    let mut gdot = 0.0;
+                    for q in 0..seg.count as usize {
+                        gdot += gs[q].dot(&sb.state.v[seg.nodes[q] as usize]);
+                        let of = NormalOf::of_corner(seg, js, &s_nodal, q);
+                        gdot += s_tau[q].dot(&normal_rate(of, ssurf, xs_, &sb.state.v));
+                    }
+                    for q in 0..ms.count as usize {
+                        gdot += gm[q].dot(&mb.state.v[ms.nodes[q] as usize]);
+                        let of = NormalOf::of_corner(ms, m.j, &m.nodal, q);
+                        gdot += m_tau[q].dot(&normal_rate(of, msurf, xm, &mb.state.v));
+                    }
+                    let ma = mu * area0 / (n * n) as f64;
+                    phi -= 2.0 * cfg.damping_ratio * (k * ma).sqrt() * gdot;
+                }
+                if !(phi > 0.0 && phi.is_finite()) {
+                    continue;
+                }
+                for q in 0..seg.count as usize {
+                    out.slave_loads.push(NormalLoad {
+                        of: NormalOf::of_corner(seg, js, &s_nodal, q),
+                        tau: s_tau[q] * phi,
+                    });
                 }
                 for q in 0..ms.count as usize {
-                    gdot += gm[q].dot(&mb.state.v[ms.nodes[q] as usize]);
-                    let of = NormalOf::of_corner(ms, m.j, &m.nodal, q);
-                    gdot += m_tau[q].dot(&normal_rate(of, msurf, xm, &mb.state.v));
+                    out.master_loads.push(NormalLoad {
+                        of: NormalOf::of_corner(ms, m.j, &m.nodal, q),
+                        tau: m_tau[q] * phi,
+                    });
                 }
-                let ma = mu * area0 / (n * n) as f64;
-                phi -= 2.0 * cfg.damping_ratio * (k * ma).sqrt() * gdot;
-            }
-            if !(phi > 0.0 && phi.is_finite()) {
-                continue;
-            }
-            for q in 0..seg.count as usize {
-                out.slave_loads.push(NormalLoad {
-                    of: NormalOf::of_corner(seg, js, &s_nodal, q),
-                    tau: s_tau[q] * phi,
+                out.pushes.push(PointPush {
+                    slave_seg: js,
+                    master_seg: m.j,
+                    slave_f: std::array::from_fn(|q| (seg.nodes[q], gs[q] * phi)),
+                    slave_count: seg.count,
+                    master_f: std::array::from_fn(|q| (ms.nodes[q], gm[q] * phi)),
+                    master_count: ms.count,
+                    force: grad * phi,
+                    normal_force: phi * grad.norm(),
+                    depth: -gap,
                 });
             }
-            for q in 0..ms.count as usize {
-                out.master_loads.push(NormalLoad {
-                    of: NormalOf::of_corner(ms, m.j, &m.nodal, q),
-                    tau: m_tau[q] * phi,
-                });
-            }
-            out.pushes.push(PointPush {
-                slave_seg: js,
-                master_seg: m.j,
-                slave_f: std::array::from_fn(|q| (seg.nodes[q], gs[q] * phi)),
-                slave_count: seg.count,
-                master_f: std::array::from_fn(|q| (ms.nodes[q], gm[q] * phi)),
-                master_count: ms.count,
-                force: grad * phi,
-                normal_force: phi * grad.norm(),
-                depth: -gap,
-            });
         }
     }
 }
