@@ -305,21 +305,35 @@ pub fn cells() -> Vec<Cell> {
     // Issue 12: a thin tube thrown onto a clamped plate, speed x thickness x element
     // kind; every cell completes with an energy error under 5 % and no pass-through, or
     // stops with a named diagnostic.
-    for kind in [ElementKind::Tri, ElementKind::Quad] {
-        for t in [5e-4, 1.25e-4] {
-            for v in [50.0, 200.0, 1000.0, 2000.0, 5000.0] {
-                let name = match kind {
-                    ElementKind::Tri => "tri",
-                    ElementKind::Quad => "quad",
-                };
-                let quick = t == 5e-4 && (v == 50.0 || v == 2000.0);
-                out.push(cell(
-                    "thrown tube, R/t, elements, speed [m/s]",
-                    format!("R/t {:.0}, {name}, {v}", 0.025 / t),
-                    Scenario::Thrown(Thrown { speed: v, t, kind }),
-                    CompletedOrStopped,
-                    quick,
-                ));
+    // The same cells under the segment contact pass (contact.pass = "segments", an
+    // option), none quick: recorded beside the node passes' (docs/stability.md).
+    for segments in [false, true] {
+        for kind in [ElementKind::Tri, ElementKind::Quad] {
+            for t in [5e-4, 1.25e-4] {
+                for v in [50.0, 200.0, 1000.0, 2000.0, 5000.0] {
+                    let name = match kind {
+                        ElementKind::Tri => "tri",
+                        ElementKind::Quad => "quad",
+                    };
+                    let quick = !segments && t == 5e-4 && (v == 50.0 || v == 2000.0);
+                    let axis = if segments {
+                        "thrown tube, segment pass, R/t, elements, speed [m/s]"
+                    } else {
+                        "thrown tube, R/t, elements, speed [m/s]"
+                    };
+                    out.push(cell(
+                        axis,
+                        format!("R/t {:.0}, {name}, {v}", 0.025 / t),
+                        Scenario::Thrown(Thrown {
+                            speed: v,
+                            t,
+                            kind,
+                            segments,
+                        }),
+                        CompletedOrStopped,
+                        quick,
+                    ));
+                }
             }
         }
     }

@@ -175,6 +175,9 @@ pub struct Thrown {
     /// Tube wall thickness [m].
     pub t: f64,
     pub kind: ElementKind,
+    /// Run under the segment contact pass (`contact.pass = "segments"`) instead of the
+    /// node passes.
+    pub segments: bool,
 }
 
 const TUBE_R: f64 = 0.025;
@@ -190,11 +193,16 @@ impl Thrown {
         let gap = 1e-4;
         let end = (gap + 3.0 * TUBE_R) / self.speed;
         let end = end.min(3e-4);
+        let contact = if self.segments {
+            "\n[contact]\npass = \"segments\"\n"
+        } else {
+            ""
+        };
         format!(
             r#"name = "matrix-thrown"
 end_time = {end:e}
 output_interval = {out:e}
-
+{contact}
 [materials.steel]
 density = 7800.0
 young = 200.0e9

@@ -71,40 +71,100 @@ fn unit_sum_pullback(
     }
 }
 
-/// Adds scale * dh/dx (h at fixed weights w) to `out`: through the edge vectors of the
-/// segment and through its corner normals (nodal normals reach the nodes of the
-/// corners' incident segments).
-#[allow(clippy::too_many_arguments)]
-pub fn bulge_pullback(
+/// scale * dh/dx (h at fixed weights w) in two parts: through the segment's edge vectors,
+/// a force per corner node (`direct`), and through its corner normals, a load tau_k on
+/// corner k's normal (`on_normal`), which `normal_pullback` turns into node forces. The
+/// second is linear in tau, so the segment pass sums the loads per normal over all its
+/// points and pulls each sum back once (a normal's derivative reaches the nodes of all
+/// the segments around its node).
+pub fn bulge_parts(
     seg: &Segment,
-    j: u32,
-    surf: &Surface,
     x: &[Vec3],
     normals: &[Vec3; 4],
-    nodal: &[bool; 4],
     w: &[f64; 4],
     scale: f64,
-    out: &mut Vec<(u32, Vec3)>,
-) {
+) -> ([Vec3; 4], [Vec3; 4]) {
     let n = seg.count as usize;
     let xs = seg.nodes.map(|i| x[i as usize]);
+    let mut direct = [Vec3::zeros(); 4];
+    let mut on_normal = [Vec3::zeros(); 4];
     for k in 0..n {
-        let mut dx = Vec3::zeros();
-        let mut dn = Vec3::zeros();
         for m in 0..n {
             if m != k {
                 let ww = 0.5 * w[k] * w[m] * scale;
-                dx += (normals[k] - normals[m]) * ww;
-                dn += (xs[k] - xs[m]) * ww;
+                direct[k] += (normals[k] - normals[m]) * ww;
+                on_normal[k] += (xs[k] - xs[m]) * ww;
             }
         }
-        out.push((seg.nodes[k], dx));
+    }
+    (direct, on_normal)
+}
+
+/// Which unit normal a corner carries: its node's nodal normal (the sum over the node's
+/// incident segments) or, on a crease, its segment's own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum NormalOf {
+    Node(u32),
+    Segment(u32),
+}
+
+impl NormalOf {
+    pub fn of_corner(seg: &Segment, j: u32, nodal: &[bool; 4], k: usize) -> Self {
         if nodal[k] {
-            unit_sum_pullback(surf.incident(seg.nodes[k]), surf, x, &dn, out);
+            NormalOf::Node(seg.nodes[k])
         } else {
-            unit_sum_pullback(&[j], surf, x, &dn, out);
+            NormalOf::Segment(j)
         }
     }
+
+    fn segments<'a>(&self, surf: &'a Surface, one: &'a [u32; 1]) -> &'a [u32] {
+        match self {
+            NormalOf::Node(n) => surf.incident(*n),
+            NormalOf::Segment(_) => one,
+        }
+    }
+}
+
+/// Adds (d n / d x)^T tau to `out` for the unit normal `which`.
+pub fn normal_pullback(
+    which: NormalOf,
+    surf: &Surface,
+    x: &[Vec3],
+    tau: &Vec3,
+    out: &mut Vec<(u32, Vec3)>,
+) {
+    let one = match which {
+        NormalOf::Segment(j) => [j],
+        NormalOf::Node(_) => [0],
+    };
+    unit_sum_pullback(which.segments(surf, &one), surf, x, tau, out);
+}
+
+/// The rate dn/dt of the unit normal `which` for nodal velocities v.
+pub fn normal_rate(which: NormalOf, surf: &Surface, x: &[Vec3], v: &[Vec3]) -> Vec3 {
+    let one = match which {
+        NormalOf::Segment(j) => [j],
+        NormalOf::Node(_) => [0],
+    };
+    let segs = which.segments(surf, &one);
+    let (mut f, mut df) = (Vec3::zeros(), Vec3::zeros());
+    for &j in segs {
+        let s = &surf.segments[j as usize];
+        f += face_vector(s, x);
+        let [a, b, c, d] = s.nodes.map(|i| x[i as usize]);
+        let [va, vb, vc, vd] = s.nodes.map(|i| v[i as usize]);
+        df += if s.count == 3 {
+            (vb - va).cross(&(c - a)) + (b - a).cross(&(vc - va))
+        } else {
+            (vc - va).cross(&(d - b)) + (c - a).cross(&(vd - vb))
+        };
+    }
+    let l = f.norm();
+    if l <= 0.0 {
+        return Vec3::zeros();
+    }
+    let n = f / l;
+    (df - n * n.dot(&df)) / l
 }
 
 /// The pair coefficients b_ij of a segment (row-major 4 x 4, symmetric, zero diagonal).
@@ -120,6 +180,70 @@ pub fn coefficients(seg: &Segment, x: &[Vec3], normals: &[Vec3; 4]) -> [[f64; 4]
         }
     }
     b
+}
+
+/// The largest |h| of a segment: sum_{i<j} |b_ij| / 4 (weights w >= 0 summing to 1 give
+/// w_i w_j <= 1/4).
+pub fn bulge_bound(b: &[[f64; 4]; 4]) -> f64 {
+    let mut s = 0.0;
+    for (i, row) in b.iter().enumerate() {
+        for v in &row[i + 1..] {
+            s += v.abs();
+        }
+    }
+    0.25 * s
+}
+
+/// A loose bound on any segment's bulge, from the largest node box (`boxes`, by
+/// segment): corner normals lie within the crease angle (30 degrees) of the segment's
+/// normal, so |n_j - n_i| <= 1, |b_ij| <= |e_ij| / 2 and |h| <= sum |e_ij| / 8 <=
+/// (pairs / 8) x the box diagonal.
+pub fn loose_bulge_bound(surf: &Surface, boxes: &[(Vec3, Vec3)]) -> f64 {
+    surf.segments
+        .iter()
+        .zip(boxes)
+        .map(|(seg, (lo, hi))| {
+            let pairs = if seg.count == 3 { 3.0 } else { 6.0 };
+            (hi - lo).norm_squared() * (pairs * pairs / 64.0)
+        })
+        .fold(0.0, f64::max)
+        .sqrt()
+}
+
+/// The node box of a segment.
+pub fn node_box(seg: &Segment, x: &[Vec3]) -> (Vec3, Vec3) {
+    let mut lo = x[seg.nodes[0] as usize];
+    let mut hi = lo;
+    for &n in &seg.nodes()[1..] {
+        lo = lo.inf(&x[n as usize]);
+        hi = hi.sup(&x[n as usize]);
+    }
+    (lo, hi)
+}
+
+/// The largest bulge bound over the segments of a body whose node box comes within
+/// `grow` of the box `near` (the other body's, grown by what a bulge can add): how far
+/// its curved surface can stand off its facets where contact can happen. Max is
+/// order-free: the same bits on any thread count.
+pub fn near_bulge_bound(
+    surf: &Surface,
+    x: &[Vec3],
+    boxes: &[(Vec3, Vec3)],
+    near: &(Vec3, Vec3),
+    grow: f64,
+) -> f64 {
+    use rayon::prelude::*;
+    surf.segments
+        .par_iter()
+        .zip(boxes)
+        .filter(|(_, (lo, hi))| {
+            (0..3).all(|d| hi[d] >= near.0[d] - grow && lo[d] <= near.1[d] + grow)
+        })
+        .map(|(seg, _)| {
+            let (normals, _) = corner_normals(seg, surf, x);
+            bulge_bound(&coefficients(seg, x, &normals))
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 /// h(w) and its partial derivatives dh/dw_k.

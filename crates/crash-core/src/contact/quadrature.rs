@@ -14,15 +14,18 @@
 
 use super::config::ContactConfig;
 use super::curved::{
-    bulge, bulge_pullback, coefficients, corner_a_weights, corner_normals, sub_triangle,
+    bulge, bulge_bound, bulge_parts, coefficients, corner_a_weights, corner_normals,
+    loose_bulge_bound, near_bulge_bound, node_box, normal_pullback, normal_rate, sub_triangle,
+    NormalOf,
 };
 use super::narrow::TIE;
 use super::segment::{project, Projection, Segment};
-use super::stage::PairStats;
+use super::stage::{KinLoad, PairStats};
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::mem::take;
 
 /// Target spacing of the quadrature points as a fraction of the contact distance c:
@@ -30,49 +33,59 @@ use std::mem::take;
 pub const SPACING: f64 = 0.5;
 /// Most parts per (sub-)triangle edge (bounds the cost on coarse meshes).
 pub const MAX_PARTS: usize = 24;
-/// Master points are looked for this far beyond the flat contact distance, as a share
-/// of c: the bulge of a curved master reaches that far.
+/// Master points are looked for at least this far beyond the flat contact distance, as
+/// a share of c, and farther where the meshes' bulge bounds are larger (coarse curved
+/// meshes: a level-1 sphere of R 30 mm bulges 1.6 mm off its facets, 1.3 c).
 pub const BULGE_REACH: f64 = 0.25;
 /// Slave segments per task.
 const SEG_CHUNK: usize = 256;
 
-/// One active quadrature point.
+/// One active quadrature point: its forces on the corner nodes of its two segments. The
+/// bulge terms through the corner normals are not here: they go to `NormalLoad`s,
+/// summed per normal and pulled back once per pass.
 #[derive(Debug, Clone)]
 pub struct PointPush {
     pub slave_seg: u32,
     pub master_seg: u32,
-    /// Forces on the slave's and the master's nodes [N] (they sum to zero; a node may
-    /// appear more than once).
-    pub slave_f: Vec<(u32, Vec3)>,
-    pub master_f: Vec<(u32, Vec3)>,
+    /// Forces on the slave's and the master's corner nodes [N] (the first `*_count`).
+    pub slave_f: [(u32, Vec3); 4],
+    pub slave_count: u8,
+    pub master_f: [(u32, Vec3); 4],
+    pub master_count: u8,
     /// Resultant force on the slave [N].
     pub force: Vec3,
     pub normal_force: f64,
     pub depth: f64,
 }
 
-/// Points of one (sub-)triangle split into n x n: barycentric (u, v) of the small
-/// triangles' centroids; each carries 1/n^2 of the area.
-fn points(n: usize) -> impl Iterator<Item = (f64, f64)> {
-    let nf = n as f64;
-    (0..n).flat_map(move |i| {
-        (0..n - i).flat_map(move |j| {
-            let up = Some(((i as f64 + 1.0 / 3.0) / nf, (j as f64 + 1.0 / 3.0) / nf));
-            let down =
-                (i + j + 1 < n).then(|| ((i as f64 + 2.0 / 3.0) / nf, (j as f64 + 2.0 / 3.0) / nf));
-            up.into_iter().chain(down)
-        })
-    })
+/// A load on one unit normal of a body (the derivative of the potential by that normal,
+/// at one point) [N]: `curved::normal_pullback` turns it into node forces.
+#[derive(Debug, Clone, Copy)]
+pub struct NormalLoad {
+    pub of: NormalOf,
+    pub tau: Vec3,
 }
 
-fn seg_box(seg: &Segment, x: &[Vec3]) -> (Vec3, Vec3) {
-    let mut lo = x[seg.nodes[0] as usize];
-    let mut hi = lo;
-    for &n in &seg.nodes()[1..] {
-        lo = lo.inf(&x[n as usize]);
-        hi = hi.sup(&x[n as usize]);
-    }
-    (lo, hi)
+/// The points of one direction of the pass, and the loads they put on the slave's and
+/// the master's normals, all in point order.
+#[derive(Debug, Default)]
+pub struct Points {
+    pub pushes: Vec<PointPush>,
+    pub slave_loads: Vec<NormalLoad>,
+    pub master_loads: Vec<NormalLoad>,
+}
+
+/// Points of one (sub-)triangle split into n x n, strip i of n (u between i/n and
+/// (i+1)/n): barycentric (u, v) of the small triangles' centroids; each carries 1/n^2 of
+/// the area. Strips 0..n in turn give every point once.
+fn strip_points(n: usize, i: usize) -> impl Iterator<Item = (f64, f64)> {
+    let nf = n as f64;
+    (0..n - i).flat_map(move |j| {
+        let up = Some(((i as f64 + 1.0 / 3.0) / nf, (j as f64 + 1.0 / 3.0) / nf));
+        let down =
+            (i + j + 1 < n).then(|| ((i as f64 + 2.0 / 3.0) / nf, (j as f64 + 2.0 / 3.0) / nf));
+        up.into_iter().chain(down)
+    })
 }
 
 fn box_gap(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
@@ -96,35 +109,41 @@ struct Master {
 pub fn point_pushes(
     sb: &Body,
     ssurf: &Surface,
+    sboxes: &[(Vec3, Vec3)],
     mb: &Body,
     msurf: &Surface,
+    mboxes: &[(Vec3, Vec3)],
+    bulges: (f64, f64),
     cfg: &ContactConfig,
     kappa: f64,
     mu: f64,
-) -> Vec<PointPush> {
+) -> Points {
+    let (hs_max, hm_max) = bulges;
     let c = 0.5 * (sb.def.section.thickness + mb.def.section.thickness);
-    let reach = c * (1.0 + BULGE_REACH);
+    // a point is in contact only within c plus the master's bulge of its flat segments;
+    // the slave's own points stand off its flat boxes by up to its bulge
+    let reach = c + (BULGE_REACH * c).max(hm_max);
+    let box_reach = reach + hs_max;
     let (mlo, mhi) = msurf.bounds();
-    let mbox = (mlo.add_scalar(-reach), mhi.add_scalar(reach));
-    let xs_ = &sb.state.x;
+    let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
     let xm = &mb.state.x;
-    let chunks: Vec<Vec<PointPush>> = ssurf
+    let chunks: Vec<Points> = ssurf
         .segments
         .par_chunks(SEG_CHUNK)
         .enumerate()
         .map(|(ci, segs)| {
-            let mut out = Vec::new();
+            let mut out = Points::default();
             let mut cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
             for (k, seg) in segs.iter().enumerate() {
                 let js = (ci * SEG_CHUNK + k) as u32;
-                let sbx = seg_box(seg, xs_);
+                let sbx = sboxes[js as usize];
                 if box_gap(&sbx, &mbox) > 0.0 {
                     continue;
                 }
                 // master segments whose stored box meets the slave's box grown by the
                 // slave's half-thickness and the bulge reach
-                let g = 0.5 * sb.def.section.thickness + BULGE_REACH * c;
+                let g = 0.5 * sb.def.section.thickness + (BULGE_REACH * c).max(hm_max + hs_max);
                 let lo = sbx.0.add_scalar(-g);
                 let hi = sbx.1.add_scalar(g);
                 msurf.query([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z], &mut cand);
@@ -132,8 +151,8 @@ pub fn point_pushes(
                 masters.clear();
                 for &j in &cand {
                     let ms = &msurf.segments[j as usize];
-                    let bx = seg_box(ms, xm);
-                    if box_gap(&sbx, &bx) >= reach {
+                    let bx = mboxes[j as usize];
+                    if box_gap(&sbx, &bx) >= box_reach {
                         continue;
                     }
                     let (normals, nodal) = corner_normals(ms, msurf, xm);
@@ -155,7 +174,13 @@ pub fn point_pushes(
             out
         })
         .collect();
-    chunks.into_iter().flatten().collect()
+    let mut all = Points::default();
+    for ch in chunks {
+        all.pushes.extend(ch.pushes);
+        all.slave_loads.extend(ch.slave_loads);
+        all.master_loads.extend(ch.master_loads);
+    }
+    all
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -172,12 +197,14 @@ fn slave_segment(
     kappa: f64,
     mu: f64,
     cfg: &ContactConfig,
-    out: &mut Vec<PointPush>,
+    out: &mut Points,
 ) {
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
     let (sn, s_nodal) = corner_normals(seg, ssurf, xs_);
     let sb_coef = coefficients(seg, xs_, &sn);
+    let hs_bound = bulge_bound(&sb_coef);
+    let mut near: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
     for sub in 0..subs {
         let st = sub_triangle(seg, xs_, sub);
@@ -194,129 +221,157 @@ fn slave_segment(
         let wa = (kappa * area0) / (n * n) as f64;
         let nsub = st.unit_normal();
         let base = corner_a_weights(seg);
-        for (u, v) in points(n) {
-            let mut w = base;
-            for q in 0..4 {
-                w[q] += u * st.dw_du[q] + v * st.dw_dv[q];
+        let flat_at = |u: f64, v: f64| st.a + (st.b - st.a) * u + (st.c - st.a) * v;
+        for i in 0..n {
+            // the masters that can reach some point of this strip: the strip's corners'
+            // box grown by the slave's bulge bound holds its points; a master farther than
+            // `reach` from it would be skipped at every point
+            let (u0, u1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+            let mut lo = flat_at(u0, 0.0);
+            let mut hi = lo;
+            for p in [
+                flat_at(u1, 0.0),
+                flat_at(u0, 1.0 - u0),
+                flat_at(u1, 1.0 - u1),
+            ] {
+                lo = lo.inf(&p);
+                hi = hi.sup(&p);
             }
-            let flat = st.a + (st.b - st.a) * u + (st.c - st.a) * v;
-            let (hs, _) = bulge(&sb_coef, &w);
-            let xa = flat + nsub * hs;
-            // closest master segment (ties within TIE c: lowest index; `masters` sorted)
-            let mut best: Option<(Projection, usize)> = None;
-            let mut dmin = f64::INFINITY;
-            for (mi, m) in masters.iter().enumerate() {
-                let lb = box_gap(&(xa, xa), &m.bx);
-                if lb >= reach || lb > dmin + TIE * c {
+            let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
+            near.clear();
+            near.extend((0..masters.len()).filter(|&mi| box_gap(&strip, &masters[mi].bx) < reach));
+            if near.is_empty() {
+                continue;
+            }
+            for (u, v) in strip_points(n, i) {
+                let mut w = base;
+                for q in 0..4 {
+                    w[q] += u * st.dw_du[q] + v * st.dw_dv[q];
+                }
+                let flat = st.a + (st.b - st.a) * u + (st.c - st.a) * v;
+                let (hs, _) = bulge(&sb_coef, &w);
+                let xa = flat + nsub * hs;
+                // closest master segment (ties within TIE c: lowest index; `masters` sorted)
+                let mut best: Option<(Projection, usize)> = None;
+                let mut dmin = f64::INFINITY;
+                for &mi in near.iter() {
+                    let m = &masters[mi];
+                    let lb = box_gap(&(xa, xa), &m.bx);
+                    if lb >= reach || lb > dmin + TIE * c {
+                        continue;
+                    }
+                    let pr = project(&xa, &msurf.segments[m.j as usize], xm);
+                    if pr.dist.is_nan() {
+                        continue;
+                    }
+                    let better = match &best {
+                        None => true,
+                        Some((b, _)) => pr.dist < b.dist - TIE * c,
+                    };
+                    dmin = dmin.min(pr.dist);
+                    if better {
+                        best = Some((pr, mi));
+                    }
+                }
+                let Some((pr, mi)) = best else { continue };
+                if pr.dist >= reach || pr.dist <= 1e-9 * c {
                     continue;
                 }
-                let pr = project(&xa, &msurf.segments[m.j as usize], xm);
-                if pr.dist.is_nan() {
-                    continue;
-                }
-                let better = match &best {
-                    None => true,
-                    Some((b, _)) => pr.dist < b.dist - TIE * c,
+                let m = &masters[mi];
+                let ms = &msurf.segments[m.j as usize];
+                let mt = sub_triangle(ms, xm, pr.sub as usize);
+                let dir = (xa - pr.point) / pr.dist;
+                let side = if dir.dot(&mt.unit_normal()) >= 0.0 {
+                    1.0
+                } else {
+                    -1.0
                 };
-                dmin = dmin.min(pr.dist);
-                if better {
-                    best = Some((pr, mi));
+                let (hm, dhm) = bulge(&m.b, &pr.weights);
+                let gap = pr.dist - side * hm - c;
+                if gap >= 0.0 {
+                    continue;
                 }
-            }
-            let Some((pr, mi)) = best else { continue };
-            if pr.dist >= reach || pr.dist <= 1e-9 * c {
-                continue;
-            }
-            let m = &masters[mi];
-            let ms = &msurf.segments[m.j as usize];
-            let mt = sub_triangle(ms, xm, pr.sub as usize);
-            let dir = (xa - pr.point) / pr.dist;
-            let side = if dir.dot(&mt.unit_normal()) >= 0.0 {
-                1.0
-            } else {
-                -1.0
-            };
-            let (hm, dhm) = bulge(&m.b, &pr.weights);
-            let gap = pr.dist - side * hm - c;
-            if gap >= 0.0 {
-                continue;
-            }
-            // exact gradient of g: by the slave point, by the master's nodes (the
-            // closest point's distance; the bulge through the projection's weights, the
-            // edges and the corner normals)
-            let rho = xa - pr.point;
-            let (gw, cg) = mt.corner_gradients(&dhm, &pr.bary, &rho);
-            let grad = dir - gw * side;
-            let mut gm: Vec<(u32, Vec3)> = Vec::with_capacity(32);
-            for q in 0..ms.count as usize {
-                gm.push((ms.nodes[q], -dir * pr.weights[q]));
-            }
-            let mut spread = [Vec3::zeros(); 4];
-            mt.spread(ms, pr.sub as usize, &cg.map(|g| -g * side), &mut spread);
-            for q in 0..ms.count as usize {
-                gm.push((ms.nodes[q], spread[q]));
-            }
-            bulge_pullback(
-                ms,
-                m.j,
-                msurf,
-                xm,
-                &m.normals,
-                &m.nodal,
-                &pr.weights,
-                -side,
-                &mut gm,
-            );
-            // the slave point moves with the facet, along its normal by hs, and with hs
-            let mut spread = [Vec3::zeros(); 4];
-            for q in 0..seg.count as usize {
-                spread[q] = grad * w[q];
-            }
-            let pb = st.normal_pullback(&grad);
-            st.spread(seg, sub, &pb.map(|g| g * hs), &mut spread);
-            let mut gs: Vec<(u32, Vec3)> = Vec::with_capacity(32);
-            for q in 0..seg.count as usize {
-                gs.push((seg.nodes[q], spread[q]));
-            }
-            bulge_pullback(
-                seg,
-                js,
-                ssurf,
-                xs_,
-                &sn,
-                &s_nodal,
-                &w,
-                grad.dot(&nsub),
-                &mut gs,
-            );
-            let k = wa;
-            let mut phi = k * (-gap);
-            if cfg.damping_ratio > 0.0 {
-                let mut gdot = 0.0;
-                for (nd, g) in &gs {
-                    gdot += g.dot(&sb.state.v[*nd as usize]);
+                // exact gradient of g: by the slave point, by the master's nodes (the
+                // closest point's distance; the bulge through the projection's weights, the
+                // edges and the corner normals)
+                let rho = xa - pr.point;
+                let (gw, cg) = mt.corner_gradients(&dhm, &pr.bary, &rho);
+                let grad = dir - gw * side;
+                // g by the master's corner nodes: the closest point's distance, the bulge
+                // through the projection's weights and through the edges; the part through
+                // the corner normals as loads on those normals
+                let mut gm = [Vec3::zeros(); 4];
+                for q in 0..ms.count as usize {
+                    gm[q] = -dir * pr.weights[q];
                 }
-                for (nd, g) in &gm {
-                    gdot += g.dot(&mb.state.v[*nd as usize]);
+                mt.spread(ms, pr.sub as usize, &cg.map(|g| -g * side), &mut gm);
+                let (direct, m_tau) = bulge_parts(ms, xm, &m.normals, &pr.weights, -side);
+                for q in 0..4 {
+                    gm[q] += direct[q];
                 }
-                let ma = mu * area0 / (n * n) as f64;
-                phi -= 2.0 * cfg.damping_ratio * (k * ma).sqrt() * gdot;
+                // the slave point moves with the facet, along its normal by hs, and with hs
+                let mut gs = [Vec3::zeros(); 4];
+                for q in 0..seg.count as usize {
+                    gs[q] = grad * w[q];
+                }
+                let pb = st.normal_pullback(&grad);
+                st.spread(seg, sub, &pb.map(|g| g * hs), &mut gs);
+                let (direct, s_tau) = bulge_parts(seg, xs_, &sn, &w, grad.dot(&nsub));
+                for q in 0..4 {
+                    gs[q] += direct[q];
+                }
+                let k = wa;
+                let mut phi = k * (-gap);
+                if cfg.damping_ratio > 0.0 {
+                    let mut gdot = 0.0;
+                    for q in 0..seg.count as usize {
+                        gdot += gs[q].dot(&sb.state.v[seg.nodes[q] as usize]);
+                        let of = NormalOf::of_corner(seg, js, &s_nodal, q);
+                        gdot += s_tau[q].dot(&normal_rate(of, ssurf, xs_, &sb.state.v));
+                    }
+                    for q in 0..ms.count as usize {
+                        gdot += gm[q].dot(&mb.state.v[ms.nodes[q] as usize]);
+                        let of = NormalOf::of_corner(ms, m.j, &m.nodal, q);
+                        gdot += m_tau[q].dot(&normal_rate(of, msurf, xm, &mb.state.v));
+                    }
+                    let ma = mu * area0 / (n * n) as f64;
+                    phi -= 2.0 * cfg.damping_ratio * (k * ma).sqrt() * gdot;
+                }
+                if !(phi > 0.0 && phi.is_finite()) {
+                    continue;
+                }
+                for q in 0..seg.count as usize {
+                    out.slave_loads.push(NormalLoad {
+                        of: NormalOf::of_corner(seg, js, &s_nodal, q),
+                        tau: s_tau[q] * phi,
+                    });
+                }
+                for q in 0..ms.count as usize {
+                    out.master_loads.push(NormalLoad {
+                        of: NormalOf::of_corner(ms, m.j, &m.nodal, q),
+                        tau: m_tau[q] * phi,
+                    });
+                }
+                out.pushes.push(PointPush {
+                    slave_seg: js,
+                    master_seg: m.j,
+                    slave_f: std::array::from_fn(|q| (seg.nodes[q], gs[q] * phi)),
+                    slave_count: seg.count,
+                    master_f: std::array::from_fn(|q| (ms.nodes[q], gm[q] * phi)),
+                    master_count: ms.count,
+                    force: grad * phi,
+                    normal_force: phi * grad.norm(),
+                    depth: -gap,
+                });
             }
-            if !(phi > 0.0 && phi.is_finite()) {
-                continue;
-            }
-            let fnorm = phi * grad.norm();
-            out.push(PointPush {
-                slave_seg: js,
-                master_seg: m.j,
-                slave_f: gs.into_iter().map(|(nd, g)| (nd, g * phi)).collect(),
-                master_f: gm.into_iter().map(|(nd, g)| (nd, g * phi)).collect(),
-                force: grad * phi,
-                normal_force: fnorm,
-                depth: -gap,
-            });
         }
     }
+}
+
+/// The node box of every segment of a body, by segment (once per pass: the bounds, the
+/// culls and the searches of both directions read them).
+fn seg_boxes(surf: &Surface, x: &[Vec3]) -> Vec<(Vec3, Vec3)> {
+    surf.segments.par_iter().map(|s| node_box(s, x)).collect()
 }
 
 /// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
@@ -334,16 +389,58 @@ pub(crate) fn segment_pair(
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
     let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
-    let first = point_pushes(a, sa, b, sb, cfg, kappa, mu);
-    let second = point_pushes(b, sb, a, sa, cfg, kappa, mu);
-    let mut st = PairStats::empty(a.def.id, b.def.id, first.len() + second.len());
+    // how far each body's curved surface can stand off its facets where the other body
+    // is near: exact bounds over the segments within reach of the other's node box
+    // (grown by the loose bounds of both), so the search misses no point of a coarse mesh
+    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+    let boxes_a = seg_boxes(sa, &a.state.x);
+    let boxes_b = seg_boxes(sb, &b.state.x);
+    let grow =
+        c * (1.0 + BULGE_REACH) + loose_bulge_bound(sa, &boxes_a) + loose_bulge_bound(sb, &boxes_b);
+    let ha = near_bulge_bound(sa, &a.state.x, &boxes_a, &sb.bounds(), grow);
+    let hb = near_bulge_bound(sb, &b.state.x, &boxes_b, &sa.bounds(), grow);
+    let first = point_pushes(a, sa, &boxes_a, b, sb, &boxes_b, (ha, hb), cfg, kappa, mu);
+    let second = point_pushes(b, sb, &boxes_b, a, sa, &boxes_a, (hb, ha), cfg, kappa, mu);
+    let mut st = PairStats::empty(a.def.id, b.def.id, first.pushes.len() + second.pushes.len());
     let thin = a.def.section.thickness.min(b.def.section.thickness);
-    apply_points(bodies, ia, ib, &first, &mut st, true);
-    apply_points(bodies, ib, ia, &second, &mut st, false);
+    apply_points(bodies, ia, ib, &first.pushes, &mut st, true);
+    apply_points(bodies, ib, ia, &second.pushes, &mut st, false);
+    // the loads on each body's normals, summed per normal (in point order), then pulled
+    // back once per normal in normal order
+    let on_a = first.slave_loads.iter().chain(&second.master_loads);
+    let on_b = first.master_loads.iter().chain(&second.slave_loads);
+    let mut buf = Vec::new();
+    for (ib_, loads, surf, is_a) in [
+        (ia, on_a.collect::<Vec<_>>(), sa, true),
+        (ib, on_b.collect(), sb, false),
+    ] {
+        let mut sums: BTreeMap<NormalOf, Vec3> = BTreeMap::new();
+        for l in loads {
+            *sums.entry(l.of).or_insert_with(Vec3::zeros) += l.tau;
+        }
+        buf.clear();
+        for (of, tau) in &sums {
+            normal_pullback(*of, surf, &bodies[ib_].state.x, tau, &mut buf);
+        }
+        let kin = if is_a { &mut st.kin_a } else { &mut st.kin_b };
+        add_forces(&mut bodies[ib_], &buf, kin);
+    }
     st.kin_a.settle_nodes();
     st.kin_b.settle_nodes();
     st.max_penetration_ratio = st.max_penetration / thin;
     st
+}
+
+/// Add node forces to a body's `f_contact` in order; on a kinematic body they go into
+/// the pair's `KinLoad` too.
+fn add_forces(b: &mut Body, forces: &[(u32, Vec3)], kin: &mut KinLoad) {
+    let is_kin = b.def.kinematic;
+    for &(n, f) in forces {
+        b.state.f_contact[n as usize] += f;
+        if is_kin {
+            kin.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
+        }
+    }
 }
 
 /// Add the points of one direction of the segment pass: their node forces on the
@@ -357,25 +454,22 @@ fn apply_points(
     st: &mut PairStats,
     slave_is_a: bool,
 ) {
-    let (kin_s, kin_m) = (bodies[islave].def.kinematic, bodies[imaster].def.kinematic);
     let (mut l_s, mut l_m) = if slave_is_a {
         (take(&mut st.kin_a), take(&mut st.kin_b))
     } else {
         (take(&mut st.kin_b), take(&mut st.kin_a))
     };
     for p in pushes {
-        for (body, fs, kin, l) in [
-            (islave, &p.slave_f, kin_s, &mut l_s),
-            (imaster, &p.master_f, kin_m, &mut l_m),
-        ] {
-            let b = &mut bodies[body];
-            for &(n, f) in fs {
-                b.state.f_contact[n as usize] += f;
-                if kin {
-                    l.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
-                }
-            }
-        }
+        add_forces(
+            &mut bodies[islave],
+            &p.slave_f[..p.slave_count as usize],
+            &mut l_s,
+        );
+        add_forces(
+            &mut bodies[imaster],
+            &p.master_f[..p.master_count as usize],
+            &mut l_m,
+        );
         st.max_penetration = st.max_penetration.max(p.depth);
         st.normal_force += p.normal_force;
         st.force_on_a += if slave_is_a { p.force } else { -p.force };
