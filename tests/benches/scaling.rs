@@ -1,11 +1,13 @@
-//! The scaling benchmark (issue 16, point 6): one scene in four modes, timed in one
+//! The scaling benchmark (issue 16, point 6): one scene in six modes, timed in one
 //! sitting with the repetitions interleaved (mode A, B, C, D, then again), so machine
 //! load affects every mode alike:
 //!
 //! - `crash run --threads 1` and `crash run --threads 2` (one process),
 //! - `crash-master` + 1 and + 2 `crash-worker` processes x 1 thread (gRPC on loopback),
 //! - `crash-master --split auto` + 2 workers: a group above its fair share is split
-//!   over both workers by elements (two exchanges per step instead of one).
+//!   over both workers by elements (two exchanges per step instead of one),
+//! - `crash-master` + 2 workers x 1 thread, all with `--idle-spin` (a SCHED_IDLE
+//!   spinner per process keeps vCPUs from halting between messages).
 //!
 //! Prints, per mode, the median wall time of the run (summary.json `wall_time_s`: from
 //! the first command to the last frame), ns per element-cycle, the speed-up over
@@ -24,8 +26,14 @@ use std::process::{Command, Stdio};
 
 #[derive(Clone, Copy, PartialEq)]
 enum Mode {
-    Local { threads: usize },
-    Cluster { workers: usize, split: bool },
+    Local {
+        threads: usize,
+    },
+    Cluster {
+        workers: usize,
+        split: bool,
+        spin: bool,
+    },
 }
 
 impl Mode {
@@ -34,12 +42,13 @@ impl Mode {
             Mode::Local { threads } => format!("crash run --threads {threads}"),
             Mode::Cluster {
                 workers,
-                split: false,
-            } => format!("master + {workers} worker(s) x 1 thread"),
-            Mode::Cluster {
-                workers,
-                split: true,
-            } => format!("master --split auto + {workers} workers x 1 thread"),
+                split,
+                spin,
+            } => format!(
+                "master{} + {workers} worker(s) x 1 thread{}",
+                if split { " --split auto" } else { "" },
+                if spin { ", --idle-spin" } else { "" }
+            ),
         }
     }
 }
@@ -60,9 +69,15 @@ fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
                 .unwrap();
             assert!(st.success(), "{}: {st}", mode.label());
         }
-        Mode::Cluster { workers, split } => {
+        Mode::Cluster {
+            workers,
+            split,
+            spin,
+        } => {
+            let spin_arg: &[&str] = if spin { &["--idle-spin"] } else { &[] };
             let mut m = Command::new(master_bin())
                 .args([scene_s, "--listen", "127.0.0.1:0"])
+                .args(spin_arg)
                 .args(["--split", if split { "auto" } else { "off" }])
                 .args(["--workers", &workers.to_string(), "--out", out_s])
                 .args(["--end-time", end, "--output-interval", end])
@@ -82,6 +97,7 @@ fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
                 .map(|_| {
                     Command::new(worker_bin())
                         .args(["--master", &format!("http://{addr}"), "--threads", "1"])
+                        .args(spin_arg)
                         .env("RUST_LOG", "warn")
                         .env_remove("CRASH_SECRET")
                         .stderr(Stdio::null())
@@ -134,14 +150,22 @@ fn main() {
         Mode::Cluster {
             workers: 1,
             split: false,
+            spin: false,
         },
         Mode::Cluster {
             workers: 2,
             split: false,
+            spin: false,
         },
         Mode::Cluster {
             workers: 2,
             split: true,
+            spin: false,
+        },
+        Mode::Cluster {
+            workers: 2,
+            split: false,
+            spin: true,
         },
     ];
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("scaling-run");
