@@ -32,16 +32,18 @@ impl<L: WorkerLink> Master<'_, L> {
         out.into_iter().map(|(w, ids, _)| (w, ids)).collect()
     }
 
-    /// Stream the frame of every body now to the sink; returns its state hash when
-    /// `hashed`.
+    /// Stream the frame of every body now to the sink (None: only hash it); returns
+    /// its state hash when `hashed`.
     fn stream_frame(
         &mut self,
-        sink: &mut dyn Sink,
+        mut sink: Option<&mut dyn Sink>,
         hashed: bool,
     ) -> Result<Option<u64>, MasterError> {
         let nw = self.links.len();
         let (step, time) = (self.clock.step, self.clock.time);
-        sink.frame_begin(step, time).map_err(MasterError::sink)?;
+        if let Some(sink) = sink.as_mut() {
+            sink.frame_begin(step, time).map_err(MasterError::sink)?;
+        }
         let mut hash = StateHasher::default();
         for (w, ids) in self.frame_pieces() {
             let mut cmds = vec![Vec::new(); nw];
@@ -73,10 +75,14 @@ impl<L: WorkerLink> Master<'_, L> {
                         ),
                     }
                 }
-                sink.frame_body(b).map_err(MasterError::sink)?;
+                if let Some(sink) = sink.as_mut() {
+                    sink.frame_body(b).map_err(MasterError::sink)?;
+                }
             }
         }
-        sink.frame_end().map_err(MasterError::sink)?;
+        if let Some(sink) = sink {
+            sink.frame_end().map_err(MasterError::sink)?;
+        }
         Ok(hashed.then(|| hash.finish()))
     }
 
@@ -120,10 +126,17 @@ impl<L: WorkerLink> Master<'_, L> {
         let step = self.clock.step;
         if self.last_frame_step == Some(step) {
             // this step's frame is out; a forced one needs its hash (a periodic frame
-            // just before a stop request): the frame again, hashed (it replaces itself)
-            if !force || self.hashed_step == Some(step) {
-                return Ok(());
+            // just before a stop request): the bodies are asked for again and hashed,
+            // the frame is not written twice
+            if force && self.hashed_step != Some(step) {
+                let t = Instant::now();
+                if let Some(h) = self.stream_frame(None, true)? {
+                    self.stats.final_hash = h;
+                    self.hashed_step = Some(step);
+                }
+                self.stats.stages.output_ns += ns(t);
             }
+            return Ok(());
         } else if !(force || due) {
             return Ok(());
         }
@@ -135,12 +148,11 @@ impl<L: WorkerLink> Master<'_, L> {
         // showcase's 14 000 nodes), which on every frame cost the step loop about 1.5 %
         // with frames every 50 steps (docs/performance.md, session 9).
         let hashed = force || self.finished();
-        if let Some(h) = self.stream_frame(sink, hashed)? {
+        if let Some(h) = self.stream_frame(Some(&mut *sink), hashed)? {
             self.stats.final_hash = h;
             self.hashed_step = Some(step);
         }
         self.write_groups(sink)?;
-        let again = self.last_frame_step == Some(step);
         self.last_frame_step = Some(step);
         if self.output_interval > 0.0 {
             // the next frame is the first whose time lies beyond now: in closed form, so
@@ -153,9 +165,7 @@ impl<L: WorkerLink> Master<'_, L> {
             };
             self.frames = next.max(self.frames + 1);
         }
-        if !again {
-            self.stats.frames += 1;
-        }
+        self.stats.frames += 1;
         self.stats.stages.output_ns += ns(t);
         Ok(())
     }
