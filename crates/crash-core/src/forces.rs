@@ -28,6 +28,12 @@ pub fn element_dt(sec: &Section, length: f64) -> f64 {
 /// totals) are identical for any number of threads.
 pub const CHUNK: usize = 256;
 
+// The parallel loops over chunks are split down to single chunks (`with_max_len(1)`):
+// rayon otherwise cuts a loop into two pieces per thread and splits a piece further only
+// when another thread steals it, so a loop of a few dozen chunks (the showcase's sphere
+// has 80, its plate 15) can end with one thread finishing a piece of 10-20 chunks alone
+// (docs/performance.md, session 9). Which thread runs a chunk never changes its result.
+
 /// What the element loop of one body reports.
 #[derive(Debug, Clone)]
 pub struct ForceSums {
@@ -171,11 +177,13 @@ impl Body {
             .enumerate();
         let tri_chunks: Vec<ChunkResult> = if tri_kelvin.is_empty() {
             tri_base
+                .with_max_len(1)
                 .map(|(ci, ((els, states), slots))| tri(ci, els, states, slots, &mut []))
                 .collect()
         } else {
             tri_base
                 .zip(tri_kelvin.par_chunks_mut(3 * CHUNK))
+                .with_max_len(1)
                 .map(|((ci, ((els, states), slots)), d)| tri(ci, els, states, slots, d))
                 .collect()
         };
@@ -210,11 +218,13 @@ impl Body {
             .enumerate();
         let quad_chunks: Vec<ChunkResult> = if quad_kelvin.is_empty() {
             quad_base
+                .with_max_len(1)
                 .map(|(ci, (((els, states), hg), slots))| quad(ci, els, states, hg, slots, &mut []))
                 .collect()
         } else {
             quad_base
                 .zip(quad_kelvin.par_chunks_mut(4 * CHUNK))
+                .with_max_len(1)
                 .map(|((ci, (((els, states), hg), slots)), d)| quad(ci, els, states, hg, slots, d))
                 .collect()
         };

@@ -147,6 +147,8 @@ impl Body {
             .zip(self.state.v[..n].par_chunks_mut(CHUNK))
             .zip(self.state.w[..n].par_chunks_mut(CHUNK))
             .enumerate()
+            // single chunks, for an even end of the loop on every thread (forces.rs)
+            .with_max_len(1)
             .map(|(ci, ((xs, vs), ws))| {
                 let mut s = NodeSums::default();
                 for k in 0..xs.len() {

@@ -34,6 +34,9 @@ pub struct BlockCache {
     /// Arrays stored (level 0) in this frame.
     stored: Vec<bool>,
     frames: u64,
+    /// The last frame's in-memory spill, emptied, for the next frame: a fresh one grew
+    /// by doubling to a few MB per frame (copies, and new pages the kernel must clear).
+    spare: Vec<u8>,
 }
 
 impl BlockCache {
@@ -54,6 +57,17 @@ impl BlockCache {
         }
         self.sizes[array].0 += raw as u64;
         self.sizes[array].1 += z as u64;
+    }
+
+    /// Keep `buf`'s memory for the next frame (`take_spare`).
+    pub fn keep_spare(&mut self, mut buf: Vec<u8>) {
+        buf.clear();
+        self.spare = buf;
+    }
+
+    /// The buffer kept by `keep_spare` (empty), or a new one.
+    pub fn take_spare(&mut self) -> Vec<u8> {
+        std::mem::take(&mut self.spare)
     }
 
     /// The frame is written: decide which arrays the next frame stores.

@@ -158,7 +158,16 @@ pub struct FrameEncoder {
 
 impl FrameEncoder {
     /// `cache`: the blocks kept from the series' previous frame (`finish` gives it back).
-    pub fn new(time: f64, step: u64, format: VtuFormat, spill: Spill, cache: BlockCache) -> Self {
+    pub fn new(
+        time: f64,
+        step: u64,
+        format: VtuFormat,
+        mut spill: Spill,
+        mut cache: BlockCache,
+    ) -> Self {
+        if spill.len == 0 {
+            spill.mem = cache.take_spare();
+        }
         // each array's type, from its values for a body without nodes or elements
         let empty = FrameBody::default();
         let streams = ARRAYS
@@ -276,6 +285,7 @@ impl FrameEncoder {
         writeln!(out, "  </AppendedData>")?;
         writeln!(out, "</VTKFile>")?;
         self.cache.end_frame();
+        self.cache.keep_spare(std::mem::take(&mut self.spill.mem));
         Ok(self.cache)
     }
 
@@ -368,6 +378,10 @@ impl Out<'_> {
         };
         let stored = match cached {
             Some(z) => z,
+            None if self.compress && self.cache.level(s.index, LEVEL) == 0 => {
+                stored_zlib(&s.buf, self.scratch);
+                &self.scratch[..]
+            }
             None if self.compress => {
                 self.scratch.clear();
                 let level = self.cache.level(s.index, LEVEL);
@@ -393,6 +407,35 @@ impl Out<'_> {
     }
 }
 
+/// `raw` as a zlib stream of stored (uncompressed) deflate blocks into `out`: what zlib
+/// writes at level 0, without a deflate state. Creating one per 64 KiB block (about
+/// 300 KiB allocated and a 128 KiB hash table cleared each time) cost the background
+/// writer more than copying the bytes, for the arrays it stores (block_cache::POOR).
+pub(crate) fn stored_zlib(raw: &[u8], out: &mut Vec<u8>) {
+    // deflate's stored blocks hold at most 65 535 bytes
+    const MAX: usize = 0xffff;
+    out.clear();
+    out.reserve(raw.len() + 6 + 5 * raw.len().div_ceil(MAX).max(1));
+    // CMF: deflate with a 32 KiB window; FLG: no dictionary, level "fastest", and
+    // (CMF * 256 + FLG) a multiple of 31
+    out.extend_from_slice(&[0x78, 0x01]);
+    let mut pieces = raw.chunks(MAX).peekable();
+    if pieces.peek().is_none() {
+        out.extend_from_slice(&[1, 0, 0, 0xff, 0xff]);
+    }
+    while let Some(p) = pieces.next() {
+        let last = pieces.peek().is_none();
+        let len = p.len() as u16;
+        out.push(u8::from(last)); // BFINAL, BTYPE = 00 (stored), byte-aligned
+        out.extend_from_slice(&len.to_le_bytes());
+        out.extend_from_slice(&(!len).to_le_bytes());
+        out.extend_from_slice(p);
+    }
+    let mut adler = simd_adler32::Adler32::new();
+    adler.write(raw);
+    out.extend_from_slice(&adler.finish().to_be_bytes());
+}
+
 /// The array's header (UInt64 values, little endian).
 fn header(s: &ArrayStream, compress: bool) -> Vec<u8> {
     let words: Vec<u64> = if compress {
@@ -405,4 +448,27 @@ fn header(s: &ArrayStream, compress: bool) -> Vec<u8> {
         vec![s.raw_len]
     };
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flate2::read::ZlibDecoder;
+
+    #[test]
+    fn stored_zlib_streams_inflate_to_their_input() {
+        // empty, one byte, one stored block exactly, one byte more, several blocks
+        for n in [0usize, 1, 65_535, 65_536, 200_003] {
+            let raw: Vec<u8> = (0..n).map(|i| (i * 7 + i / 251) as u8).collect();
+            let mut z = Vec::new();
+            stored_zlib(&raw, &mut z);
+            let mut back = Vec::new();
+            ZlibDecoder::new(&z[..])
+                .read_to_end(&mut back)
+                .expect("a valid zlib stream");
+            assert_eq!(back, raw, "{n} bytes");
+            // the data, 5 bytes per stored block, a 2-byte header and a 4-byte checksum
+            assert_eq!(z.len(), n + 6 + 5 * n.div_ceil(65_535).max(1), "{n} bytes");
+        }
+    }
 }

@@ -71,6 +71,8 @@ pub fn search(
         .par_chunks(NODE_CHUNK)
         .zip(lists.fit(nb.state.x.len()).par_chunks_mut(NODE_CHUNK))
         .enumerate()
+        // single chunks: the few near the other body hold all the work (forces.rs)
+        .with_max_len(1)
         .map(|(ci, (xs, lists))| {
             let mut out = Vec::new();
             if chunks.get(ci).is_some_and(|k| !k.meets(&lo, &hi, 0.0)) {

@@ -166,6 +166,8 @@ pub fn first_crossing(
         .par_chunks(NODE_CHUNK)
         .zip(lists.fit(nb.state.x.len()).par_chunks_mut(NODE_CHUNK))
         .enumerate()
+        // single chunks: the few near the other body hold all the work (forces.rs)
+        .with_max_len(1)
         .map(|(ci, (xs, lists))| {
             // each node's reach below is at most the chunk's: skip what none can meet
             if chunks

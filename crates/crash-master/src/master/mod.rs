@@ -151,6 +151,9 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     probed: Vec<(u64, NodeProbe)>,
     frames: u64,
     last_frame_step: Option<u64>,
+    /// The step whose frame gave `stats.final_hash` (frames before the end are not
+    /// hashed: `output`).
+    hashed_step: Option<u64>,
     /// Groups split over workers (`split`).
     splits: Vec<split::SplitGroup>,
     /// Every split body's element step over all its parts in the last step, for the
@@ -262,6 +265,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             probed: Vec::new(),
             frames: 0,
             last_frame_step: None,
+            hashed_step: None,
             splits: Vec::new(),
             split_contact: Vec::new(),
             stats: RunStats::default(),
