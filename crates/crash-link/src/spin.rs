@@ -118,21 +118,26 @@ fn idle_policy() -> std::io::Result<()> {
 mod tests {
     use super::*;
 
+    /// The task directory of the spinner thread in /proc/self/task, if it runs.
+    #[cfg(target_os = "linux")]
+    fn spinner_task() -> Option<std::path::PathBuf> {
+        std::fs::read_dir("/proc/self/task")
+            .expect("/proc")
+            .filter_map(|e| e.ok())
+            .map(|e| e.path())
+            .find(|p| {
+                std::fs::read_to_string(p.join("comm")).is_ok_and(|c| c.trim() == "crash-idle-spin")
+            })
+    }
+
     /// The spinner thread runs under SCHED_IDLE (read back from /proc) and stops when
     /// dropped.
     #[cfg(target_os = "linux")]
     #[test]
     fn the_spinner_runs_at_idle_priority_and_stops_when_dropped() {
         let s = IdleSpinner::start().expect("SCHED_IDLE needs no privilege on Linux");
-        let tid = std::fs::read_dir("/proc/self/task")
-            .expect("/proc")
-            .filter_map(|e| e.ok())
-            .find(|e| {
-                std::fs::read_to_string(e.path().join("comm"))
-                    .is_ok_and(|c| c.trim() == "crash-idle-spin")
-            })
-            .expect("the spinner thread is listed");
-        let stat = std::fs::read_to_string(tid.path().join("stat")).expect("stat");
+        let task = spinner_task().expect("the spinner thread is listed");
+        let stat = std::fs::read_to_string(task.join("stat")).expect("stat");
         // field 41 of /proc/TID/stat is the policy (SCHED_IDLE = 5); fields after the
         // command name, which is in parentheses
         let after = &stat[stat.rfind(')').expect("comm") + 2..];
@@ -143,13 +148,9 @@ mod tests {
             .expect("policy field");
         assert_eq!(policy, libc::SCHED_IDLE);
         drop(s);
-        let alive = std::fs::read_dir("/proc/self/task")
-            .expect("/proc")
-            .filter_map(|e| e.ok())
-            .any(|e| {
-                std::fs::read_to_string(e.path().join("comm"))
-                    .is_ok_and(|c| c.trim() == "crash-idle-spin")
-            });
-        assert!(!alive, "the spinner must stop when dropped");
+        assert!(
+            spinner_task().is_none(),
+            "the spinner must stop when dropped"
+        );
     }
 }
