@@ -26,13 +26,20 @@ impl Resultants {
 impl Body {
     /// Resultants of every element (triangles first, then quads).
     pub fn resultants(&self) -> Vec<Resultants> {
-        let sec = &self.def.section;
         let mut out = Vec::with_capacity(self.element_count());
+        self.resultants_each(|r| out.push(r));
+        out
+    }
+
+    /// Each element's resultants in that order, without a vector (a frame's capture
+    /// writes them straight into its arrays).
+    pub fn resultants_each(&self, mut f: impl FnMut(Resultants)) {
+        let sec = &self.def.section;
         let x = &self.state.x;
         for (k, e) in self.def.tris.iter().enumerate() {
             let p = e.nodes.map(|n| x[n as usize]);
             let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
-            out.push(Resultants {
+            f(Resultants {
                 n: sec.plane(sec.membrane, green(&f1, &f2)),
                 m: self.state.shell[k].m,
             });
@@ -42,7 +49,7 @@ impl Body {
             let p = e.nodes.map(|n| x[n as usize]);
             let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
             let g = green(&f1, &f2);
-            out.push(Resultants {
+            f(Resultants {
                 n: sec.plane(
                     sec.membrane,
                     [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]],
@@ -50,6 +57,5 @@ impl Body {
                 m: self.state.shell[nt + k].m,
             });
         }
-        out
     }
 }

@@ -2,6 +2,36 @@
 
 use crash_core::{Body, Vec3};
 use serde::{Deserialize, Serialize};
+use std::sync::Mutex;
+
+/// Frame bodies whose arrays a consumer (the frame writer, a wire encoder) has finished
+/// with, kept for the next capture to fill. At most `MAX_SPARE`: the writer holds at
+/// most two frames in flight, so the steady state is about one frame's bodies.
+static SPARE: Mutex<Vec<FrameBody>> = Mutex::new(Vec::new());
+const MAX_SPARE: usize = 64;
+
+/// Give a consumed body's arrays back for a later capture.
+pub fn recycle(b: FrameBody) {
+    let mut spare = SPARE.lock().unwrap_or_else(|p| p.into_inner());
+    if spare.len() < MAX_SPARE {
+        spare.push(b);
+    }
+}
+
+/// A spare body for body `id`: its own last one if kept (same sizes), else any.
+fn spare(id: u32) -> FrameBody {
+    let mut spare = SPARE.lock().unwrap_or_else(|p| p.into_inner());
+    let k = spare.iter().position(|b| b.id == id);
+    match k {
+        Some(k) => spare.swap_remove(k),
+        None => spare.pop().unwrap_or_default(),
+    }
+}
+
+fn refill<T: Copy>(dst: &mut Vec<T>, src: &[T]) {
+    dst.clear();
+    dst.extend_from_slice(src);
+}
 
 /// One body in a frame. Element arrays hold triangles first, then quads (the order of
 /// `Body::resultants`), and so do the cells of the .vtu file.
@@ -57,33 +87,51 @@ pub struct Placement {
 }
 
 impl FrameBody {
+    /// The body now. The arrays come from a body the writer has finished with
+    /// (`recycle`) when there is one: a frame of fresh vectors cost the step loop its
+    /// page faults (about half of the capture, docs/performance.md, session 10).
     pub fn capture(b: &Body) -> Self {
+        let mut f = spare(b.def.id);
+        f.fill(b);
+        f
+    }
+
+    /// Overwrite every field with body `b` now, keeping the vectors' memory.
+    fn fill(&mut self, b: &Body) {
         let t = b.def.section.thickness;
-        let res = b.resultants();
-        let (top, bottom): (Vec<f64>, Vec<f64>) = res.iter().map(|r| r.von_mises(t)).unzip();
-        let f_contact = if b.state.f_contact.len() == b.state.x.len() {
-            b.state.f_contact.clone()
-        } else {
-            vec![Vec3::zeros(); b.state.x.len()]
-        };
-        Self {
-            id: b.def.id,
-            name: b.def.name.clone(),
-            thickness: t,
-            x: b.state.x.clone(),
-            x0: b.def.x0.clone(),
-            v: b.state.v.clone(),
-            w: b.state.w.clone(),
-            tris: b.def.tris.iter().map(|e| e.nodes).collect(),
-            quads: b.def.quads.iter().map(|e| e.nodes).collect(),
-            von_mises_top: top,
-            von_mises_bottom: bottom,
-            n: res.iter().map(|r| r.n).collect(),
-            m: res.iter().map(|r| r.m).collect(),
-            f_contact,
-            placement: None,
-            parts: None,
+        let s = &b.state;
+        self.id = b.def.id;
+        self.name.clear();
+        self.name.push_str(&b.def.name);
+        self.thickness = t;
+        refill(&mut self.x, &s.x);
+        refill(&mut self.x0, &b.def.x0);
+        refill(&mut self.v, &s.v);
+        refill(&mut self.w, &s.w);
+        self.tris.clear();
+        self.tris.extend(b.def.tris.iter().map(|e| e.nodes));
+        self.quads.clear();
+        self.quads.extend(b.def.quads.iter().map(|e| e.nodes));
+        for v in [&mut self.von_mises_top, &mut self.von_mises_bottom] {
+            v.clear();
         }
+        self.n.clear();
+        self.m.clear();
+        b.resultants_each(|r| {
+            let (top, bottom) = r.von_mises(t);
+            self.von_mises_top.push(top);
+            self.von_mises_bottom.push(bottom);
+            self.n.push(r.n);
+            self.m.push(r.m);
+        });
+        if s.f_contact.len() == s.x.len() {
+            refill(&mut self.f_contact, &s.f_contact);
+        } else {
+            self.f_contact.clear();
+            self.f_contact.resize(s.x.len(), Vec3::zeros());
+        }
+        self.placement = None;
+        self.parts = None;
     }
 
     pub fn element_count(&self) -> usize {
@@ -153,5 +201,52 @@ impl Frame {
             .flat_map(|b| (0..b.element_count()).map(move |e| b.von_mises_max(e)))
             .filter(|s| s.is_finite())
             .fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crash_core::shapes::{icosphere, plate, ElementKind};
+    use crash_core::{Material, Section, Stabilization};
+
+    fn body(id: u32, kind: ElementKind, cells: usize) -> Body {
+        let mesh = plate(0.2, 0.1, cells, cells, kind);
+        let sec = Section::new(Material::steel(), 0.002);
+        let mut b = Body::new(id, "p", &mesh, sec, Stabilization::default()).expect("plate");
+        // a bent state, so that resultants and stresses are not zero
+        for (k, x) in b.state.x.iter_mut().enumerate() {
+            x.z += 1e-4 * (x.x * 30.0).sin() + 1e-9 * k as f64;
+        }
+        b
+    }
+
+    #[test]
+    fn a_capture_into_recycled_arrays_equals_a_fresh_one() {
+        let a = body(3, ElementKind::Quad, 6);
+        let mut fresh = FrameBody::default();
+        fresh.fill(&a);
+        // spares of other bodies, larger and smaller, with placement and parts set
+        let mut sphere = Body::new(
+            9,
+            "ball with a longer name",
+            &icosphere(0.05, 2),
+            Section::new(Material::steel(), 0.001),
+            Stabilization::default(),
+        )
+        .expect("ball");
+        sphere.state.f_contact = vec![Vec3::new(1.0, 2.0, 3.0); sphere.state.x.len()];
+        for other in [&sphere, &body(4, ElementKind::Tri, 2)] {
+            let mut s = FrameBody::capture(other);
+            s.placement = Some(Placement { worker: 1, group: 2 });
+            s.parts = Some(PartCells {
+                worker: vec![1; 3],
+                part: vec![2; 3],
+            });
+            recycle(s);
+            assert_eq!(FrameBody::capture(&a), fresh);
+        }
+        assert!(fresh.von_mises_top.iter().any(|&s| s > 0.0));
+        assert_eq!(fresh.f_contact.len(), fresh.x.len());
     }
 }

@@ -283,7 +283,11 @@ fn write_loop(shared: &Shared, mut series: SeriesWriter) {
                     series.set_format(format);
                     series.begin_frame(time, step)
                 }
-                Job::Body(b) => series.frame_body(&b),
+                Job::Body(b) => {
+                    let r = series.frame_body(&b);
+                    crate::frame::recycle(*b);
+                    r
+                }
                 Job::End => series.end_frame().map(|_| ()),
             }
         };
