@@ -54,4 +54,44 @@ fn every_element_of_a_split_body_names_its_part_and_that_parts_worker() {
     let plate = whole[0];
     let home = plate.placement.unwrap().worker;
     assert!(worker_of_part[0].contains(&home), "plate on worker {home}");
+
+    // groups.csv and summary.json: the split group has one row per holder, whose
+    // elements are the frame's cells on that worker and add up to the group's
+    let summary = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    let text = std::fs::read_to_string(out.join("groups.csv")).unwrap();
+    let last_time = text.lines().last().unwrap().split(',').next().unwrap();
+    let rows: Vec<(String, usize, usize)> = text
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').next() == Some(last_time))
+        .map(|l| {
+            // time,group,"names",worker,elements,step_ns
+            let (_, rest) = l.split_once(",\"").unwrap();
+            let (names, tail) = rest.split_once("\",").unwrap();
+            let t: Vec<&str> = tail.split(',').collect();
+            (
+                names.to_string(),
+                t[0].parse().unwrap(),
+                t[1].parse().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(rows.len(), 2, "one row per holder: {rows:?}");
+    let mut per_worker = std::collections::BTreeMap::new();
+    for &w in &cells.worker {
+        *per_worker.entry(w as usize).or_insert(0) += 1;
+    }
+    *per_worker.entry(home as usize).or_insert(0) += plate.tris.len() + plate.quads.len();
+    for (names, worker, elements) in &rows {
+        assert_eq!(per_worker.get(worker), Some(elements), "{rows:?}");
+        let on_home = *worker == home as usize;
+        assert_eq!(names.contains("plate"), on_home, "{rows:?}");
+        assert!(names.contains("sphere"), "{rows:?}");
+    }
+    let groups = &summary.cluster.final_groups;
+    assert_eq!(
+        groups.iter().map(|g| g.worker).collect::<BTreeSet<_>>(),
+        rows.iter().map(|r| r.1).collect::<BTreeSet<_>>(),
+        "summary.json's final groups name the same holders"
+    );
 }

@@ -238,7 +238,10 @@ mod tests {
         sphere.state.f_contact = vec![Vec3::new(1.0, 2.0, 3.0); sphere.state.x.len()];
         for other in [&sphere, &body(4, ElementKind::Tri, 2)] {
             let mut s = FrameBody::capture(other);
-            s.placement = Some(Placement { worker: 1, group: 2 });
+            s.placement = Some(Placement {
+                worker: 1,
+                group: 2,
+            });
             s.parts = Some(PartCells {
                 worker: vec![1; 3],
                 part: vec![2; 3],

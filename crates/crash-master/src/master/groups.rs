@@ -10,23 +10,38 @@ use crash_link::{escape_peer, WorkerLink};
 use std::collections::BTreeMap;
 
 impl<L: WorkerLink> Master<'_, L> {
-    /// The current MEIM groups as rows.
+    /// Who computes group `g` (its ids in MEIM order): (worker, bodies, elements). One
+    /// entry for a whole group; for a group split over workers one per holder, with the
+    /// bodies that have elements there and the elements its parts own.
+    pub(super) fn group_shares(&self, g: &[u32]) -> Vec<(usize, Vec<u32>, usize)> {
+        if let Some(s) = self.splits.iter().find(|s| s.ids() == g) {
+            let shares = s.shares();
+            if !shares.is_empty() {
+                return shares;
+            }
+        }
+        let idx: Vec<usize> = g.iter().filter_map(|&id| self.index(id)).collect();
+        let worker = idx.first().and_then(|&i| self.worker_of[i]).unwrap_or(0);
+        let elements = idx.iter().map(|&i| self.info[i].elements).sum();
+        vec![(worker, g.to_vec(), elements)]
+    }
+
+    /// The current MEIM groups as rows (a split group: one row per holder).
     pub(super) fn group_rows(&self) -> Vec<GroupRow> {
-        self.meim
-            .groups()
-            .iter()
-            .map(|g| {
-                let idx: Vec<usize> = g.iter().filter_map(|&id| self.index(id)).collect();
-                let first = g.first().copied().unwrap_or(0);
-                GroupRow {
+        let mut rows = Vec::new();
+        for g in self.meim.groups() {
+            let first = g.first().copied().unwrap_or(0);
+            for (worker, ids, elements) in self.group_shares(g) {
+                rows.push(GroupRow {
                     group: first,
-                    bodies: g.iter().map(|&id| self.name(id).to_string()).collect(),
-                    worker: idx.first().and_then(|&i| self.worker_of[i]).unwrap_or(0),
-                    elements: idx.iter().map(|&i| self.info[i].elements).sum(),
+                    bodies: ids.iter().map(|&id| self.name(id).to_string()).collect(),
+                    worker,
+                    elements,
                     step_ns: self.group_ns.get(&first).copied().unwrap_or(0),
-                }
-            })
-            .collect()
+                });
+            }
+        }
+        rows
     }
 
     /// Hand the group rows to the sink (once per step).

@@ -48,6 +48,34 @@ impl SplitGroup {
         }
     }
 
+    /// The group's bodies, in MEIM order.
+    pub(super) fn ids(&self) -> &[u32] {
+        &self.ids
+    }
+
+    /// Per holder (slot order): its worker, the bodies with elements there and how
+    /// many (empty before the cells are known).
+    pub(super) fn shares(&self) -> Vec<(usize, Vec<u32>, usize)> {
+        if self.cells.is_empty() {
+            return Vec::new();
+        }
+        self.workers
+            .iter()
+            .map(|&w| {
+                let mut ids = Vec::new();
+                let mut elements = 0;
+                for (&id, c) in &self.cells {
+                    let k = c.worker.iter().filter(|&&x| x as usize == w).count();
+                    if k > 0 {
+                        ids.push(id);
+                        elements += k;
+                    }
+                }
+                (w, ids, elements)
+            })
+            .collect()
+    }
+
     fn home(&self) -> usize {
         self.workers[0]
     }

@@ -252,14 +252,8 @@ impl<L: WorkerLink> Master<'_, L> {
             .meim
             .groups()
             .iter()
-            .map(|g| {
-                let w = g
-                    .first()
-                    .and_then(|&id| self.index(id))
-                    .and_then(|i| self.worker_of[i])
-                    .unwrap_or(0);
-                (g.to_vec(), w)
-            })
+            .flat_map(|g| self.group_shares(g))
+            .map(|(w, ids, _)| (ids, w))
             .collect();
         Ok(())
     }
