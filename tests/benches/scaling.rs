@@ -15,7 +15,9 @@
 //! mode ends with the same final state hash (exit 1 otherwise).
 //!
 //! Run: cargo bench -p crash-tests --bench scaling -- SCENE [END_TIME [REPS]]
-//! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions).
+//! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions);
+//! `SCALING_MODES=1t,2t,2w,spin` runs only those modes (1w: master + 1 worker,
+//! split: --split auto). The speed-up is against the first mode run.
 #![allow(clippy::unwrap_used)]
 
 use crash_io::Summary;
@@ -168,6 +170,28 @@ fn main() {
             spin: true,
         },
     ];
+    // SCALING_MODES=1t,2t,1w,2w,split,spin picks some of the modes (a long scene in
+    // the minutes a machine is idle); all six by default
+    let names = ["1t", "2t", "1w", "2w", "split", "spin"];
+    let pick = std::env::var("SCALING_MODES").unwrap_or_default();
+    let chosen: Vec<&str> = pick
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .collect();
+    if let Some(bad) = chosen.iter().find(|c| !names.contains(c)) {
+        eprintln!(
+            "scaling: SCALING_MODES names {bad:?}; valid: {}",
+            names.join(",")
+        );
+        std::process::exit(2);
+    }
+    let modes: Vec<Mode> = modes
+        .iter()
+        .zip(names)
+        .filter(|(_, n)| chosen.is_empty() || chosen.contains(n))
+        .map(|(m, _)| *m)
+        .collect();
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("scaling-run");
     let mut runs: Vec<Vec<Summary>> = vec![Vec::new(); modes.len()];
     for _ in 0..reps {
