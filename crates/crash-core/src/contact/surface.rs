@@ -40,17 +40,36 @@ impl NodeChunk {
 
 /// Chunk boxes and speeds of a body's nodes (min, max: the same bits in any order).
 pub fn node_chunks(body: &Body) -> Vec<NodeChunk> {
+    node_chunks_moved(body, &[], 0.0).0
+}
+
+/// `node_chunks`, and in the same read of the nodes whether one lies farther than
+/// `skin` from its position in `reference` (a yes/no: the same answer in any order; an
+/// empty or shorter reference says nothing). One pass over x, v and the reference
+/// instead of two: each pass over a large body costs a stream of its nodes.
+pub fn node_chunks_moved(body: &Body, reference: &[Vec3], skin: f64) -> (Vec<NodeChunk>, bool) {
     use rayon::prelude::*;
-    body.state
-        .x
+    let x = &body.state.x;
+    let s2 = skin * skin;
+    let check = reference.len() == x.len();
+    let out: Vec<(NodeChunk, bool)> = x
         .par_chunks(NODE_CHUNK)
         .zip(body.state.v.par_chunks(NODE_CHUNK))
-        .map(|(xs, vs)| {
+        .enumerate()
+        .with_max_len(1)
+        .map(|(k, (xs, vs))| {
             let (lo, hi) = crate::mesh::bounds(xs);
             let vmax = vs.iter().map(|v| v.norm()).fold(0.0, f64::max);
-            NodeChunk { lo, hi, vmax }
+            let moved = check
+                && xs.iter().zip(&reference[k * NODE_CHUNK..]).any(|(a, b)| {
+                    let d2 = (a - b).norm_squared();
+                    d2.is_nan() || d2 > s2
+                });
+            (NodeChunk { lo, hi, vmax }, moved)
         })
-        .collect()
+        .collect();
+    let moved = out.iter().any(|c| c.1);
+    (out.into_iter().map(|c| c.0).collect(), moved)
 }
 
 /// Search data of one body's contact surface.
@@ -231,10 +250,30 @@ impl Surface {
                     })
                 })
         };
-        if self.built && self.skin == skin && self.reference.len() == body.state.x.len() && !moved()
-        {
+        if self.current(body, skin) && !moved() {
             return false;
         }
+        self.rebuild(body, skin)
+    }
+
+    /// `refresh` with the node chunks of this pass: they come with the answer to "did a
+    /// node move beyond the skin" (`node_chunks_moved` against `self.reference`), so the
+    /// nodes are read once for both. Returns whether it rebuilt.
+    pub fn refresh_chunks(&mut self, body: &Body, skin: f64) -> bool {
+        let (chunks, moved) = node_chunks_moved(body, &self.reference, skin);
+        self.chunks = chunks;
+        if self.current(body, skin) && !moved {
+            return false;
+        }
+        self.rebuild(body, skin)
+    }
+
+    /// Built, for this skin and this many nodes.
+    fn current(&self, body: &Body, skin: f64) -> bool {
+        self.built && self.skin == skin && self.reference.len() == body.state.x.len()
+    }
+
+    fn rebuild(&mut self, body: &Body, skin: f64) -> bool {
         let pad = 0.5 * body.def.section.thickness + skin;
         let x = &body.state.x;
         let entries: Vec<Entry> = self
