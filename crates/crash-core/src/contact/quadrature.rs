@@ -15,9 +15,8 @@
 
 use super::config::ContactConfig;
 use super::curved::{
-    bulge, bulge_bound, bulge_parts, coefficients, corner_a_weights, corner_normals,
-    loose_bulge_bound, near_bulge_bound, node_box, normal_pullback, normal_rate, sub_triangle,
-    NormalOf,
+    bulge, bulge_bound, bulge_parts, corner_a_weights, loose_bulge_bound, near_curved, node_box,
+    normal_pullback, normal_rate, sub_triangle, Curved, NearCurved, NormalOf,
 };
 use super::narrow::TIE;
 use super::segment::{project, Projection, Segment};
@@ -106,9 +105,9 @@ struct Master {
     nodal: [bool; 4],
 }
 
-/// All active points of slave body `sb` against master body `mb`. `kappa`: penalty
-/// stiffness per unit area of this direction (weight included); `xi`: damping ratio;
-/// `mu`: areal mass for the damping.
+/// All active points of slave body `sb` against master body `mb`. `curved`: both
+/// bodies' curved data near the other (slave's, master's); `kappa`: penalty stiffness
+/// per unit area of this direction (weight included); `mu`: areal mass for the damping.
 #[allow(clippy::too_many_arguments)]
 pub fn point_pushes(
     sb: &Body,
@@ -117,12 +116,13 @@ pub fn point_pushes(
     mb: &Body,
     msurf: &Surface,
     mboxes: &[(Vec3, Vec3)],
-    bulges: (f64, f64),
+    curved: (&NearCurved, &NearCurved),
     cfg: &ContactConfig,
     kappa: f64,
     mu: f64,
 ) -> Points {
-    let (hs_max, hm_max) = bulges;
+    let (scurv, mcurv) = curved;
+    let (hs_max, hm_max) = (scurv.bound, mcurv.bound);
     let c = 0.5 * (sb.def.section.thickness + mb.def.section.thickness);
     // a point is in contact only within c plus the master's bulge of its flat segments;
     // the slave's own points stand off its flat boxes by up to its bulge
@@ -154,25 +154,26 @@ pub fn point_pushes(
                 cand.sort_unstable();
                 masters.clear();
                 for &j in &cand {
-                    let ms = &msurf.segments[j as usize];
                     let bx = mboxes[j as usize];
                     if box_gap(&sbx, &bx) >= box_reach {
                         continue;
                     }
-                    let (normals, nodal) = corner_normals(ms, msurf, xm);
+                    let cv = mcurv.get(j, msurf, xm);
                     masters.push(Master {
                         j,
                         bx,
-                        b: coefficients(ms, xm, &normals),
-                        normals,
-                        nodal,
+                        b: cv.b,
+                        normals: cv.normals,
+                        nodal: cv.nodal,
                     });
                 }
                 if masters.is_empty() {
                     continue;
                 }
+                let scv = scurv.get(js, ssurf, &sb.state.x);
                 slave_segment(
-                    sb, ssurf, js, seg, mb, msurf, &masters, c, reach, kappa, mu, cfg, &mut out,
+                    sb, ssurf, js, seg, &scv, mb, msurf, &masters, c, reach, kappa, mu, cfg,
+                    &mut out,
                 );
             }
             out
@@ -193,6 +194,7 @@ fn slave_segment(
     ssurf: &Surface,
     js: u32,
     seg: &Segment,
+    scv: &Curved,
     mb: &Body,
     msurf: &Surface,
     masters: &[Master],
@@ -205,8 +207,7 @@ fn slave_segment(
 ) {
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
-    let (sn, s_nodal) = corner_normals(seg, ssurf, xs_);
-    let sb_coef = coefficients(seg, xs_, &sn);
+    let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
     let mut near: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
@@ -402,10 +403,10 @@ pub(crate) fn segment_pair(
     let boxes_b = seg_boxes(sb, &b.state.x);
     let grow =
         c * (1.0 + BULGE_REACH) + loose_bulge_bound(sa, &boxes_a) + loose_bulge_bound(sb, &boxes_b);
-    let ha = near_bulge_bound(sa, &a.state.x, &boxes_a, &sb.bounds(), grow);
-    let hb = near_bulge_bound(sb, &b.state.x, &boxes_b, &sa.bounds(), grow);
-    let first = point_pushes(a, sa, &boxes_a, b, sb, &boxes_b, (ha, hb), cfg, kappa, mu);
-    let second = point_pushes(b, sb, &boxes_b, a, sa, &boxes_a, (hb, ha), cfg, kappa, mu);
+    let ca = near_curved(sa, &a.state.x, &boxes_a, &sb.bounds(), grow);
+    let cb = near_curved(sb, &b.state.x, &boxes_b, &sa.bounds(), grow);
+    let first = point_pushes(a, sa, &boxes_a, b, sb, &boxes_b, (&ca, &cb), cfg, kappa, mu);
+    let second = point_pushes(b, sb, &boxes_b, a, sa, &boxes_a, (&cb, &ca), cfg, kappa, mu);
     let mut st = PairStats::empty(a.def.id, b.def.id, first.pushes.len() + second.pushes.len());
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, ia, ib, &first.pushes, &mut st, true);
