@@ -15,8 +15,8 @@
 
 use super::config::SOFT_SCALE_LIMIT;
 
-/// Depth (share of c) from which the cubic term matters: at X1 c the force is twice the
-/// linear penalty's.
+/// Depth (share of c) from which the cubic term matters: at X1 c it equals the linear
+/// term (with the barrier term the force is then 2.6 times the linear penalty's).
 pub const X1: f64 = 0.2;
 /// Depth (share of c) beyond which the force is continued linearly.
 pub const CAP: f64 = 0.95;
