@@ -48,10 +48,10 @@ fn two_grpc_workers_give_the_single_thread_state() {
 #[test]
 fn segment_pass_gives_the_single_thread_state_in_every_mode() {
     const SEG: &str = "ten-spheres-tiny-segments.toml";
-    // these coarse spheres (80 triangles) sink to 105 % of the thinner shell (0.42 c)
-    // under the segment pass, the Hertz depth of its penalty law (28 % under the node
-    // passes), a warning that fails the exit code; the test is about equal bits in every
-    // mode (docs/theory-contact.md, "Segment pass", "Penetration on coarse meshes")
+    // these coarse spheres (80 triangles) sink to 79 % of the thinner shell (0.32 c)
+    // under the segment pass, within the energy depth of its stiffening law (28 % under
+    // the node passes), a warning that fails the exit code; the test is about equal bits
+    // in every mode (docs/theory-contact.md, "Segment pass", "Depth: the stiffening law")
     let one = crash_run_scene(SEG, "seg-ref", &["--threads", "1", "--allow-warnings"]);
     assert_ne!(one, reference(), "the pass changes the contact forces");
     let threads2 = ["--threads", "2", "--allow-warnings"];

@@ -5,14 +5,14 @@
 //! passes and under the segment pass. The quick cells run here; `crash study
 //! stability` runs them all and writes docs/stability.md.
 
-use crash_cli::study::matrix::{cells, CellResult, Scenario};
+use crash_cli::study::matrix::{cells, Cell, CellResult, Scenario};
 use crash_cli::study::outcome::Outcome;
 use std::time::Instant;
 
-fn run(quick_only: bool) -> Vec<CellResult> {
+fn run(keep: impl Fn(&Cell) -> bool) -> Vec<CellResult> {
     cells()
         .into_iter()
-        .filter(|c| matches!(c.scenario, Scenario::Thrown(_)) && (!quick_only || c.quick))
+        .filter(|c| matches!(c.scenario, Scenario::Thrown(_)) && keep(c))
         .map(|cell| {
             let t = Instant::now();
             let outcome = cell.scenario.run();
@@ -53,7 +53,7 @@ fn check(res: &[CellResult]) {
 
 #[test]
 fn thrown_tube_cells_never_pass_through_silently() {
-    let res = run(true);
+    let res = run(|c| c.quick);
     assert_eq!(res.len(), 4, "two speeds x two element kinds");
     check(&res);
 }
@@ -61,7 +61,15 @@ fn thrown_tube_cells_never_pass_through_silently() {
 #[test]
 #[ignore = "the whole matrix, about a minute: cargo test --release -p crash-cli --test thrown_matrix -- --ignored"]
 fn every_thrown_tube_cell_is_completed_under_the_energy_limit_or_stopped_never_silent() {
-    let res = run(false);
+    let res = run(|_| true);
     assert_eq!(res.len(), 40, "20 cells under each contact pass");
+    check(&res);
+}
+
+#[test]
+#[ignore = "the segment pass's 20 cells: cargo test --release -p crash-cli --test thrown_matrix -- --ignored segment_pass"]
+fn every_thrown_tube_cell_under_the_segment_pass_is_completed_under_the_energy_limit_or_stopped() {
+    let res = run(|c| matches!(&c.scenario, Scenario::Thrown(t) if t.segments));
+    assert_eq!(res.len(), 20, "20 cells under the segment pass");
     check(&res);
 }

@@ -221,29 +221,84 @@ pub fn node_box(seg: &Segment, x: &[Vec3]) -> (Vec3, Vec3) {
     (lo, hi)
 }
 
-/// The largest bulge bound over the segments of a body whose node box comes within
-/// `grow` of the box `near` (the other body's, grown by what a bulge can add): how far
-/// its curved surface can stand off its facets where contact can happen. Max is
-/// order-free: the same bits on any thread count.
-pub fn near_bulge_bound(
+/// The curved data of one segment at the current positions: its corner normals, which
+/// corners took their nodal normal, and its bulge coefficients.
+#[derive(Debug, Clone, Copy)]
+pub struct Curved {
+    pub normals: [Vec3; 4],
+    pub nodal: [bool; 4],
+    pub b: [[f64; 4]; 4],
+}
+
+impl Curved {
+    pub fn of(seg: &Segment, surf: &Surface, x: &[Vec3]) -> Self {
+        let (normals, nodal) = corner_normals(seg, surf, x);
+        Curved {
+            normals,
+            nodal,
+            b: coefficients(seg, x, &normals),
+        }
+    }
+}
+
+/// The curved data of the segments of a body near the other body of a pair, computed
+/// once per pass (every point of both directions reads its slave's and its master's),
+/// and the largest bulge bound over them.
+#[derive(Debug)]
+pub struct NearCurved {
+    /// Index into `data` by segment, `u32::MAX` where the segment is not near.
+    index: Vec<u32>,
+    data: Vec<Curved>,
+    pub bound: f64,
+}
+
+impl NearCurved {
+    /// Segment j's curved data: the stored one, or computed now for a segment outside
+    /// the near set (the same values either way).
+    pub fn get(&self, j: u32, surf: &Surface, x: &[Vec3]) -> Curved {
+        match self.index[j as usize] {
+            u32::MAX => Curved::of(&surf.segments[j as usize], surf, x),
+            k => self.data[k as usize],
+        }
+    }
+}
+
+/// The curved data of the segments of a body whose node box comes within `grow` of the
+/// box `near` (the other body's, grown by what a bulge can add), and the largest bulge
+/// bound over them: how far its curved surface can stand off its facets where contact
+/// can happen. Max is order-free and the data are collected in segment order: the same
+/// bits on any thread count.
+pub fn near_curved(
     surf: &Surface,
     x: &[Vec3],
     boxes: &[(Vec3, Vec3)],
     near: &(Vec3, Vec3),
     grow: f64,
-) -> f64 {
+) -> NearCurved {
     use rayon::prelude::*;
-    surf.segments
+    let data: Vec<(u32, Curved)> = surf
+        .segments
         .par_iter()
         .zip(boxes)
-        .filter(|(_, (lo, hi))| {
+        .enumerate()
+        .filter(|(_, (_, (lo, hi)))| {
             (0..3).all(|d| hi[d] >= near.0[d] - grow && lo[d] <= near.1[d] + grow)
         })
-        .map(|(seg, _)| {
-            let (normals, _) = corner_normals(seg, surf, x);
-            bulge_bound(&coefficients(seg, x, &normals))
-        })
-        .reduce(|| 0.0, f64::max)
+        .map(|(j, (seg, _))| (j as u32, Curved::of(seg, surf, x)))
+        .collect();
+    let mut index = vec![u32::MAX; surf.segments.len()];
+    for (k, (j, _)) in data.iter().enumerate() {
+        index[*j as usize] = k as u32;
+    }
+    let bound = data
+        .iter()
+        .map(|(_, cv)| bulge_bound(&cv.b))
+        .fold(0.0, f64::max);
+    NearCurved {
+        index,
+        data: data.into_iter().map(|(_, cv)| cv).collect(),
+        bound,
+    }
 }
 
 /// h(w) and its partial derivatives dh/dw_k.

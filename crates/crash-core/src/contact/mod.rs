@@ -10,6 +10,7 @@ pub mod quadrature;
 pub mod segment;
 pub mod smooth;
 pub mod stage;
+pub mod stiffening;
 pub mod surface;
 pub mod sweep;
 pub mod verlet;

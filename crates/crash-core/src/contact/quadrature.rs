@@ -1,12 +1,13 @@
 //! The segment pass (`ContactPass::Segments`): contact points that are not nodes.
 //! Quadrature points on one body's (slave's) curved segments press on the other's
-//! (master's) curved segments with the penalty potential (1/2) k_a g_a^2 per point;
-//! each body is slave once with half the weight. docs/theory-contact.md, "Segment pass".
+//! (master's) curved segments with the penalty potential k_a c^2 psi(-g_a / c) per
+//! point (`stiffening.rs`: (1/2) k_a g_a^2 when shallow, stiffer with depth); each body
+//! is slave once with half the weight. docs/theory-contact.md, "Segment pass".
 //!
 //! Per point: x_a = sum N_k x_k + h_s n_sub (the slave's curved surface, `curved.rs`),
 //! P the closest point of the master's flat segments (closest, ties: lowest index),
 //! d = |x_a - P|, g = d - s h_m - c (h_m the master's bulge at P, s = +-1 the side of
-//! x_a), force f = k_a (-g) grad g, grad g = (x_a - P)/d - s grad h_m. The force and its
+//! x_a), force f = k_a c phi(-g / c) grad g, grad g = (x_a - P)/d - s grad h_m. The force and its
 //! reaction act on one line (through x_a along f): on the slave's nodes with the weights
 //! of the point where that line meets the slave's (sub-)triangle, on the master's with
 //! those where it meets the master's, so momentum and angular momentum hold exactly and
@@ -14,13 +15,13 @@
 
 use super::config::ContactConfig;
 use super::curved::{
-    bulge, bulge_bound, bulge_parts, coefficients, corner_a_weights, corner_normals,
-    loose_bulge_bound, near_bulge_bound, node_box, normal_pullback, normal_rate, sub_triangle,
-    NormalOf,
+    bulge, bulge_bound, bulge_parts, corner_a_weights, loose_bulge_bound, near_curved, node_box,
+    normal_pullback, normal_rate, sub_triangle, Curved, NearCurved, NormalOf,
 };
 use super::narrow::TIE;
 use super::segment::{project, Projection, Segment};
 use super::stage::{KinLoad, PairStats};
+use super::stiffening;
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
@@ -29,8 +30,10 @@ use std::collections::BTreeMap;
 use std::mem::take;
 
 /// Target spacing of the quadrature points as a fraction of the contact distance c:
-/// each (sub-)triangle edge is split into ceil(L / (SPACING c)) parts.
-pub const SPACING: f64 = 0.5;
+/// each (sub-)triangle edge is split into ceil(L / (SPACING c)) parts. At c a point
+/// costs a quarter of c/2's and the oblique impacts stay within issue 12's bounds
+/// (docs/theory-contact.md, spacing table).
+pub const SPACING: f64 = 1.0;
 /// Most parts per (sub-)triangle edge (bounds the cost on coarse meshes).
 pub const MAX_PARTS: usize = 24;
 /// Master points are looked for at least this far beyond the flat contact distance, as
@@ -102,9 +105,9 @@ struct Master {
     nodal: [bool; 4],
 }
 
-/// All active points of slave body `sb` against master body `mb`. `kappa`: penalty
-/// stiffness per unit area of this direction (weight included); `xi`: damping ratio;
-/// `mu`: areal mass for the damping.
+/// All active points of slave body `sb` against master body `mb`. `curved`: both
+/// bodies' curved data near the other (slave's, master's); `kappa`: penalty stiffness
+/// per unit area of this direction (weight included); `mu`: areal mass for the damping.
 #[allow(clippy::too_many_arguments)]
 pub fn point_pushes(
     sb: &Body,
@@ -113,12 +116,13 @@ pub fn point_pushes(
     mb: &Body,
     msurf: &Surface,
     mboxes: &[(Vec3, Vec3)],
-    bulges: (f64, f64),
+    curved: (&NearCurved, &NearCurved),
     cfg: &ContactConfig,
     kappa: f64,
     mu: f64,
 ) -> Points {
-    let (hs_max, hm_max) = bulges;
+    let (scurv, mcurv) = curved;
+    let (hs_max, hm_max) = (scurv.bound, mcurv.bound);
     let c = 0.5 * (sb.def.section.thickness + mb.def.section.thickness);
     // a point is in contact only within c plus the master's bulge of its flat segments;
     // the slave's own points stand off its flat boxes by up to its bulge
@@ -150,25 +154,26 @@ pub fn point_pushes(
                 cand.sort_unstable();
                 masters.clear();
                 for &j in &cand {
-                    let ms = &msurf.segments[j as usize];
                     let bx = mboxes[j as usize];
                     if box_gap(&sbx, &bx) >= box_reach {
                         continue;
                     }
-                    let (normals, nodal) = corner_normals(ms, msurf, xm);
+                    let cv = mcurv.get(j, msurf, xm);
                     masters.push(Master {
                         j,
                         bx,
-                        b: coefficients(ms, xm, &normals),
-                        normals,
-                        nodal,
+                        b: cv.b,
+                        normals: cv.normals,
+                        nodal: cv.nodal,
                     });
                 }
                 if masters.is_empty() {
                     continue;
                 }
+                let scv = scurv.get(js, ssurf, &sb.state.x);
                 slave_segment(
-                    sb, ssurf, js, seg, mb, msurf, &masters, c, reach, kappa, mu, cfg, &mut out,
+                    sb, ssurf, js, seg, &scv, mb, msurf, &masters, c, reach, kappa, mu, cfg,
+                    &mut out,
                 );
             }
             out
@@ -189,6 +194,7 @@ fn slave_segment(
     ssurf: &Surface,
     js: u32,
     seg: &Segment,
+    scv: &Curved,
     mb: &Body,
     msurf: &Surface,
     masters: &[Master],
@@ -201,8 +207,7 @@ fn slave_segment(
 ) {
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
-    let (sn, s_nodal) = corner_normals(seg, ssurf, xs_);
-    let sb_coef = coefficients(seg, xs_, &sn);
+    let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
     let mut near: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
@@ -320,8 +325,9 @@ fn slave_segment(
                 for q in 0..4 {
                     gs[q] += direct[q];
                 }
+                // the stiffening law (`stiffening.rs`): k c phi(-g / c), = k (-g) when shallow
                 let k = wa;
-                let mut phi = k * (-gap);
+                let mut phi = k * c * stiffening::force(-gap / c);
                 if cfg.damping_ratio > 0.0 {
                     let mut gdot = 0.0;
                     for q in 0..seg.count as usize {
@@ -397,10 +403,10 @@ pub(crate) fn segment_pair(
     let boxes_b = seg_boxes(sb, &b.state.x);
     let grow =
         c * (1.0 + BULGE_REACH) + loose_bulge_bound(sa, &boxes_a) + loose_bulge_bound(sb, &boxes_b);
-    let ha = near_bulge_bound(sa, &a.state.x, &boxes_a, &sb.bounds(), grow);
-    let hb = near_bulge_bound(sb, &b.state.x, &boxes_b, &sa.bounds(), grow);
-    let first = point_pushes(a, sa, &boxes_a, b, sb, &boxes_b, (ha, hb), cfg, kappa, mu);
-    let second = point_pushes(b, sb, &boxes_b, a, sa, &boxes_a, (hb, ha), cfg, kappa, mu);
+    let ca = near_curved(sa, &a.state.x, &boxes_a, &sb.bounds(), grow);
+    let cb = near_curved(sb, &b.state.x, &boxes_b, &sa.bounds(), grow);
+    let first = point_pushes(a, sa, &boxes_a, b, sb, &boxes_b, (&ca, &cb), cfg, kappa, mu);
+    let second = point_pushes(b, sb, &boxes_b, a, sa, &boxes_a, (&cb, &ca), cfg, kappa, mu);
     let mut st = PairStats::empty(a.def.id, b.def.id, first.pushes.len() + second.pushes.len());
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, ia, ib, &first.pushes, &mut st, true);

@@ -14,6 +14,7 @@ use super::config::{
 use super::narrow::{forces, search, Hit, Normals, Push};
 use super::quadrature::segment_pair;
 use super::segment::Segment;
+use super::stiffening;
 use super::surface::Surface;
 use super::sweep::{closing_speed, first_crossing, mean_velocity};
 use super::verlet::NodeLists;
@@ -394,6 +395,13 @@ pub(crate) fn contact_forces_given(
         }
         if cfg.pass == ContactPass::Segments && !self_pair {
             let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref);
+            // the stiffening law's step (docs/theory-contact.md, "Depth")
+            let (a, b) = (&bodies[ia], &bodies[ib]);
+            let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+            if let Some(d) = stiffening::step(cfg.penalty_scale, st.max_penetration / c, pair_dt) {
+                dt[ia] = dt[ia].min(d);
+                dt[ib] = dt[ib].min(d);
+            }
             state.stats.push(st);
             continue;
         }
