@@ -14,8 +14,10 @@
 //! `--threads 1`, the barrier's median per step and its parts, and checks that every
 //! mode ends with the same final state hash (exit 1 otherwise).
 //!
-//! Run: cargo bench -p crash-tests --bench scaling -- SCENE [END_TIME [REPS]]
-//! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions).
+//! Run: cargo bench -p crash-tests --bench scaling -- SCENE [END_TIME [REPS [MODES]]]
+//! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions, all
+//! modes; MODES picks some by their place in the list above, e.g. `0,4`: 1 thread and
+//! the split; the speed-up is over the first mode picked).
 #![allow(clippy::unwrap_used)]
 
 use crash_io::Summary;
@@ -168,6 +170,14 @@ fn main() {
             spin: true,
         },
     ];
+    let modes: Vec<Mode> = match args.get(3) {
+        Some(pick) => pick
+            .split(',')
+            .filter_map(|k| k.trim().parse::<usize>().ok())
+            .filter_map(|k| modes.get(k).copied())
+            .collect(),
+        None => modes.to_vec(),
+    };
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("scaling-run");
     let mut runs: Vec<Vec<Summary>> = vec![Vec::new(); modes.len()];
     for _ in 0..reps {
@@ -184,7 +194,7 @@ fn main() {
         s0.steps
     );
     println!(
-        "| mode | wall [s] | ns/element-cycle | speed-up vs 1 thread | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | final hash |"
+        "| mode | wall [s] | ns/element-cycle | speed-up vs the first | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | final hash |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
     let base = median(runs[0].iter().map(|s| s.wall_time_s).collect());

@@ -18,16 +18,26 @@
 //!    element steps, which the master sends with the next step (or with a `Contact`
 //!    before the whole bodies are assembled).
 //!
-//! Every holder holds the whole bodies' x, v, w after step 2, so the global figures
-//! (body boxes, pairs, each body's mass-weighted mean velocity for the closing-speed
-//! step, the view rebuild rule) are computed from the same numbers in the same order
-//! on every holder: no order-free reduction is needed.
+//! What crosses the wire is what another part reads: each part sends x, v, w of its
+//! *export nodes* only (`SharedGroup::export`: its owned nodes in another part's halo
+//! or contact view), plus its box and its largest distance from where the views were
+//! built. Every holder derives the same export lists from the split and the views of
+//! all parts (node lists only for the parts held elsewhere) at each view build. The
+//! global figures need no whole body: the body boxes are the min/max of the parts'
+//! boxes, the view rebuild rule the max of the parts' distances, and the closing-speed
+//! step reads the whole bodies' velocities (each body's mass-weighted mean velocity,
+//! summed in node order, and the largest speed relative to it), so under
+//! `SpeedRule::LimitDt` every owned node's v is sent each step: the same numbers in
+//! the same order on every holder, so no order-free reduction and no change of bits.
+//! A view build needs the whole bodies: once some node has moved farther than the
+//! skin less one step's tunnelling budget, the next integration sends every owned
+//! node, and the contact pass after it rebuilds the views (on every holder alike).
 
 use super::contact::Closing;
 use super::GroupSplit;
 use crate::body::{Body, BodyEnergy, BodyState};
 use crate::clock::Clock;
-use crate::contact::{check_moves, ContactConfig};
+use crate::contact::{check_moves, ContactConfig, SpeedRule};
 use crate::error::{CoreError, Fault};
 use crate::forces::ForceSums;
 use crate::group::{BodyReport, Reaction};
@@ -36,19 +46,37 @@ use crate::Vec3;
 
 pub use super::SplitError;
 
-/// The owned nodes of one part after its integration: what the other holders of its
-/// group import.
+/// The owned nodes of one part after its integration that the other holders of its
+/// group import, and its figures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PartState {
     /// Body id and part index.
     pub id: u32,
     pub part: u32,
+    /// Each of x, v, w: at every owned node (in order), or at the part's export nodes
+    /// only (`SharedGroup::export`, known to every holder from the last view build).
     pub x: Vec<Vec3>,
     pub v: Vec<Vec3>,
     pub w: Vec<Vec3>,
+    /// Box of the owned nodes (the body's box is the min/max over its parts).
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Largest distance of an owned node from where the contact views were built.
+    pub far: f64,
     /// Largest move of an owned node in the step and that node (whole-body index).
     pub max_move: f64,
     pub max_move_node: u32,
+}
+
+/// A part's figures of one step (its own, or imported with its `PartState`).
+#[derive(Debug, Clone, Copy)]
+struct PartFigures {
+    lo: Vec3,
+    hi: Vec3,
+    far: f64,
+    max_move: f64,
+    /// Whole-body index.
+    max_move_node: u32,
 }
 
 /// The smallest element critical step of body `id` over some of its parts, and its
@@ -84,6 +112,27 @@ pub struct SharedGroup {
     forces: Vec<Vec<Option<ForceSums>>>,
     /// The contact pass the last `forces` left for the next step.
     pending: Option<Pending>,
+    /// Per body and part: the local indices of the owned nodes some other part reads
+    /// (its halo and contact-view nodes), in order: all that crosses the wire in a step
+    /// without a view build. The same on every holder (a function of the split and of
+    /// the whole bodies' positions at the last view build).
+    pub export: Vec<Vec<Vec<u32>>>,
+    /// Per body and part: the figures of the last integration (own parts only).
+    figures: Vec<Vec<Option<PartFigures>>>,
+    /// The next integration sends every owned node (a view build follows it).
+    due: bool,
+    /// The last integration sent every owned node.
+    sent_full: bool,
+    /// The whole bodies were gathered in the last `forces`: the pending pass rebuilds
+    /// the views there.
+    rebuild: bool,
+    /// A view build is due when some node has moved this far from where the views
+    /// were built: one more step (at most the tunnelling guard's budget per node)
+    /// keeps it within the skin, and the build needs a step to gather the bodies.
+    trigger: f64,
+    /// Every node's velocity is sent each step (the closing-speed step reads the whole
+    /// bodies' velocities).
+    all_v: bool,
 }
 
 /// A contact pass left for later: the step's length and number, and the closing-speed
@@ -120,15 +169,32 @@ impl SharedGroup {
             st.hourglass_now = b.state.hourglass_now;
         }
         split.mine = mine;
+        split.all_lists = true;
         let sums = parts.iter().map(|&k| vec![None; k]).collect();
         let forces = parts.iter().map(|&k| vec![None; k]).collect();
+        let figures = parts.iter().map(|&k| vec![None; k]).collect();
         let ids = bodies.iter().map(|b| b.def.id).collect();
+        let budget = bodies
+            .iter()
+            .filter(|b| b.def.contact)
+            .map(|b| contact.step_budget(b))
+            .fold(0.0, f64::max);
+        // 1 % below the exact bound: the distances are rounded
+        let trigger = 0.99 * (split.skin - budget);
+        let export = exports(&split);
         Ok(Self {
             split,
             ids,
             sums,
             forces,
             pending: None,
+            export,
+            figures,
+            due: contact.enabled,
+            sent_full: false,
+            rebuild: false,
+            trigger,
+            all_v: contact.enabled && contact.speed_rule == SpeedRule::LimitDt,
         })
     }
 
@@ -148,10 +214,14 @@ impl SharedGroup {
     pub fn integrate(&mut self, clock: &Clock, h: f64) -> Result<Vec<PartState>, Fault> {
         let sc = clock.step_of(h);
         let gravity = self.split.gravity;
+        let full = self.due;
         let mut out = Vec::new();
         for (i, s) in self.split.splits.iter_mut().enumerate() {
+            let contact = self.split.whole[i].def.contact;
+            let reference = self.split.reference.get(i);
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
+                self.figures[i][q] = None;
                 if !self.split.mine[i][q] {
                     continue;
                 }
@@ -160,18 +230,48 @@ impl SharedGroup {
                     .integrate(&sc, gravity)
                     .map_err(|f| node_in_whole(f, &p.node))?;
                 let st = &p.body.state;
+                let o = p.owned;
+                let (lo, hi) = crate::mesh::bounds(&st.x[..o]);
+                let far = match reference {
+                    Some(r) if contact => p.node[..o]
+                        .iter()
+                        .zip(&st.x[..o])
+                        .map(|(&g, x)| (x - r[g as usize]).norm())
+                        .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a }),
+                    _ => 0.0,
+                };
+                let ex = &self.export[i][q];
+                let pick = |a: &[Vec3], all: bool| -> Vec<Vec3> {
+                    if all {
+                        a[..o].to_vec()
+                    } else {
+                        ex.iter().map(|&k| a[k as usize]).collect()
+                    }
+                };
+                let fig = PartFigures {
+                    lo,
+                    hi,
+                    far,
+                    max_move: n.max_move,
+                    max_move_node: p.node[n.max_move_node],
+                };
                 out.push(PartState {
                     id: self.ids[i],
                     part: q as u32,
-                    x: st.x[..p.owned].to_vec(),
-                    v: st.v[..p.owned].to_vec(),
-                    w: st.w[..p.owned].to_vec(),
-                    max_move: n.max_move,
-                    max_move_node: p.node[n.max_move_node],
+                    x: pick(&st.x, full),
+                    v: pick(&st.v, full || self.all_v),
+                    w: pick(&st.w, full),
+                    lo,
+                    hi,
+                    far,
+                    max_move: fig.max_move,
+                    max_move_node: fig.max_move_node,
                 });
+                self.figures[i][q] = Some(fig);
                 self.sums[i][q] = Some(n);
             }
         }
+        self.sent_full = full;
         Ok(out)
     }
 
@@ -198,11 +298,7 @@ impl SharedGroup {
             .into());
         }
         let step = clock.after(h).step;
-        let mut got: Vec<Vec<Option<(f64, u32)>>> = self
-            .sums
-            .iter()
-            .map(|s| s.iter().map(|_| None).collect())
-            .collect();
+        let mut got = self.figures.clone();
         for p in imports {
             let bad = |what: &str| CoreError::Other {
                 body: format!("body {}", p.id),
@@ -218,32 +314,51 @@ impl SharedGroup {
                 return Err(bad("not expected here, or twice").into());
             }
             let part = &mut self.split.splits[i].parts[q];
-            let o = part.owned;
-            if p.x.len() != o || p.v.len() != o || p.w.len() != o {
-                return Err(bad("wrong node count").into());
+            let (o, ex) = (part.owned, &self.export[i][q]);
+            if self.sent_full && p.x.len() != o {
+                return Err(bad("every owned node expected (a view build)").into());
             }
             let st = &mut part.body.state;
-            st.x[..o].copy_from_slice(&p.x);
-            st.v[..o].copy_from_slice(&p.v);
-            st.w[..o].copy_from_slice(&p.w);
-            got[i][q] = Some((p.max_move, p.max_move_node));
+            for (to, from) in [(&mut st.x, &p.x), (&mut st.v, &p.v), (&mut st.w, &p.w)] {
+                if from.len() == o {
+                    to[..o].copy_from_slice(from);
+                } else if from.len() == ex.len() {
+                    for (&k, y) in ex.iter().zip(from) {
+                        to[k as usize] = *y;
+                    }
+                } else {
+                    return Err(bad("wrong node count").into());
+                }
+            }
+            got[i][q] = Some(PartFigures {
+                lo: p.lo,
+                hi: p.hi,
+                far: p.far,
+                max_move: p.max_move,
+                max_move_node: p.max_move_node,
+            });
         }
-        // the largest move of each body over all parts (ties: the lowest node)
-        let mut moves = Vec::with_capacity(self.ids.len());
-        for (i, s) in self.split.splits.iter().enumerate() {
-            let mut m = (0.0f64, u32::MAX);
-            for (q, p) in s.parts.iter().enumerate() {
-                let this = match (&self.sums[i][q], got[i][q]) {
-                    (Some(n), _) => (n.max_move, p.node[n.max_move_node]),
-                    (None, Some(g)) => g,
-                    (None, None) => {
-                        return Err(CoreError::Other {
+        let got: Vec<Vec<PartFigures>> = got
+            .into_iter()
+            .enumerate()
+            .map(|(i, g)| {
+                g.into_iter()
+                    .enumerate()
+                    .map(|(q, f)| {
+                        f.ok_or_else(|| CoreError::Other {
                             body: format!("body {}", self.ids[i]),
                             what: format!("part {q} neither computed here nor imported"),
-                        }
-                        .into())
-                    }
-                };
+                        })
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .collect::<Result<_, _>>()?;
+        // the largest move of each body over all parts (ties: the lowest node)
+        let mut moves = Vec::with_capacity(self.ids.len());
+        for g in &got {
+            let mut m = (0.0f64, u32::MAX);
+            for f in g {
+                let this = (f.max_move, f.max_move_node);
                 if this.0 > m.0 || (this.0 == m.0 && this.1 < m.1) {
                     m = this;
                 }
@@ -251,9 +366,31 @@ impl SharedGroup {
             moves.push((m.0, if m.1 == u32::MAX { 0 } else { m.1 as usize }));
         }
         check_moves(&self.split.whole, &self.split.contact, &moves, h, step)?;
+        if self.sent_full {
+            // every node arrived: the whole bodies for the view build of the pending pass
+            self.split.gather_whole();
+            self.rebuild = true;
+            self.due = false;
+        } else {
+            let far = got
+                .iter()
+                .zip(&self.split.whole)
+                .filter(|(_, b)| b.def.contact)
+                .flat_map(|(g, _)| g.iter().map(|f| f.far))
+                .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a });
+            // NaN: a fault is found elsewhere; build anyway
+            self.due = !(far <= self.trigger);
+            if self.all_v {
+                self.split.gather_velocities();
+            }
+        }
         let mut out = vec![None; self.ids.len()];
         for (i, s) in self.split.splits.iter_mut().enumerate() {
-            s.exchange();
+            for (q, m) in self.split.mine[i].iter().enumerate() {
+                if *m {
+                    s.exchange_into(q);
+                }
+            }
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.forces[i][q] = None;
                 if !self.split.mine[i][q] {
@@ -276,7 +413,16 @@ impl SharedGroup {
             .iter()
             .map(|d| d.map_or(f64::INFINITY, |d| d.dt))
             .collect();
-        let (limit, closing) = self.split.figures(&local);
+        let bounds: Vec<(Vec3, Vec3)> = got
+            .iter()
+            .map(|g| {
+                g.iter()
+                    .fold(crate::mesh::bounds(&[]), |(lo, hi), f| {
+                        (lo.inf(&f.lo), hi.sup(&f.hi))
+                    })
+            })
+            .collect();
+        let (limit, closing) = self.split.figures_given(&local, &bounds);
         let mut shares = Vec::new();
         for (i, s) in self.split.splits.iter().enumerate() {
             let mut r: Option<BodyReport> = None;
@@ -340,7 +486,18 @@ impl SharedGroup {
             .into());
         };
         let edt: Vec<f64> = dt.iter().map(|d| d.dt).collect();
-        self.split.views_pass(&edt, &p.closing, p.h, p.step)
+        let rebuild = std::mem::take(&mut self.rebuild);
+        if self.split.views.is_empty() && !rebuild && self.split.contact.enabled {
+            return Err(CoreError::Other {
+                body: "split group".into(),
+                what: "contact views to build without the whole bodies".into(),
+            }
+            .into());
+        }
+        if self.split.views_pass(&edt, &p.closing, p.h, p.step, rebuild)? {
+            self.export = exports(&self.split);
+        }
+        Ok(())
     }
 
     /// The full states of the parts computed here (for the assembly of whole bodies).
@@ -439,6 +596,48 @@ impl SharedGroup {
         }
         Ok(out)
     }
+}
+
+/// Per body and part: the owned nodes (local indices) that another part reads, as a
+/// halo node or a node of its contact view (the views of every part, built or not).
+fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
+    let mut needed: Vec<Vec<bool>> = split
+        .whole
+        .iter()
+        .map(|b| vec![false; b.def.node_count()])
+        .collect();
+    for (i, s) in split.splits.iter().enumerate() {
+        for (q, p) in s.parts.iter().enumerate() {
+            for &n in &p.node[p.owned..] {
+                needed[i][n as usize] = true;
+            }
+            let Some(view) = split.views.get(i).and_then(|v| v.get(q)) else {
+                continue;
+            };
+            for (&j, nodes) in view.index.iter().zip(&view.node) {
+                for &n in nodes {
+                    if j != i || split.splits[j].owner[n as usize].0 as usize != q {
+                        needed[j][n as usize] = true;
+                    }
+                }
+            }
+        }
+    }
+    split
+        .splits
+        .iter()
+        .zip(&needed)
+        .map(|(s, need)| {
+            s.parts
+                .iter()
+                .map(|p| {
+                    (0..p.owned as u32)
+                        .filter(|&k| need[p.node[k as usize] as usize])
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Join two holders' shares of one body's report: energies summed (another order than
