@@ -86,6 +86,8 @@ pub struct View {
     pub node: Vec<Vec<u32>>,
     /// View element -> element of the whole body, per view body.
     pub element: Vec<Vec<u32>>,
+    /// View node -> (part owning it, its index there), per view body (the fill).
+    from: Vec<Vec<(u32, u32)>>,
     /// The part's own body among `bodies`, and the view index of each owned node.
     own: usize,
     owned_at: Vec<u32>,
@@ -350,17 +352,17 @@ impl GroupSplit {
                 if !self.mine[i][q] {
                     continue;
                 }
-                for (vb, (&j, node)) in view
+                for (vb, (&j, from)) in view
                     .bodies
                     .iter_mut()
-                    .zip(view.index.iter().zip(&view.node))
+                    .zip(view.index.iter().zip(&view.from))
                 {
-                    // from the parts owning the nodes (what a shared group imports)
-                    let (s, sp) = (&mut vb.state, &self.splits[j]);
-                    for (k, &n) in node.iter().enumerate() {
-                        let (oq, ok) = sp.owner[n as usize];
-                        let (w, ok) = (&sp.parts[oq as usize].body.state, ok as usize);
-                        (s.x[k], s.v[k], s.w[k]) = (w.x[ok], w.v[ok], w.w[ok]);
+                    // x and v (all the contact stage reads of a node) from the parts
+                    // owning the nodes (what a shared group imports)
+                    let (s, parts) = (&mut vb.state, &self.splits[j].parts);
+                    for (k, &(oq, ok)) in from.iter().enumerate() {
+                        let (w, ok) = (&parts[oq as usize].body.state, ok as usize);
+                        (s.x[k], s.v[k]) = (w.x[ok], w.v[ok]);
                     }
                 }
                 let edt: Vec<f64> = view.index.iter().map(|&j| element_dt[j]).collect();
@@ -421,6 +423,7 @@ impl GroupSplit {
                     index: Vec::new(),
                     node: Vec::new(),
                     element: Vec::new(),
+                    from: Vec::new(),
                     own: 0,
                     owned_at: Vec::new(),
                     state: ContactState::default(),
@@ -469,6 +472,11 @@ impl GroupSplit {
                             })?;
                     }
                     view.bodies.push(vb);
+                    view.from.push(
+                        node.iter()
+                            .map(|&n| self.splits[j].owner[n as usize])
+                            .collect(),
+                    );
                     view.index.push(j);
                     view.node.push(node);
                     view.element.push(element);

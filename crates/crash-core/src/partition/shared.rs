@@ -416,10 +416,9 @@ impl SharedGroup {
         let bounds: Vec<(Vec3, Vec3)> = got
             .iter()
             .map(|g| {
-                g.iter()
-                    .fold(crate::mesh::bounds(&[]), |(lo, hi), f| {
-                        (lo.inf(&f.lo), hi.sup(&f.hi))
-                    })
+                g.iter().fold(crate::mesh::bounds(&[]), |(lo, hi), f| {
+                    (lo.inf(&f.lo), hi.sup(&f.hi))
+                })
             })
             .collect();
         let (limit, closing) = self.split.figures_given(&local, &bounds);
@@ -494,7 +493,10 @@ impl SharedGroup {
             }
             .into());
         }
-        if self.split.views_pass(&edt, &p.closing, p.h, p.step, rebuild)? {
+        if self
+            .split
+            .views_pass(&edt, &p.closing, p.h, p.step, rebuild)?
+        {
             self.export = exports(&self.split);
         }
         Ok(())
