@@ -34,6 +34,8 @@
 //! node, and the contact pass after it rebuilds the views (on every holder alike).
 
 use super::contact::Closing;
+use super::export::exports;
+use super::report::{add_energy, add_reaction, element_in_whole, node_in_whole};
 use super::GroupSplit;
 use crate::body::{Body, BodyEnergy, BodyState};
 use crate::clock::Clock;
@@ -44,29 +46,9 @@ use crate::group::{BodyReport, Reaction};
 use crate::integrate::NodeSums;
 use crate::Vec3;
 
+pub use super::export::PartState;
+pub use super::report::merge_report;
 pub use super::SplitError;
-
-/// The owned nodes of one part after its integration that the other holders of its
-/// group import, and its figures.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PartState {
-    /// Body id and part index.
-    pub id: u32,
-    pub part: u32,
-    /// Each of x, v, w: at every owned node (in order), or at the part's export nodes
-    /// only (`SharedGroup::export`, known to every holder from the last view build).
-    pub x: Vec<Vec3>,
-    pub v: Vec<Vec3>,
-    pub w: Vec<Vec3>,
-    /// Box of the owned nodes (the body's box is the min/max over its parts).
-    pub lo: Vec3,
-    pub hi: Vec3,
-    /// Largest distance of an owned node from where the contact views were built.
-    pub far: f64,
-    /// Largest move of an owned node in the step and that node (whole-body index).
-    pub max_move: f64,
-    pub max_move_node: u32,
-}
 
 /// A part's figures of one step (its own, or imported with its `PartState`).
 #[derive(Debug, Clone, Copy)]
@@ -379,7 +361,7 @@ impl SharedGroup {
                 .flat_map(|(g, _)| g.iter().map(|f| f.far))
                 .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a });
             // NaN: a fault is found elsewhere; build anyway
-            self.due = !(far <= self.trigger);
+            self.due = far > self.trigger || far.is_nan();
             if self.all_v {
                 self.split.gather_velocities();
             }
@@ -598,140 +580,4 @@ impl SharedGroup {
         }
         Ok(out)
     }
-}
-
-/// Per body and part: the owned nodes (local indices) that another part reads, as a
-/// halo node or a node of its contact view (the views of every part, built or not).
-fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
-    let mut needed: Vec<Vec<bool>> = split
-        .whole
-        .iter()
-        .map(|b| vec![false; b.def.node_count()])
-        .collect();
-    for (i, s) in split.splits.iter().enumerate() {
-        for (q, p) in s.parts.iter().enumerate() {
-            for &n in &p.node[p.owned..] {
-                needed[i][n as usize] = true;
-            }
-            let Some(view) = split.views.get(i).and_then(|v| v.get(q)) else {
-                continue;
-            };
-            for (&j, nodes) in view.index.iter().zip(&view.node) {
-                for &n in nodes {
-                    if j != i || split.splits[j].owner[n as usize].0 as usize != q {
-                        needed[j][n as usize] = true;
-                    }
-                }
-            }
-        }
-    }
-    split
-        .splits
-        .iter()
-        .zip(&needed)
-        .map(|(s, need)| {
-            s.parts
-                .iter()
-                .map(|p| {
-                    (0..p.owned as u32)
-                        .filter(|&k| need[p.node[k as usize] as usize])
-                        .collect()
-                })
-                .collect()
-        })
-        .collect()
-}
-
-/// Join two holders' shares of one body's report: energies summed (another order than
-/// the whole body's: ulps), the box and the move order-free, the element step and hot
-/// element by value then lowest element.
-pub fn merge_report(a: BodyReport, b: BodyReport) -> BodyReport {
-    let (dt, dt_element) = if b.stable_dt < a.stable_dt
-        || (b.stable_dt == a.stable_dt && b.dt_element < a.dt_element)
-    {
-        (b.stable_dt, b.dt_element)
-    } else {
-        (a.stable_dt, a.dt_element)
-    };
-    let (hot_density, hot_element) = if b.hot_density > a.hot_density
-        || (b.hot_density == a.hot_density && b.hot_element < a.hot_element)
-    {
-        (b.hot_density, b.hot_element)
-    } else {
-        (a.hot_density, a.hot_element)
-    };
-    let reaction = match (a.reaction, b.reaction) {
-        (Some(x), Some(y)) => Some(add_reaction(x, y)),
-        (x, y) => x.or(y),
-    };
-    BodyReport {
-        id: a.id,
-        energy: add_energy(a.energy, b.energy),
-        stable_dt: dt,
-        dt_element,
-        lo: a.lo.inf(&b.lo),
-        hi: a.hi.sup(&b.hi),
-        max_move: a.max_move.max(b.max_move),
-        hot_element,
-        hot_density,
-        reaction,
-    }
-}
-
-fn add_energy(a: BodyEnergy, b: BodyEnergy) -> BodyEnergy {
-    BodyEnergy {
-        kinetic: a.kinetic + b.kinetic,
-        internal: a.internal + b.internal,
-        hourglass: a.hourglass + b.hourglass,
-        contact: a.contact + b.contact,
-        damping: a.damping + b.damping,
-        external: a.external + b.external,
-    }
-}
-
-fn add_reaction(a: Reaction, b: Reaction) -> Reaction {
-    Reaction {
-        force: a.force + b.force,
-        moment: a.moment + b.moment,
-        moment_origin: a.moment_origin + b.moment_origin,
-    }
-}
-
-/// A fault of a part's integration with the whole body's node number.
-fn node_in_whole(mut f: Fault, node: &[u32]) -> Fault {
-    if let Fault::NonFinite { place, .. } = &mut f {
-        if let Some(n) = place
-            .strip_prefix("node ")
-            .and_then(|n| n.parse::<usize>().ok())
-        {
-            if let Some(&g) = node.get(n) {
-                *place = format!("node {g}");
-            }
-        }
-    }
-    f
-}
-
-/// A fault of a part's element pass with the whole body's element number.
-fn element_in_whole(mut f: Fault, element: &[u32]) -> Fault {
-    let map = |e: &mut usize| {
-        if let Some(&g) = element.get(*e) {
-            *e = g as usize;
-        }
-    };
-    match &mut f {
-        Fault::Collapsed { element: e, .. } | Fault::Inverted { element: e, .. } => map(e),
-        Fault::NonFinite { place, .. } => {
-            if let Some(n) = place
-                .strip_prefix("element ")
-                .and_then(|n| n.parse::<usize>().ok())
-            {
-                if let Some(&g) = element.get(n) {
-                    *place = format!("element {g}");
-                }
-            }
-        }
-        _ => {}
-    }
-    f
 }
