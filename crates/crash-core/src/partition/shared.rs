@@ -1,15 +1,15 @@
 //! A split group shared between workers (issue 16 point 2, the wiring). Every holder
 //! keeps all parts of the group (`GroupSplit`) but computes only its own (`mine`); the
-//! others are containers for the owned states that arrive from their holders. One step
+//! others are containers for the nodes that arrive from their holders. One step
 //! is two exchanges, the master relaying; the contact pass of a step runs at the start
 //! of the next one:
 //!
 //! 1. `contact` (the previous step's, when one is pending: with each body's element
 //!    step over all holders, the soft penalty's reference step) then `integrate`: the
-//!    holder's parts update their owned nodes and return them (`PartState`: x, v, w
-//!    and the largest move).
-//! 2. `forces`: the other holders' `PartState`s fill the other parts (so the whole
-//!    bodies, the halos and the contact views are current everywhere), the tunnelling
+//!    holder's parts update their owned nodes and return what the others read of
+//!    them (`PartState`: x, v, w at the export nodes, box, moves).
+//! 2. `forces`: the other holders' `PartState`s fill the other parts (so every node
+//!    the halos and contact views here read is current), the tunnelling
 //!    guard runs on the largest move over all parts, the holder's parts compute their
 //!    element forces, then the global figures (body boxes, pairs, closing-speed steps)
 //!    give each body's stable step without any contact force; returns the holder's
