@@ -14,10 +14,10 @@
 //! `--threads 1`, the barrier's median per step and its parts, and checks that every
 //! mode ends with the same final state hash (exit 1 otherwise).
 //!
-//! Run: cargo bench -p crash-tests --bench scaling -- SCENE [END_TIME [REPS]]
-//! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions);
-//! `SCALING_MODES=1t,2t,2w,spin` runs only those modes (1w: master + 1 worker,
-//! split: --split auto). The speed-up is against the first mode run.
+//! Run: cargo bench -p crash-tests --bench scaling -- SCENE [END_TIME [REPS [MODES]]]
+//! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions, all
+//! modes; MODES picks some by their place in the list above, e.g. `0,4`: 1 thread and
+//! the split; the speed-up is over the first mode picked).
 #![allow(clippy::unwrap_used)]
 
 use crash_io::Summary;
@@ -170,28 +170,24 @@ fn main() {
             spin: true,
         },
     ];
-    // SCALING_MODES=1t,2t,1w,2w,split,spin picks some of the modes (a long scene in
-    // the minutes a machine is idle); all six by default
-    let names = ["1t", "2t", "1w", "2w", "split", "spin"];
-    let pick = std::env::var("SCALING_MODES").unwrap_or_default();
-    let chosen: Vec<&str> = pick
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .collect();
-    if let Some(bad) = chosen.iter().find(|c| !names.contains(c)) {
-        eprintln!(
-            "scaling: SCALING_MODES names {bad:?}; valid: {}",
-            names.join(",")
-        );
-        std::process::exit(2);
-    }
-    let modes: Vec<Mode> = modes
-        .iter()
-        .zip(names)
-        .filter(|(_, n)| chosen.is_empty() || chosen.contains(n))
-        .map(|(m, _)| *m)
-        .collect();
+    let modes: Vec<Mode> = match args.get(3) {
+        Some(pick) => pick
+            .split(',')
+            .map(
+                |k| match k.trim().parse::<usize>().ok().and_then(|k| modes.get(k)) {
+                    Some(m) => *m,
+                    None => {
+                        eprintln!(
+                            "scaling: MODES {pick:?}: each must be 0..{}",
+                            modes.len() - 1
+                        );
+                        std::process::exit(2);
+                    }
+                },
+            )
+            .collect(),
+        None => modes.to_vec(),
+    };
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("scaling-run");
     let mut runs: Vec<Vec<Summary>> = vec![Vec::new(); modes.len()];
     for _ in 0..reps {
@@ -208,7 +204,7 @@ fn main() {
         s0.steps
     );
     println!(
-        "| mode | wall [s] | ns/element-cycle | speed-up vs 1 thread | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | final hash |"
+        "| mode | wall [s] | ns/element-cycle | speed-up vs the first | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | final hash |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
     let base = median(runs[0].iter().map(|s| s.wall_time_s).collect());

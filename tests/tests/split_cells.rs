@@ -1,9 +1,10 @@
 //! What a user sees of a group split over workers (issue 16 point 5): each frame's
 //! `worker` and `part` cells give, for every element of a split body, the part that
 //! computes it and that part's worker. Invariants on the showcase split over 2
-//! in-process workers (the sphere cut in 2, the plate whole): the sphere's elements
+//! in-process workers (the sphere and the plate each cut in 2): each body's elements
 //! fall in parts 0 and 1, each part on one worker, the two on different workers, the
-//! cut balanced; the plate is one part on one worker; the frames read back as written.
+//! cut balanced, part 0 on the group's home; the frames read back as written; groups.csv
+//! and summary.json list the group once per holder with the elements computed there.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_tests::cli::{crash_run, last_frame};
@@ -24,36 +25,36 @@ fn every_element_of_a_split_body_names_its_part_and_that_parts_worker() {
     ];
     let out = crash_run(&scene("sphere-on-plate.toml"), "split-cells", &args);
     let last = last_frame(&out);
-    let (split, whole): (Vec<_>, Vec<_>) = last.bodies.iter().partition(|b| b.parts.is_some());
-    assert_eq!(
-        (split.len(), whole.len()),
-        (1, 1),
-        "the sphere split, the plate whole"
-    );
-    let sphere = split[0];
-    let cells = sphere.parts.as_ref().unwrap();
-    let n = sphere.tris.len() + sphere.quads.len();
-    assert_eq!((cells.part.len(), cells.worker.len()), (n, n));
-    assert_eq!(
-        cells.part.iter().copied().collect::<BTreeSet<u32>>(),
-        BTreeSet::from([0, 1])
-    );
-    let mut worker_of_part = [BTreeSet::new(), BTreeSet::new()];
-    for (&q, &w) in cells.part.iter().zip(&cells.worker) {
-        worker_of_part[q as usize].insert(w);
-    }
+    // the sphere above the share is cut; the plate, placed whole, would load the
+    // sphere's first part's worker 1.19x its share: it is cut too
     assert!(
-        worker_of_part.iter().all(|w| w.len() == 1),
-        "{worker_of_part:?}"
+        last.bodies.iter().all(|b| b.parts.is_some()),
+        "the sphere and the plate split"
     );
-    assert_ne!(worker_of_part[0], worker_of_part[1]);
-    // RCB by cost halves the sphere's elements (all triangles: equal weights)
-    let in0 = cells.part.iter().filter(|&&q| q == 0).count();
-    assert!(in0.abs_diff(n - in0) <= 1, "parts of {in0} and {}", n - in0);
-    // the plate: whole, on the group's home, which computes part 0 of the sphere
-    let plate = whole[0];
-    let home = plate.placement.unwrap().worker;
-    assert!(worker_of_part[0].contains(&home), "plate on worker {home}");
+    for body in &last.bodies {
+        let cells = body.parts.as_ref().unwrap();
+        let n = body.tris.len() + body.quads.len();
+        assert_eq!((cells.part.len(), cells.worker.len()), (n, n));
+        assert_eq!(
+            cells.part.iter().copied().collect::<BTreeSet<u32>>(),
+            BTreeSet::from([0, 1])
+        );
+        let mut worker_of_part = [BTreeSet::new(), BTreeSet::new()];
+        for (&q, &w) in cells.part.iter().zip(&cells.worker) {
+            worker_of_part[q as usize].insert(w);
+        }
+        assert!(
+            worker_of_part.iter().all(|w| w.len() == 1),
+            "{worker_of_part:?}"
+        );
+        assert_ne!(worker_of_part[0], worker_of_part[1]);
+        // RCB by cost halves each body's elements (one kind each: equal weights)
+        let in0 = cells.part.iter().filter(|&&q| q == 0).count();
+        assert!(in0.abs_diff(n - in0) <= 1, "parts of {in0} and {}", n - in0);
+        // part 0 on the group's home
+        let home = body.placement.unwrap().worker;
+        assert!(worker_of_part[0].contains(&home), "home {home}");
+    }
 
     // groups.csv and summary.json: the split group has one row per holder, whose
     // elements are the frame's cells on that worker and add up to the group's
@@ -78,15 +79,17 @@ fn every_element_of_a_split_body_names_its_part_and_that_parts_worker() {
         .collect();
     assert_eq!(rows.len(), 2, "one row per holder: {rows:?}");
     let mut per_worker = std::collections::BTreeMap::new();
-    for &w in &cells.worker {
-        *per_worker.entry(w as usize).or_insert(0) += 1;
+    for body in &last.bodies {
+        for &w in &body.parts.as_ref().unwrap().worker {
+            *per_worker.entry(w as usize).or_insert(0) += 1;
+        }
     }
-    *per_worker.entry(home as usize).or_insert(0) += plate.tris.len() + plate.quads.len();
     for (names, worker, elements) in &rows {
         assert_eq!(per_worker.get(worker), Some(elements), "{rows:?}");
-        let on_home = *worker == home as usize;
-        assert_eq!(names.contains("plate"), on_home, "{rows:?}");
-        assert!(names.contains("sphere"), "{rows:?}");
+        assert_eq!(
+            names, "plate sphere",
+            "both bodies have parts on each holder"
+        );
     }
     let groups = &summary.cluster.final_groups;
     assert_eq!(

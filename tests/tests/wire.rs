@@ -426,6 +426,9 @@ fn part_state() -> PartState {
         ],
         v: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.0, 5.5, 1e-310)],
         w: vec![Vec3::new(0.0, 0.0, 0.25), Vec3::new(9.0, -1.0 / 3.0, 2.0)],
+        lo: Vec3::new(-1.0, f64::MIN_POSITIVE, 0.5),
+        hi: Vec3::new(2.0, 1e300, -0.0),
+        far: 3.0e-4,
         max_move: 1.0 / 7.0,
         max_move_node: 41,
     }

@@ -19,8 +19,11 @@ use thiserror::Error;
 /// workers (Split, Share, Halo, Contact, Parts, Assemble, Unsplit; Report.parts).
 /// v10: a split step is two exchanges: Halo is answered by a Report (the shares and
 /// Report.part_dts), Step carries the element steps for the pending contact pass,
-/// Contact runs it before an assembly (Ack); the PartDts reply is gone.
-pub const PROTOCOL_VERSION: u32 = 10;
+/// Contact runs it before an assembly (Ack); the PartDts reply is gone. v11: a part
+/// state carries x, v, w at the part's export nodes only (every owned node in the step
+/// before a view build; v too under the closing-speed rule), its box and its largest
+/// distance from where the views were built.
+pub const PROTOCOL_VERSION: u32 = 11;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -345,6 +345,8 @@ fn part_states_to_pb(parts: &[PartState]) -> pb::PartStates {
                 w: pack3(&p.w),
                 max_move: p.max_move,
                 max_move_node: p.max_move_node,
+                bounds: vec![p.lo.x, p.lo.y, p.lo.z, p.hi.x, p.hi.y, p.hi.z],
+                far: p.far,
             })
             .collect(),
     }
@@ -360,18 +362,21 @@ fn part_states_from_pb(p: Option<&pb::PartStates>) -> Result<Vec<PartState>, Pro
             let x = unpack3(s.id, "part x", &s.x)?;
             let v = unpack3(s.id, "part v", &s.v)?;
             let w = unpack3(s.id, "part w", &s.w)?;
-            if v.len() != x.len() || w.len() != x.len() {
+            let [lx, ly, lz, hx, hy, hz] = s.bounds[..] else {
                 return Err(ProtoError::Invalid(format!(
-                    "part {} of body {}: x, v, w differ in length",
+                    "part {} of body {}: a box is 6 numbers",
                     s.part, s.id
                 )));
-            }
+            };
             Ok(PartState {
                 id: s.id,
                 part: s.part,
                 x,
                 v,
                 w,
+                lo: Vec3::new(lx, ly, lz),
+                hi: Vec3::new(hx, hy, hz),
+                far: s.far,
                 max_move: s.max_move,
                 max_move_node: s.max_move_node,
             })

@@ -86,6 +86,8 @@ pub struct View {
     pub node: Vec<Vec<u32>>,
     /// View element -> element of the whole body, per view body.
     pub element: Vec<Vec<u32>>,
+    /// View node -> (part owning it, its index there), per view body (the fill).
+    from: Vec<Vec<(u32, u32)>>,
     /// The part's own body among `bodies`, and the view index of each owned node.
     own: usize,
     owned_at: Vec<u32>,
@@ -106,7 +108,7 @@ pub struct GroupSplit {
     surfaces: Vec<Option<Surface>>,
     /// Views per body per part, and the positions they were built at.
     pub views: Vec<Vec<View>>,
-    reference: Vec<Vec<Vec3>>,
+    pub(super) reference: Vec<Vec<Vec3>>,
     /// Node motion allowed between view builds [m].
     pub skin: f64,
     /// View builds so far.
@@ -114,6 +116,9 @@ pub struct GroupSplit {
     /// Which parts this process computes (`mine[i][q]`; all of them unless the group is
     /// shared between workers, `partition::shared`): the others' views are not built.
     pub mine: Vec<Vec<bool>>,
+    /// Select the node lists of the other parts' views too (no sub-bodies): a shared
+    /// group derives from them what each part sends the other holders.
+    pub(super) all_lists: bool,
 }
 
 impl GroupSplit {
@@ -159,6 +164,7 @@ impl GroupSplit {
             skin,
             builds: 0,
             mine: parts.iter().map(|&k| vec![true; k]).collect(),
+            all_lists: false,
         })
     }
 
@@ -215,7 +221,8 @@ impl GroupSplit {
         step: u64,
     ) -> Result<Vec<f64>, SplitError> {
         let (dt, closing) = self.figures(&element_dt);
-        self.views_pass(&element_dt, &closing, h, step)?;
+        let rebuild = self.views.is_empty() || self.moved_beyond_skin();
+        self.views_pass(&element_dt, &closing, h, step, rebuild)?;
         Ok(dt)
     }
 
@@ -229,29 +236,65 @@ impl GroupSplit {
     /// a body with no part here): a pair is skipped here only if neither body has a
     /// part here, so every pair's limits reach the shares of the bodies it holds.
     pub(super) fn figures(&mut self, element_dt: &[f64]) -> (Vec<f64>, Closing) {
-        let cfg = self.contact;
-        for (s, b) in self.splits.iter().zip(&mut self.whole) {
-            s.gather_into(b);
-        }
-        let mut dt = element_dt.to_vec();
-        let mut closing = BTreeMap::new();
-        if !cfg.enabled {
-            return (dt, closing);
-        }
+        self.gather_whole();
         let bounds: Vec<(Vec3, Vec3)> = self
             .splits
             .iter()
-            .zip(&self.whole)
-            .map(|(s, b)| {
-                if !b.def.contact {
-                    return (Vec3::zeros(), Vec3::zeros());
-                }
+            .map(|s| {
                 s.parts
                     .iter()
                     .map(|p| crate::mesh::bounds(&p.body.state.x[..p.owned]))
                     .fold(crate::mesh::bounds(&[]), |(lo, hi), (l, u)| {
                         (lo.inf(&l), hi.sup(&u))
                     })
+            })
+            .collect();
+        self.figures_given(element_dt, &bounds)
+    }
+
+    /// Write every part's owned x, v, w into the whole bodies.
+    pub(super) fn gather_whole(&mut self) {
+        for (s, b) in self.splits.iter().zip(&mut self.whole) {
+            s.gather_into(b);
+        }
+    }
+
+    /// Write every part's owned v into the whole bodies (the closing-speed step reads
+    /// the whole bodies' velocities only).
+    pub(super) fn gather_velocities(&mut self) {
+        for (s, b) in self.splits.iter().zip(&mut self.whole) {
+            for p in &s.parts {
+                let v = &p.body.state.v;
+                for (k, &n) in p.node[..p.owned].iter().enumerate() {
+                    b.state.v[n as usize] = v[k];
+                }
+            }
+        }
+    }
+
+    /// `figures` with each body's node box given (`bounds[i]`: min/max over its parts'
+    /// owned nodes) and the whole bodies' velocities current (their positions need not
+    /// be: the closing speed reads velocities and masses only).
+    pub(super) fn figures_given(
+        &self,
+        element_dt: &[f64],
+        bounds: &[(Vec3, Vec3)],
+    ) -> (Vec<f64>, Closing) {
+        let cfg = self.contact;
+        let mut dt = element_dt.to_vec();
+        let mut closing = BTreeMap::new();
+        if !cfg.enabled {
+            return (dt, closing);
+        }
+        let bounds: Vec<(Vec3, Vec3)> = bounds
+            .iter()
+            .zip(&self.whole)
+            .map(|(&bb, b)| {
+                if b.def.contact {
+                    bb
+                } else {
+                    (Vec3::zeros(), Vec3::zeros())
+                }
             })
             .collect();
         let pairs = pairs_of(&self.whole, &cfg, &bounds);
@@ -292,15 +335,16 @@ impl GroupSplit {
         closing: &Closing,
         h: f64,
         step: u64,
-    ) -> Result<(), SplitError> {
+        rebuild: bool,
+    ) -> Result<bool, SplitError> {
         let cfg = self.contact;
         if !cfg.enabled {
             for p in self.splits.iter_mut().flat_map(|s| &mut s.parts) {
                 p.body.state.f_contact.clear();
             }
-            return Ok(());
+            return Ok(false);
         }
-        if self.views.is_empty() || self.moved_beyond_skin() {
+        if rebuild {
             self.build_views()?;
         }
         for (i, views) in self.views.iter_mut().enumerate() {
@@ -308,15 +352,17 @@ impl GroupSplit {
                 if !self.mine[i][q] {
                     continue;
                 }
-                for (vb, (&j, node)) in view
+                for (vb, (&j, from)) in view
                     .bodies
                     .iter_mut()
-                    .zip(view.index.iter().zip(&view.node))
+                    .zip(view.index.iter().zip(&view.from))
                 {
-                    let (s, w) = (&mut vb.state, &self.whole[j].state);
-                    for (k, &n) in node.iter().enumerate() {
-                        let n = n as usize;
-                        (s.x[k], s.v[k], s.w[k]) = (w.x[n], w.v[n], w.w[n]);
+                    // x and v (all the contact stage reads of a node) from the parts
+                    // owning the nodes (what a shared group imports)
+                    let (s, parts) = (&mut vb.state, &self.splits[j].parts);
+                    for (k, &(oq, ok)) in from.iter().enumerate() {
+                        let (w, ok) = (&parts[oq as usize].body.state, ok as usize);
+                        (s.x[k], s.v[k]) = (w.x[ok], w.v[ok]);
                     }
                 }
                 let edt: Vec<f64> = view.index.iter().map(|&j| element_dt[j]).collect();
@@ -345,7 +391,7 @@ impl GroupSplit {
                 }
             }
         }
-        Ok(())
+        Ok(rebuild)
     }
 
     fn moved_beyond_skin(&self) -> bool {
@@ -377,11 +423,13 @@ impl GroupSplit {
                     index: Vec::new(),
                     node: Vec::new(),
                     element: Vec::new(),
+                    from: Vec::new(),
                     own: 0,
                     owned_at: Vec::new(),
                     state: ContactState::default(),
                 };
-                if !self.mine[i][q] {
+                let mine = self.mine[i][q];
+                if !mine && !self.all_lists {
                     // another worker's part: its view is built there
                     vs.push(view);
                     continue;
@@ -393,6 +441,13 @@ impl GroupSplit {
                     }
                     let (node, element) = select(b, &boxes, g, self.rule.ring);
                     if node.is_empty() {
+                        continue;
+                    }
+                    if !mine {
+                        // its node lists only (what it imports)
+                        view.index.push(j);
+                        view.node.push(node);
+                        view.element.push(element);
                         continue;
                     }
                     let mut vb = super::parts::sub_body(b, &node, &element, node.len())?;
@@ -417,6 +472,11 @@ impl GroupSplit {
                             })?;
                     }
                     view.bodies.push(vb);
+                    view.from.push(
+                        node.iter()
+                            .map(|&n| self.splits[j].owner[n as usize])
+                            .collect(),
+                    );
                     view.index.push(j);
                     view.node.push(node);
                     view.element.push(element);

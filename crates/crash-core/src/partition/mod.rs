@@ -7,7 +7,9 @@
 //! `shared` (the wiring) steps such a group with its parts spread over workers.
 
 mod contact;
+mod export;
 mod parts;
+mod report;
 mod shared;
 
 pub use contact::{GroupSplit, SplitError, View, ViewRule};

@@ -135,25 +135,27 @@ impl Split {
     /// Copy every halo node's x, v, w from its owner (after the owners' update, before
     /// the element forces).
     pub fn exchange(&mut self) {
-        let incoming: Vec<Vec<(Vec3, Vec3, Vec3)>> = self
-            .parts
+        for q in 0..self.parts.len() {
+            self.exchange_into(q);
+        }
+    }
+
+    /// Copy the halo nodes' x, v, w of part q from their owners (halo slots are written,
+    /// owned slots read: the order of the parts does not matter).
+    pub fn exchange_into(&mut self, q: usize) {
+        let incoming: Vec<(Vec3, Vec3, Vec3)> = self.parts[q]
+            .halo_from
             .iter()
-            .map(|p| {
-                p.halo_from
-                    .iter()
-                    .map(|&(q, i)| {
-                        let s = &self.parts[q as usize].body.state;
-                        let i = i as usize;
-                        (s.x[i], s.v[i], s.w[i])
-                    })
-                    .collect()
+            .map(|&(o, i)| {
+                let s = &self.parts[o as usize].body.state;
+                let i = i as usize;
+                (s.x[i], s.v[i], s.w[i])
             })
             .collect();
-        for (p, states) in self.parts.iter_mut().zip(incoming) {
-            let (o, s) = (p.owned, &mut p.body.state);
-            for (j, (x, v, w)) in states.into_iter().enumerate() {
-                (s.x[o + j], s.v[o + j], s.w[o + j]) = (x, v, w);
-            }
+        let p = &mut self.parts[q];
+        let (o, s) = (p.owned, &mut p.body.state);
+        for (j, (x, v, w)) in incoming.into_iter().enumerate() {
+            (s.x[o + j], s.v[o + j], s.w[o + j]) = (x, v, w);
         }
     }
 

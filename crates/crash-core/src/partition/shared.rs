@@ -1,15 +1,15 @@
 //! A split group shared between workers (issue 16 point 2, the wiring). Every holder
 //! keeps all parts of the group (`GroupSplit`) but computes only its own (`mine`); the
-//! others are containers for the owned states that arrive from their holders. One step
+//! others are containers for the nodes that arrive from their holders. One step
 //! is two exchanges, the master relaying; the contact pass of a step runs at the start
 //! of the next one:
 //!
 //! 1. `contact` (the previous step's, when one is pending: with each body's element
 //!    step over all holders, the soft penalty's reference step) then `integrate`: the
-//!    holder's parts update their owned nodes and return them (`PartState`: x, v, w
-//!    and the largest move).
-//! 2. `forces`: the other holders' `PartState`s fill the other parts (so the whole
-//!    bodies, the halos and the contact views are current everywhere), the tunnelling
+//!    holder's parts update their owned nodes and return what the others read of
+//!    them (`PartState`: x, v, w at the export nodes, box, moves).
+//! 2. `forces`: the other holders' `PartState`s fill the other parts (so every node
+//!    the halos and contact views here read is current), the tunnelling
 //!    guard runs on the largest move over all parts, the holder's parts compute their
 //!    element forces, then the global figures (body boxes, pairs, closing-speed steps)
 //!    give each body's stable step without any contact force; returns the holder's
@@ -18,37 +18,47 @@
 //!    element steps, which the master sends with the next step (or with a `Contact`
 //!    before the whole bodies are assembled).
 //!
-//! Every holder holds the whole bodies' x, v, w after step 2, so the global figures
-//! (body boxes, pairs, each body's mass-weighted mean velocity for the closing-speed
-//! step, the view rebuild rule) are computed from the same numbers in the same order
-//! on every holder: no order-free reduction is needed.
+//! What crosses the wire is what another part reads: each part sends x, v, w of its
+//! *export nodes* only (`SharedGroup::export`: its owned nodes in another part's halo
+//! or contact view), plus its box and its largest distance from where the views were
+//! built. Every holder derives the same export lists from the split and the views of
+//! all parts (node lists only for the parts held elsewhere) at each view build. The
+//! global figures need no whole body: the body boxes are the min/max of the parts'
+//! boxes, the view rebuild rule the max of the parts' distances, and the closing-speed
+//! step reads the whole bodies' velocities (each body's mass-weighted mean velocity,
+//! summed in node order, and the largest speed relative to it), so under
+//! `SpeedRule::LimitDt` every owned node's v is sent each step: the same numbers in
+//! the same order on every holder, so no order-free reduction and no change of bits.
+//! A view build needs the whole bodies: once some node has moved farther than the
+//! skin less one step's tunnelling budget, the next integration sends every owned
+//! node, and the contact pass after it rebuilds the views (on every holder alike).
 
 use super::contact::Closing;
+use super::export::exports;
+use super::report::{add_energy, add_reaction, element_in_whole, node_in_whole};
 use super::GroupSplit;
 use crate::body::{Body, BodyEnergy, BodyState};
 use crate::clock::Clock;
-use crate::contact::{check_moves, ContactConfig};
+use crate::contact::{check_moves, ContactConfig, SpeedRule};
 use crate::error::{CoreError, Fault};
 use crate::forces::ForceSums;
 use crate::group::{BodyReport, Reaction};
 use crate::integrate::NodeSums;
 use crate::Vec3;
 
+pub use super::export::PartState;
+pub use super::report::merge_report;
 pub use super::SplitError;
 
-/// The owned nodes of one part after its integration: what the other holders of its
-/// group import.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PartState {
-    /// Body id and part index.
-    pub id: u32,
-    pub part: u32,
-    pub x: Vec<Vec3>,
-    pub v: Vec<Vec3>,
-    pub w: Vec<Vec3>,
-    /// Largest move of an owned node in the step and that node (whole-body index).
-    pub max_move: f64,
-    pub max_move_node: u32,
+/// A part's figures of one step (its own, or imported with its `PartState`).
+#[derive(Debug, Clone, Copy)]
+struct PartFigures {
+    lo: Vec3,
+    hi: Vec3,
+    far: f64,
+    max_move: f64,
+    /// Whole-body index.
+    max_move_node: u32,
 }
 
 /// The smallest element critical step of body `id` over some of its parts, and its
@@ -84,6 +94,27 @@ pub struct SharedGroup {
     forces: Vec<Vec<Option<ForceSums>>>,
     /// The contact pass the last `forces` left for the next step.
     pending: Option<Pending>,
+    /// Per body and part: the local indices of the owned nodes some other part reads
+    /// (its halo and contact-view nodes), in order: all that crosses the wire in a step
+    /// without a view build. The same on every holder (a function of the split and of
+    /// the whole bodies' positions at the last view build).
+    pub export: Vec<Vec<Vec<u32>>>,
+    /// Per body and part: the figures of the last integration (own parts only).
+    figures: Vec<Vec<Option<PartFigures>>>,
+    /// The next integration sends every owned node (a view build follows it).
+    due: bool,
+    /// The last integration sent every owned node.
+    sent_full: bool,
+    /// The whole bodies were gathered in the last `forces`: the pending pass rebuilds
+    /// the views there.
+    rebuild: bool,
+    /// A view build is due when some node has moved this far from where the views
+    /// were built: one more step (at most the tunnelling guard's budget per node)
+    /// keeps it within the skin, and the build needs a step to gather the bodies.
+    trigger: f64,
+    /// Every node's velocity is sent each step (the closing-speed step reads the whole
+    /// bodies' velocities).
+    all_v: bool,
 }
 
 /// A contact pass left for later: the step's length and number, and the closing-speed
@@ -120,15 +151,32 @@ impl SharedGroup {
             st.hourglass_now = b.state.hourglass_now;
         }
         split.mine = mine;
+        split.all_lists = true;
         let sums = parts.iter().map(|&k| vec![None; k]).collect();
         let forces = parts.iter().map(|&k| vec![None; k]).collect();
+        let figures = parts.iter().map(|&k| vec![None; k]).collect();
         let ids = bodies.iter().map(|b| b.def.id).collect();
+        let budget = bodies
+            .iter()
+            .filter(|b| b.def.contact)
+            .map(|b| contact.step_budget(b))
+            .fold(0.0, f64::max);
+        // 1 % below the exact bound: the distances are rounded
+        let trigger = 0.99 * (split.skin - budget);
+        let export = exports(&split);
         Ok(Self {
             split,
             ids,
             sums,
             forces,
             pending: None,
+            export,
+            figures,
+            due: contact.enabled,
+            sent_full: false,
+            rebuild: false,
+            trigger,
+            all_v: contact.enabled && contact.speed_rule == SpeedRule::LimitDt,
         })
     }
 
@@ -148,10 +196,14 @@ impl SharedGroup {
     pub fn integrate(&mut self, clock: &Clock, h: f64) -> Result<Vec<PartState>, Fault> {
         let sc = clock.step_of(h);
         let gravity = self.split.gravity;
+        let full = self.due;
         let mut out = Vec::new();
         for (i, s) in self.split.splits.iter_mut().enumerate() {
+            let contact = self.split.whole[i].def.contact;
+            let reference = self.split.reference.get(i);
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
+                self.figures[i][q] = None;
                 if !self.split.mine[i][q] {
                     continue;
                 }
@@ -160,18 +212,48 @@ impl SharedGroup {
                     .integrate(&sc, gravity)
                     .map_err(|f| node_in_whole(f, &p.node))?;
                 let st = &p.body.state;
+                let o = p.owned;
+                let (lo, hi) = crate::mesh::bounds(&st.x[..o]);
+                let far = match reference {
+                    Some(r) if contact => p.node[..o]
+                        .iter()
+                        .zip(&st.x[..o])
+                        .map(|(&g, x)| (x - r[g as usize]).norm())
+                        .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a }),
+                    _ => 0.0,
+                };
+                let ex = &self.export[i][q];
+                let pick = |a: &[Vec3], all: bool| -> Vec<Vec3> {
+                    if all {
+                        a[..o].to_vec()
+                    } else {
+                        ex.iter().map(|&k| a[k as usize]).collect()
+                    }
+                };
+                let fig = PartFigures {
+                    lo,
+                    hi,
+                    far,
+                    max_move: n.max_move,
+                    max_move_node: p.node[n.max_move_node],
+                };
                 out.push(PartState {
                     id: self.ids[i],
                     part: q as u32,
-                    x: st.x[..p.owned].to_vec(),
-                    v: st.v[..p.owned].to_vec(),
-                    w: st.w[..p.owned].to_vec(),
-                    max_move: n.max_move,
-                    max_move_node: p.node[n.max_move_node],
+                    x: pick(&st.x, full),
+                    v: pick(&st.v, full || self.all_v),
+                    w: pick(&st.w, full),
+                    lo,
+                    hi,
+                    far,
+                    max_move: fig.max_move,
+                    max_move_node: fig.max_move_node,
                 });
+                self.figures[i][q] = Some(fig);
                 self.sums[i][q] = Some(n);
             }
         }
+        self.sent_full = full;
         Ok(out)
     }
 
@@ -198,11 +280,7 @@ impl SharedGroup {
             .into());
         }
         let step = clock.after(h).step;
-        let mut got: Vec<Vec<Option<(f64, u32)>>> = self
-            .sums
-            .iter()
-            .map(|s| s.iter().map(|_| None).collect())
-            .collect();
+        let mut got = self.figures.clone();
         for p in imports {
             let bad = |what: &str| CoreError::Other {
                 body: format!("body {}", p.id),
@@ -218,32 +296,51 @@ impl SharedGroup {
                 return Err(bad("not expected here, or twice").into());
             }
             let part = &mut self.split.splits[i].parts[q];
-            let o = part.owned;
-            if p.x.len() != o || p.v.len() != o || p.w.len() != o {
-                return Err(bad("wrong node count").into());
+            let (o, ex) = (part.owned, &self.export[i][q]);
+            if self.sent_full && p.x.len() != o {
+                return Err(bad("every owned node expected (a view build)").into());
             }
             let st = &mut part.body.state;
-            st.x[..o].copy_from_slice(&p.x);
-            st.v[..o].copy_from_slice(&p.v);
-            st.w[..o].copy_from_slice(&p.w);
-            got[i][q] = Some((p.max_move, p.max_move_node));
+            for (to, from) in [(&mut st.x, &p.x), (&mut st.v, &p.v), (&mut st.w, &p.w)] {
+                if from.len() == o {
+                    to[..o].copy_from_slice(from);
+                } else if from.len() == ex.len() {
+                    for (&k, y) in ex.iter().zip(from) {
+                        to[k as usize] = *y;
+                    }
+                } else {
+                    return Err(bad("wrong node count").into());
+                }
+            }
+            got[i][q] = Some(PartFigures {
+                lo: p.lo,
+                hi: p.hi,
+                far: p.far,
+                max_move: p.max_move,
+                max_move_node: p.max_move_node,
+            });
         }
-        // the largest move of each body over all parts (ties: the lowest node)
-        let mut moves = Vec::with_capacity(self.ids.len());
-        for (i, s) in self.split.splits.iter().enumerate() {
-            let mut m = (0.0f64, u32::MAX);
-            for (q, p) in s.parts.iter().enumerate() {
-                let this = match (&self.sums[i][q], got[i][q]) {
-                    (Some(n), _) => (n.max_move, p.node[n.max_move_node]),
-                    (None, Some(g)) => g,
-                    (None, None) => {
-                        return Err(CoreError::Other {
+        let got: Vec<Vec<PartFigures>> = got
+            .into_iter()
+            .enumerate()
+            .map(|(i, g)| {
+                g.into_iter()
+                    .enumerate()
+                    .map(|(q, f)| {
+                        f.ok_or_else(|| CoreError::Other {
                             body: format!("body {}", self.ids[i]),
                             what: format!("part {q} neither computed here nor imported"),
-                        }
-                        .into())
-                    }
-                };
+                        })
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .collect::<Result<_, _>>()?;
+        // the largest move of each body over all parts (ties: the lowest node)
+        let mut moves = Vec::with_capacity(self.ids.len());
+        for g in &got {
+            let mut m = (0.0f64, u32::MAX);
+            for f in g {
+                let this = (f.max_move, f.max_move_node);
                 if this.0 > m.0 || (this.0 == m.0 && this.1 < m.1) {
                     m = this;
                 }
@@ -251,9 +348,31 @@ impl SharedGroup {
             moves.push((m.0, if m.1 == u32::MAX { 0 } else { m.1 as usize }));
         }
         check_moves(&self.split.whole, &self.split.contact, &moves, h, step)?;
+        if self.sent_full {
+            // every node arrived: the whole bodies for the view build of the pending pass
+            self.split.gather_whole();
+            self.rebuild = true;
+            self.due = false;
+        } else {
+            let far = got
+                .iter()
+                .zip(&self.split.whole)
+                .filter(|(_, b)| b.def.contact)
+                .flat_map(|(g, _)| g.iter().map(|f| f.far))
+                .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a });
+            // NaN: a fault is found elsewhere; build anyway
+            self.due = far > self.trigger || far.is_nan();
+            if self.all_v {
+                self.split.gather_velocities();
+            }
+        }
         let mut out = vec![None; self.ids.len()];
         for (i, s) in self.split.splits.iter_mut().enumerate() {
-            s.exchange();
+            for (q, m) in self.split.mine[i].iter().enumerate() {
+                if *m {
+                    s.exchange_into(q);
+                }
+            }
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.forces[i][q] = None;
                 if !self.split.mine[i][q] {
@@ -276,7 +395,15 @@ impl SharedGroup {
             .iter()
             .map(|d| d.map_or(f64::INFINITY, |d| d.dt))
             .collect();
-        let (limit, closing) = self.split.figures(&local);
+        let bounds: Vec<(Vec3, Vec3)> = got
+            .iter()
+            .map(|g| {
+                g.iter().fold(crate::mesh::bounds(&[]), |(lo, hi), f| {
+                    (lo.inf(&f.lo), hi.sup(&f.hi))
+                })
+            })
+            .collect();
+        let (limit, closing) = self.split.figures_given(&local, &bounds);
         let mut shares = Vec::new();
         for (i, s) in self.split.splits.iter().enumerate() {
             let mut r: Option<BodyReport> = None;
@@ -340,7 +467,21 @@ impl SharedGroup {
             .into());
         };
         let edt: Vec<f64> = dt.iter().map(|d| d.dt).collect();
-        self.split.views_pass(&edt, &p.closing, p.h, p.step)
+        let rebuild = std::mem::take(&mut self.rebuild);
+        if self.split.views.is_empty() && !rebuild && self.split.contact.enabled {
+            return Err(CoreError::Other {
+                body: "split group".into(),
+                what: "contact views to build without the whole bodies".into(),
+            }
+            .into());
+        }
+        if self
+            .split
+            .views_pass(&edt, &p.closing, p.h, p.step, rebuild)?
+        {
+            self.export = exports(&self.split);
+        }
+        Ok(())
     }
 
     /// The full states of the parts computed here (for the assembly of whole bodies).
@@ -439,98 +580,4 @@ impl SharedGroup {
         }
         Ok(out)
     }
-}
-
-/// Join two holders' shares of one body's report: energies summed (another order than
-/// the whole body's: ulps), the box and the move order-free, the element step and hot
-/// element by value then lowest element.
-pub fn merge_report(a: BodyReport, b: BodyReport) -> BodyReport {
-    let (dt, dt_element) = if b.stable_dt < a.stable_dt
-        || (b.stable_dt == a.stable_dt && b.dt_element < a.dt_element)
-    {
-        (b.stable_dt, b.dt_element)
-    } else {
-        (a.stable_dt, a.dt_element)
-    };
-    let (hot_density, hot_element) = if b.hot_density > a.hot_density
-        || (b.hot_density == a.hot_density && b.hot_element < a.hot_element)
-    {
-        (b.hot_density, b.hot_element)
-    } else {
-        (a.hot_density, a.hot_element)
-    };
-    let reaction = match (a.reaction, b.reaction) {
-        (Some(x), Some(y)) => Some(add_reaction(x, y)),
-        (x, y) => x.or(y),
-    };
-    BodyReport {
-        id: a.id,
-        energy: add_energy(a.energy, b.energy),
-        stable_dt: dt,
-        dt_element,
-        lo: a.lo.inf(&b.lo),
-        hi: a.hi.sup(&b.hi),
-        max_move: a.max_move.max(b.max_move),
-        hot_element,
-        hot_density,
-        reaction,
-    }
-}
-
-fn add_energy(a: BodyEnergy, b: BodyEnergy) -> BodyEnergy {
-    BodyEnergy {
-        kinetic: a.kinetic + b.kinetic,
-        internal: a.internal + b.internal,
-        hourglass: a.hourglass + b.hourglass,
-        contact: a.contact + b.contact,
-        damping: a.damping + b.damping,
-        external: a.external + b.external,
-    }
-}
-
-fn add_reaction(a: Reaction, b: Reaction) -> Reaction {
-    Reaction {
-        force: a.force + b.force,
-        moment: a.moment + b.moment,
-        moment_origin: a.moment_origin + b.moment_origin,
-    }
-}
-
-/// A fault of a part's integration with the whole body's node number.
-fn node_in_whole(mut f: Fault, node: &[u32]) -> Fault {
-    if let Fault::NonFinite { place, .. } = &mut f {
-        if let Some(n) = place
-            .strip_prefix("node ")
-            .and_then(|n| n.parse::<usize>().ok())
-        {
-            if let Some(&g) = node.get(n) {
-                *place = format!("node {g}");
-            }
-        }
-    }
-    f
-}
-
-/// A fault of a part's element pass with the whole body's element number.
-fn element_in_whole(mut f: Fault, element: &[u32]) -> Fault {
-    let map = |e: &mut usize| {
-        if let Some(&g) = element.get(*e) {
-            *e = g as usize;
-        }
-    };
-    match &mut f {
-        Fault::Collapsed { element: e, .. } | Fault::Inverted { element: e, .. } => map(e),
-        Fault::NonFinite { place, .. } => {
-            if let Some(n) = place
-                .strip_prefix("element ")
-                .and_then(|n| n.parse::<usize>().ok())
-            {
-                if let Some(&g) = element.get(n) {
-                    *place = format!("element {g}");
-                }
-            }
-        }
-        _ => {}
-    }
-    f
 }

@@ -12,7 +12,8 @@
 //! contact pass is the node pass (the segment pass does not run on parts). Each
 //! body whose cost exceeds the group's cost over the workers is cut into one part per
 //! live worker (part q on slot q); the smaller bodies stay whole, each on the least
-//! loaded slot so far. Slot 0 is the group's worker (its *home*): it answers for the
+//! loaded slot so far, unless that would load the slot more than 5 % above the share:
+//! then they are cut too. Slot 0 is the group's worker (its *home*): it answers for the
 //! bodies (frames, states) from the whole bodies it assembles.
 
 use super::Master;
@@ -24,6 +25,11 @@ use crash_core::BodyReport;
 use crash_io::PartCells;
 use crash_link::{BodyLoad, Command, Reply, SplitSpec, StepReport, WorkerLink};
 use std::collections::BTreeMap;
+
+/// How far above its share a slot of a split group may be loaded by a body placed
+/// whole before that body is cut too (cutting costs a halo and contact views: a few
+/// per cent of the body's work).
+const CUT_TOLERANCE: f64 = 0.05;
 
 /// A group split over workers.
 #[derive(Debug, Clone)]
@@ -138,20 +144,36 @@ impl<L: WorkerLink> Master<'_, L> {
         workers.extend(live.iter().copied().filter(|&w| w != home));
         let share = cost / k as f64;
         let mut load = vec![0.0; k];
-        let (mut parts, mut holder) = (Vec::new(), Vec::new());
-        for &i in &idx {
+        let (mut parts, mut holder) = (vec![1u32; idx.len()], vec![Vec::new(); idx.len()]);
+        // the bodies above the share are cut first, one part per slot; then each other
+        // body goes whole to the least loaded slot, unless that slot would exceed the
+        // share by more than CUT_TOLERANCE: then it is cut too (the showcase: the sphere
+        // in 2, then the plate, which would load one slot 1.19x the share, in 2)
+        let cut = |c: f64, elements: usize| elements >= k && c > share;
+        for (b, &i) in idx.iter().enumerate() {
+            if cut(self.cost[i], self.info[i].elements) {
+                parts[b] = k as u32;
+                holder[b] = (0..k as u32).collect();
+                for l in &mut load {
+                    *l += self.cost[i] / k as f64;
+                }
+            }
+        }
+        for (b, &i) in idx.iter().enumerate() {
             let c = self.cost[i];
-            if c > share && self.info[i].elements >= k {
-                parts.push(k as u32);
-                holder.push((0..k as u32).collect());
+            if parts[b] > 1 {
+                continue;
+            }
+            let s = (0..k).fold(0, |a, b| if load[b] < load[a] { b } else { a });
+            if load[s] + c > share * (1.0 + CUT_TOLERANCE) && self.info[i].elements >= k {
+                parts[b] = k as u32;
+                holder[b] = (0..k as u32).collect();
                 for l in &mut load {
                     *l += c / k as f64;
                 }
             } else {
-                let s = (0..k).fold(0, |a, b| if load[b] < load[a] { b } else { a });
                 load[s] += c;
-                parts.push(1);
-                holder.push(vec![s as u32]);
+                holder[b] = vec![s as u32];
             }
         }
         if parts.iter().all(|&p| p == 1) && holder.iter().all(|h| h[0] == 0) {

@@ -182,6 +182,7 @@ impl Engine {
             let s = &mut self.shared[k];
             let t = Instant::now();
             if s.g.contact_pending() {
+                let builds = s.g.split.builds;
                 let r = match dts_of(&s.g, contact) {
                     Ok(d) => s.g.contact(&d),
                     Err(e) => return Some(Reply::Error(e.to_string())),
@@ -189,6 +190,15 @@ impl Engine {
                 if let Err(e) = r {
                     let first = s.first();
                     return Some(self.failed(first, e));
+                }
+                if s.g.split.builds != builds {
+                    tracing::debug!(
+                        "step {}: split group of body {}: contact views built ({} so far), export nodes per part {:?}",
+                        at.step,
+                        s.first(),
+                        s.g.split.builds,
+                        s.g.export.iter().map(|e| e.iter().map(Vec::len).collect::<Vec<_>>()).collect::<Vec<_>>()
+                    );
                 }
             }
             let r: Result<Vec<PartState>, _> = s.g.integrate(at, dt);

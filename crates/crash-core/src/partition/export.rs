@@ -1,0 +1,70 @@
+//! What a part of a group shared between workers sends the other holders each step
+//! (`PartState`), and which of its nodes (`exports`: the owned nodes another part
+//! reads). Every holder derives the same lists from the split and the views.
+
+use super::GroupSplit;
+use crate::Vec3;
+
+/// The owned nodes of one part after its integration that the other holders of its
+/// group import, and its figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PartState {
+    /// Body id and part index.
+    pub id: u32,
+    pub part: u32,
+    /// Each of x, v, w: at every owned node (in order), or at the part's export nodes
+    /// only (`SharedGroup::export`, known to every holder from the last view build).
+    pub x: Vec<Vec3>,
+    pub v: Vec<Vec3>,
+    pub w: Vec<Vec3>,
+    /// Box of the owned nodes (the body's box is the min/max over its parts).
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Largest distance of an owned node from where the contact views were built.
+    pub far: f64,
+    /// Largest move of an owned node in the step and that node (whole-body index).
+    pub max_move: f64,
+    pub max_move_node: u32,
+}
+
+/// Per body and part: the owned nodes (local indices) that another part reads, as a
+/// halo node or a node of its contact view (the views of every part, built or not).
+pub(super) fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
+    let mut needed: Vec<Vec<bool>> = split
+        .whole
+        .iter()
+        .map(|b| vec![false; b.def.node_count()])
+        .collect();
+    for (i, s) in split.splits.iter().enumerate() {
+        for (q, p) in s.parts.iter().enumerate() {
+            for &n in &p.node[p.owned..] {
+                needed[i][n as usize] = true;
+            }
+            let Some(view) = split.views.get(i).and_then(|v| v.get(q)) else {
+                continue;
+            };
+            for (&j, nodes) in view.index.iter().zip(&view.node) {
+                for &n in nodes {
+                    if j != i || split.splits[j].owner[n as usize].0 as usize != q {
+                        needed[j][n as usize] = true;
+                    }
+                }
+            }
+        }
+    }
+    split
+        .splits
+        .iter()
+        .zip(&needed)
+        .map(|(s, need)| {
+            s.parts
+                .iter()
+                .map(|p| {
+                    (0..p.owned as u32)
+                        .filter(|&k| need[p.node[k as usize] as usize])
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
+}
