@@ -96,8 +96,8 @@ pub fn def_to_pb(b: &BodyDef) -> pb::BodyDef {
     let mut quad_ref = Vec::with_capacity(QUAD_REF * b.quads.len());
     for e in &b.quads {
         quad_nodes.extend_from_slice(&e.nodes);
-        quad_ref.extend_from_slice(&e.bx0);
-        quad_ref.extend_from_slice(&e.by0);
+        quad_ref.extend_from_slice(&e.bx0_all());
+        quad_ref.extend_from_slice(&e.by0_all());
         quad_ref.extend_from_slice(&e.gamma);
         quad_ref.push(e.area0);
         quad_ref.extend_from_slice(&e.e0);
@@ -291,8 +291,17 @@ pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
         .iter_mut()
         .zip(d.quad_ref.chunks_exact(QUAD_REF))
     {
-        e.bx0.copy_from_slice(&r[0..4]);
-        e.by0.copy_from_slice(&r[4..8]);
+        // the element keeps the gradients of nodes 3 and 4; those of 1 and 2 must be
+        // their exact negatives (`QuadElem::bx0_all`)
+        let (bx, by) = (&r[0..4], &r[4..8]);
+        let antisymmetric = |g: &[f64]| (0..2).all(|i| g[i].to_bits() == (-g[i + 2]).to_bits());
+        if !(antisymmetric(bx) && antisymmetric(by)) {
+            return Err(ProtoError::Invalid(format!(
+                "body {id}: quad reference gradients are not antisymmetric across the diagonals"
+            )));
+        }
+        e.bx0.copy_from_slice(&bx[2..4]);
+        e.by0.copy_from_slice(&by[2..4]);
         e.gamma.copy_from_slice(&r[8..12]);
         e.area0 = r[12];
         e.e0.copy_from_slice(&r[13..16]);

@@ -31,11 +31,11 @@ const HG: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct QuadElem {
     pub nodes: [u32; 4],
-    /// Reference gradients, antisymmetric across the diagonals: bx0[0] = -bx0[2] and
-    /// bx0[1] = -bx0[3] exactly (likewise by0; `quad_gradients`). The kernel reads only
-    /// bx0[2..4], by0[2..4].
-    pub bx0: [f64; 4],
-    pub by0: [f64; 4],
+    /// Reference gradients of nodes 3 and 4. Those of nodes 1 and 2 are their
+    /// negatives, exactly (`quad_gradients`; `bx0_all`): not stored, so that the
+    /// element loop streams 32 bytes less per element and cycle.
+    pub bx0: [f64; 2],
+    pub by0: [f64; 2],
     /// Hourglass shape vector gamma_I = (h_I - (h.X) bx_I - (h.Y) by_I) / 4.
     pub gamma: [f64; 4],
     pub area0: f64,
@@ -63,8 +63,8 @@ impl QuadElem {
         let bb: f64 = (0..4).map(|i| bx0[i] * bx0[i] + by0[i] * by0[i]).sum();
         Self {
             nodes,
-            bx0,
-            by0,
+            bx0: [bx0[2], bx0[3]],
+            by0: [by0[2], by0[3]],
             gamma,
             area0,
             e0,
@@ -72,6 +72,18 @@ impl QuadElem {
             k_w: stab.hourglass_w * sec.bending * area0 * bb * bb,
             k_th: stab.hourglass_rotation * sec.bending * area0 * bb,
         }
+    }
+
+    /// The reference x-gradients of the four nodes (-b3, -b4, b3, b4).
+    pub fn bx0_all(&self) -> [f64; 4] {
+        let [b3, b4] = self.bx0;
+        [-b3, -b4, b3, b4]
+    }
+
+    /// The reference y-gradients of the four nodes.
+    pub fn by0_all(&self) -> [f64; 4] {
+        let [b3, b4] = self.by0;
+        [-b3, -b4, b3, b4]
     }
 }
 
@@ -339,17 +351,24 @@ mod tests {
 
     #[test]
     fn reference_gradients_are_exactly_antisymmetric_across_the_diagonals() {
+        // what lets QuadElem keep the gradients of nodes 3 and 4 only
         let x = [
             Vec3::new(0.0, 0.0, 0.0),
             Vec3::new(1.3, 0.1, 0.01),
             Vec3::new(1.1, 0.9, -0.02),
             Vec3::new(-0.2, 0.7, 0.01),
         ];
+        let (fr, c) = Frame::quad(&x);
+        let xl = x.map(|p| (p - c).dot(&fr.e1));
+        let yl = x.map(|p| (p - c).dot(&fr.e2));
+        let (bx0, by0, _) = quad_gradients(xl, yl);
+        for i in 0..2 {
+            assert_eq!(bx0[i].to_bits(), (-bx0[i + 2]).to_bits());
+            assert_eq!(by0[i].to_bits(), (-by0[i + 2]).to_bits());
+        }
         let sec = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid"), 0.01);
         let q = QuadElem::new([0, 1, 2, 3], &x, &sec, &Stabilization::default());
-        for i in 0..2 {
-            assert_eq!(q.bx0[i].to_bits(), (-q.bx0[i + 2]).to_bits());
-            assert_eq!(q.by0[i].to_bits(), (-q.by0[i + 2]).to_bits());
-        }
+        assert_eq!(q.bx0_all().map(f64::to_bits), bx0.map(f64::to_bits));
+        assert_eq!(q.by0_all().map(f64::to_bits), by0.map(f64::to_bits));
     }
 }

@@ -475,6 +475,42 @@ mod x86 {
                         }
                     }
                 }
+                #[inline(always)]
+                fn stream_rows6<const N: usize>(cols: &[[Self; 6]; N], rows: &mut [[f64; 6]]) {
+                    // 16-byte non-temporal stores need 16-byte aligned rows: a row is
+                    // 48 bytes, so every row is when the first one is
+                    if rows.as_ptr() as usize % 16 != 0 {
+                        for (i, c) in cols.iter().enumerate() {
+                            Self::scatter_rows6(c, rows, i, N);
+                        }
+                        return;
+                    }
+                    for k in 0..$w / 4 {
+                        // SAFETY: see the module documentation.
+                        let mut t = unsafe { [[(_mm256_setzero_pd(), _mm_setzero_pd()); 4]; N] };
+                        for (i, c) in cols.iter().enumerate() {
+                            // SAFETY: see the module documentation.
+                            t[i] = unsafe { transpose4x6($quarter(c, k)) };
+                        }
+                        // lane by lane, each lane's N rows in order: the stores fill
+                        // whole lines one after the other (a write-combining buffer
+                        // flushed half full costs a read of the line after all)
+                        for j in 0..4 {
+                            for (i, ti) in t.iter().enumerate() {
+                                let (lo, hi) = ti[j];
+                                let r = &mut rows[N * (4 * k + j) + i];
+                                // SAFETY: see the module documentation; `r` has 6 f64
+                                // and is 16-byte aligned (checked above).
+                                unsafe { stream_row6(r, lo, hi) };
+                            }
+                        }
+                    }
+                }
+                #[inline(always)]
+                fn stream_fence() {
+                    // SAFETY: SSE is part of x86-64.
+                    unsafe { _mm_sfence() }
+                }
             }
         };
     }
@@ -598,6 +634,20 @@ mod x86 {
         unsafe {
             _mm256_storeu_pd(p, lo);
             _mm_storeu_pd(p.add(4), hi);
+        }
+    }
+
+    /// Store (lo, hi) as the six values of `r` with non-temporal stores (`r` 16-byte
+    /// aligned).
+    #[inline(always)]
+    unsafe fn stream_row6(r: &mut [f64; 6], lo: __m256d, hi: __m128d) {
+        let p = r.as_mut_ptr();
+        // SAFETY: p points to 6 writable f64, 16-byte aligned (the caller checks); AVX is
+        // available (called only from Avx4/Avx8 methods, see the module documentation).
+        unsafe {
+            _mm_stream_pd(p, _mm256_castpd256_pd128(lo));
+            _mm_stream_pd(p.add(2), _mm256_extractf128_pd::<1>(lo));
+            _mm_stream_pd(p.add(4), hi);
         }
     }
 
