@@ -20,7 +20,9 @@ use thiserror::Error;
 /// v10: a split step is two exchanges: Halo is answered by a Report (the shares and
 /// Report.part_dts), Step carries the element steps for the pending contact pass,
 /// Contact runs it before an assembly (Ack); the PartDts reply is gone.
-pub const PROTOCOL_VERSION: u32 = 10;
+/// v11: quad reference data in stride 11 (what the element stores: gradients of nodes 3
+/// and 4, h.X, h.Y, area, e0, bb; was 19).
+pub const PROTOCOL_VERSION: u32 = 11;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -5,7 +5,7 @@
 //! results do not depend on the SIMD path (`simd`) nor on the chunking.
 
 use super::plate::{Consts, ShellL};
-use super::quad::{quad_kernel, HgL, QuadElem, QuadIn};
+use super::quad::{hourglass_shape, hourglass_stiffness, quad_kernel, HgL, QuadElem, QuadIn};
 use super::real::{Lanes, Real, V3};
 use super::simd::Lanewise;
 use super::tri::{tri_kernel, KernelOut, TriElem, TriIn};
@@ -281,6 +281,7 @@ impl<S: Real> QuadLanes<S> {
 /// Gather S::W quads into `l` (every input and resultant).
 #[inline(always)]
 fn quad_gather<S: Lanes>(
+    kc: &Consts<S>,
     els: &[QuadElem],
     nodes: Nodes<'_>,
     sts: &[ShellState],
@@ -305,7 +306,6 @@ fn quad_gather<S: Lanes>(
             #[inline(always)]
             |k| els[k].nodes[i] as usize,
         );
-        q.gamma[i] = gather(|k| els[k].gamma[i]);
     }
     q.bx0 = [gather(|k| els[k].bx0[0]), gather(|k| els[k].bx0[1])];
     q.by0 = [gather(|k| els[k].by0[0]), gather(|k| els[k].by0[1])];
@@ -315,9 +315,10 @@ fn quad_gather<S: Lanes>(
         gather(|k| els[k].e0[2]),
     ];
     q.area0 = gather(|k| els[k].area0);
-    q.k_m = gather(|k| els[k].k_m);
-    q.k_w = gather(|k| els[k].k_w);
-    q.k_th = gather(|k| els[k].k_th);
+    // derived, not stored: fewer bytes per element (QuadElem)
+    let (hx, hy) = (gather(|k| els[k].hx), gather(|k| els[k].hy));
+    q.gamma = hourglass_shape(q.bx0, q.by0, hx, hy);
+    [q.k_m, q.k_w, q.k_th] = hourglass_stiffness(kc, q.area0, gather(|k| els[k].bb));
     l.st = gather_shell(sts);
     l.hg = HgL {
         w: gather(|k| hgs[k].w),
@@ -411,7 +412,7 @@ fn quad_batch<S: Lanes, const KELVIN: bool>(
     buf: &mut QuadLanes<S>,
     stream: bool,
 ) -> Result<(), (usize, ElemFailure)> {
-    quad_gather(els, nodes, sts, hgs, buf);
+    quad_gather(k, els, nodes, sts, hgs, buf);
     quad_compute::<S, KELVIN>(k, sec, e0, h, buf, sums)?;
     quad_scatter::<S, KELVIN>(buf, sts, hgs, slots, stream);
     Ok(())
