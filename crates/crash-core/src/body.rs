@@ -264,7 +264,7 @@ impl Body {
         let quads: Vec<QuadElem> = mesh
             .quads
             .iter()
-            .map(|q| QuadElem::new(*q, &q.map(|n| x[n as usize]), &section, &stab))
+            .map(|q| QuadElem::new(*q, &q.map(|n| x[n as usize])))
             .collect();
         let rho_t = section.material.density * section.thickness;
         let t2 = section.thickness * section.thickness / 12.0;

@@ -34,6 +34,38 @@ pub const CHUNK: usize = 256;
 // has 80, its plate 15) can end with one thread finishing a piece of 10-20 chunks alone
 // (docs/performance.md, session 9). Which thread runs a chunk never changes its result.
 
+/// Whether the element loop of a body whose per-cycle data (reference data, resultant
+/// states and force slots) take `bytes` writes its force slots with non-temporal stores:
+/// when those data exceed the last-level cache, the slots written by a normal store (which
+/// first reads each line it fills) are gone from the cache before the integration reads
+/// them. `CRASH_STREAM=0|1` in the environment, read once, overrides the rule (for
+/// measurements); the values written are the same either way.
+pub fn stream_slots(bytes: usize) -> bool {
+    static MODE: std::sync::OnceLock<Option<bool>> = std::sync::OnceLock::new();
+    let mode = MODE.get_or_init(|| match std::env::var("CRASH_STREAM").as_deref() {
+        Ok("0") => Some(false),
+        Ok("1") => Some(true),
+        _ => None,
+    });
+    mode.unwrap_or_else(|| bytes > last_level_cache())
+}
+
+/// Size of the last-level cache in bytes (Linux sysfs; 32 MiB where it cannot be read).
+fn last_level_cache() -> usize {
+    static SIZE: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *SIZE.get_or_init(|| {
+        (1..8)
+            .rev()
+            .find_map(|i| {
+                let dir = format!("/sys/devices/system/cpu/cpu0/cache/index{i}");
+                let size = std::fs::read_to_string(format!("{dir}/size")).ok()?;
+                let kib: usize = size.trim().strip_suffix('K')?.parse().ok()?;
+                Some(kib << 10)
+            })
+            .unwrap_or(32 << 20)
+    })
+}
+
 /// What the element loop of one body reports.
 #[derive(Debug, Clone)]
 pub struct ForceSums {
@@ -150,6 +182,14 @@ impl Body {
 
         // each chunk runs on the SIMD path of this CPU (element::simd)
         let uncounted = &self.def.uncounted;
+        let stream = stream_slots(
+            want * std::mem::size_of::<Slot>()
+                + nt * (std::mem::size_of::<TriElem>() + std::mem::size_of::<ShellState>())
+                + self.def.quads.len()
+                    * (std::mem::size_of::<QuadElem>()
+                        + std::mem::size_of::<ShellState>()
+                        + std::mem::size_of::<HourglassState>()),
+        );
         let tri = |ci: usize,
                    els: &[TriElem],
                    states: &mut [ShellState],
@@ -166,6 +206,7 @@ impl Body {
                 h,
                 first: ci * CHUNK,
                 uncounted,
+                stream,
             })
         };
         let tri_base = self
@@ -206,6 +247,7 @@ impl Body {
                 h,
                 first: nt + ci * CHUNK,
                 uncounted,
+                stream,
             })
         };
         let quad_base = self

@@ -47,7 +47,7 @@ impl Body {
         let nt = self.def.tris.len();
         for (k, e) in self.def.quads.iter().enumerate() {
             let p = e.nodes.map(|n| x[n as usize]);
-            let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
+            let (f1, f2) = gradient(&p, &e.bx0_all(), &e.by0_all());
             let g = green(&f1, &f2);
             f(Resultants {
                 n: sec.plane(

@@ -51,8 +51,10 @@ impl CheckpointKey {
 /// Layout version of the payload. 2: body states apart from definitions, the run's
 /// clock (`crash_core::Clock`). 3: the contact speed rule, the run's energy figure in
 /// every record, the shortened last step apart, warnings raised so far. 5: velocity
-/// programs say whether they prescribe a displacement.
-pub const VERSION: u32 = 5;
+/// programs say whether they prescribe a displacement. 6: quad reference data without
+/// the gradients of nodes 1 and 2, with h.X, h.Y and bb in place of the hourglass shape
+/// vector and stiffnesses (`crash_core::element::QuadElem`).
+pub const VERSION: u32 = 6;
 const HEADER: usize = 8 + 4 + 8 + 8;
 
 fn checksum(b: &[u8]) -> u64 {

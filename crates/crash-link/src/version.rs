@@ -22,8 +22,9 @@ use thiserror::Error;
 /// Contact runs it before an assembly (Ack); the PartDts reply is gone. v11: a part
 /// state carries x, v, w at the part's export nodes only (every owned node in the step
 /// before a view build; v too under the closing-speed rule), its box and its largest
-/// distance from where the views were built.
-pub const PROTOCOL_VERSION: u32 = 11;
+/// distance from where the views were built. v12: quad reference data in stride 11
+/// (what the element stores: gradients of nodes 3 and 4, h.X, h.Y, area, e0, bb; was 19).
+pub const PROTOCOL_VERSION: u32 = 12;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -17,7 +17,7 @@ use crash_core::{
 };
 
 const TRI_REF: usize = 7;
-const QUAD_REF: usize = 19;
+const QUAD_REF: usize = 11;
 /// velocity[3], angular[3], ramp, kind (0 velocity, 1 displacement).
 const PROGRAM: usize = 8;
 const LOAD: usize = 8;
@@ -98,10 +98,9 @@ pub fn def_to_pb(b: &BodyDef) -> pb::BodyDef {
         quad_nodes.extend_from_slice(&e.nodes);
         quad_ref.extend_from_slice(&e.bx0);
         quad_ref.extend_from_slice(&e.by0);
-        quad_ref.extend_from_slice(&e.gamma);
-        quad_ref.push(e.area0);
+        quad_ref.extend_from_slice(&[e.hx, e.hy, e.area0]);
         quad_ref.extend_from_slice(&e.e0);
-        quad_ref.extend_from_slice(&[e.k_m, e.k_w, e.k_th]);
+        quad_ref.push(e.bb);
     }
     let mut programs = Vec::with_capacity(PROGRAM * b.programs.len());
     for p in &b.programs {
@@ -291,12 +290,11 @@ pub fn def_from_pb(d: &pb::BodyDef) -> Result<Body, ProtoError> {
         .iter_mut()
         .zip(d.quad_ref.chunks_exact(QUAD_REF))
     {
-        e.bx0.copy_from_slice(&r[0..4]);
-        e.by0.copy_from_slice(&r[4..8]);
-        e.gamma.copy_from_slice(&r[8..12]);
-        e.area0 = r[12];
-        e.e0.copy_from_slice(&r[13..16]);
-        (e.k_m, e.k_w, e.k_th) = (r[16], r[17], r[18]);
+        e.bx0.copy_from_slice(&r[0..2]);
+        e.by0.copy_from_slice(&r[2..4]);
+        (e.hx, e.hy, e.area0) = (r[4], r[5], r[6]);
+        e.e0.copy_from_slice(&r[7..10]);
+        e.bb = r[10];
     }
     check(id, "mass", &d.mass, nn, 1)?;
     check(id, "inertia", &d.inertia, nn, 1)?;

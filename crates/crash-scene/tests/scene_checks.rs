@@ -219,7 +219,7 @@ fn plate_of_19_6_million_elements_is_refused_up_front_with_the_figure() {
         1,
         "bodies[0].plate",
         &[
-            "needs about 32.",
+            "needs about 29.",
             "GB of memory",
             "19624980 elements",
             "16.0 GB this machine has available",

@@ -5,7 +5,7 @@
 //! results do not depend on the SIMD path (`simd`) nor on the chunking.
 
 use super::plate::{Consts, ShellL};
-use super::quad::{quad_kernel, HgL, QuadElem, QuadIn};
+use super::quad::{hourglass_shape, hourglass_stiffness, quad_kernel, HgL, QuadElem, QuadIn};
 use super::real::{Lanes, Real, V3};
 use super::simd::Lanewise;
 use super::tri::{tri_kernel, KernelOut, TriElem, TriIn};
@@ -186,10 +186,15 @@ fn tri_scatter<S: Lanes, const KELVIN: bool>(
     sts: &mut [ShellState],
     slots: &mut [Slot],
     damped: &mut [Slot],
+    stream: bool,
 ) {
     scatter_shell(&l.st, &mut sts[..S::W]);
-    for i in 0..3 {
-        S::scatter_rows6(&l.out[i], slots, i, 3);
+    if stream {
+        S::stream_rows6(&l.out, slots);
+    } else {
+        for i in 0..3 {
+            S::scatter_rows6(&l.out[i], slots, i, 3);
+        }
     }
     if KELVIN {
         for i in 0..3 {
@@ -225,10 +230,11 @@ fn tri_batch<S: Lanes, const KELVIN: bool>(
     (slots, damped): (&mut [Slot], &mut [Slot]),
     sums: &mut ForceSums,
     buf: &mut TriLanes<S>,
+    stream: bool,
 ) -> Result<(), (usize, ElemFailure)> {
     tri_gather(els, nodes, sts, buf);
     tri_compute::<S, KELVIN>(k, sec, e0, h, buf, sums)?;
-    tri_scatter::<S, KELVIN>(buf, sts, slots, damped);
+    tri_scatter::<S, KELVIN>(buf, sts, slots, damped, stream);
     Ok(())
 }
 
@@ -275,6 +281,7 @@ impl<S: Real> QuadLanes<S> {
 /// Gather S::W quads into `l` (every input and resultant).
 #[inline(always)]
 fn quad_gather<S: Lanes>(
+    kc: &Consts<S>,
     els: &[QuadElem],
     nodes: Nodes<'_>,
     sts: &[ShellState],
@@ -299,19 +306,19 @@ fn quad_gather<S: Lanes>(
             #[inline(always)]
             |k| els[k].nodes[i] as usize,
         );
-        q.gamma[i] = gather(|k| els[k].gamma[i]);
     }
-    q.bx0 = [gather(|k| els[k].bx0[2]), gather(|k| els[k].bx0[3])];
-    q.by0 = [gather(|k| els[k].by0[2]), gather(|k| els[k].by0[3])];
+    q.bx0 = [gather(|k| els[k].bx0[0]), gather(|k| els[k].bx0[1])];
+    q.by0 = [gather(|k| els[k].by0[0]), gather(|k| els[k].by0[1])];
     q.e0 = [
         gather(|k| els[k].e0[0]),
         gather(|k| els[k].e0[1]),
         gather(|k| els[k].e0[2]),
     ];
     q.area0 = gather(|k| els[k].area0);
-    q.k_m = gather(|k| els[k].k_m);
-    q.k_w = gather(|k| els[k].k_w);
-    q.k_th = gather(|k| els[k].k_th);
+    // derived, not stored: fewer bytes per element (QuadElem)
+    let (hx, hy) = (gather(|k| els[k].hx), gather(|k| els[k].hy));
+    q.gamma = hourglass_shape(q.bx0, q.by0, hx, hy);
+    [q.k_m, q.k_w, q.k_th] = hourglass_stiffness(kc, q.area0, gather(|k| els[k].bb));
     l.st = gather_shell(sts);
     l.hg = HgL {
         w: gather(|k| hgs[k].w),
@@ -326,6 +333,7 @@ fn quad_scatter<S: Lanes, const KELVIN: bool>(
     sts: &mut [ShellState],
     hgs: &mut [HourglassState],
     (slots, damped): (&mut [Slot], &mut [Slot]),
+    stream: bool,
 ) {
     scatter_shell(&l.st, &mut sts[..S::W]);
     let (w, t0, t1) = (
@@ -337,8 +345,12 @@ fn quad_scatter<S: Lanes, const KELVIN: bool>(
         h.w = w[k];
         h.th = [t0[k], t1[k]];
     }
-    for i in 0..4 {
-        S::scatter_rows6(&l.out[i], slots, i, 4);
+    if stream {
+        S::stream_rows6(&l.out, slots);
+    } else {
+        for i in 0..4 {
+            S::scatter_rows6(&l.out[i], slots, i, 4);
+        }
     }
     if KELVIN {
         for i in 0..4 {
@@ -398,10 +410,11 @@ fn quad_batch<S: Lanes, const KELVIN: bool>(
     slots: (&mut [Slot], &mut [Slot]),
     sums: &mut ForceSums,
     buf: &mut QuadLanes<S>,
+    stream: bool,
 ) -> Result<(), (usize, ElemFailure)> {
-    quad_gather(els, nodes, sts, hgs, buf);
+    quad_gather(k, els, nodes, sts, hgs, buf);
     quad_compute::<S, KELVIN>(k, sec, e0, h, buf, sums)?;
-    quad_scatter::<S, KELVIN>(buf, sts, hgs, slots);
+    quad_scatter::<S, KELVIN>(buf, sts, hgs, slots, stream);
     Ok(())
 }
 
@@ -429,6 +442,8 @@ pub struct TriChunk<'a> {
     pub first: usize,
     /// `BodyDef::uncounted` (a part of a split body), else None.
     pub uncounted: &'a Option<std::sync::Arc<[bool]>>,
+    /// Write the force slots with non-temporal stores (`forces::stream_slots`).
+    pub stream: bool,
 }
 
 impl Lanewise for TriChunk<'_> {
@@ -473,6 +488,7 @@ impl TriChunk<'_> {
                 (&mut slots[3 * j..], slots_from(damped, 3, j)),
                 &mut sums,
                 &mut buf,
+                self.stream,
             )?;
             j += w;
         }
@@ -488,8 +504,12 @@ impl TriChunk<'_> {
                 (&mut slots[3 * j..], slots_from(damped, 3, j)),
                 &mut sums,
                 &mut buf1,
+                false,
             )?;
             j += 1;
+        }
+        if self.stream {
+            S::stream_fence();
         }
         Ok(sums)
     }
@@ -513,6 +533,8 @@ pub struct QuadChunk<'a> {
     pub first: usize,
     /// `BodyDef::uncounted` (a part of a split body), else None.
     pub uncounted: &'a Option<std::sync::Arc<[bool]>>,
+    /// Write the force slots with non-temporal stores (`forces::stream_slots`).
+    pub stream: bool,
 }
 
 impl Lanewise for QuadChunk<'_> {
@@ -558,6 +580,7 @@ impl QuadChunk<'_> {
                 (&mut slots[4 * j..], slots_from(damped, 4, j)),
                 &mut sums,
                 &mut buf,
+                self.stream,
             )?;
             j += w;
         }
@@ -574,8 +597,12 @@ impl QuadChunk<'_> {
                 (&mut slots[4 * j..], slots_from(damped, 4, j)),
                 &mut sums,
                 &mut buf1,
+                false,
             )?;
             j += 1;
+        }
+        if self.stream {
+            S::stream_fence();
         }
         Ok(sums)
     }

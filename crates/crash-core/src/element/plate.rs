@@ -34,6 +34,9 @@ pub struct Consts<S> {
     pub two_1pnu: S,
     pub half_inv_shear: S,
     pub half_inv_drill: S,
+    /// Hourglass stiffness factors of the quad: r_m C, r_w D, r_th D
+    /// (`quad::hourglass_stiffness`).
+    pub hourglass: [S; 3],
 }
 
 impl<S: Real> Consts<S> {
@@ -51,6 +54,11 @@ impl<S: Real> Consts<S> {
             two_1pnu: S::splat(2.0 * (1.0 + nu)),
             half_inv_shear: S::splat(0.5 / sec.shear),
             half_inv_drill: S::splat(if drill > 0.0 { 0.5 / drill } else { 0.0 }),
+            hourglass: [
+                S::splat(stab.hourglass_membrane * sec.membrane),
+                S::splat(stab.hourglass_w * sec.bending),
+                S::splat(stab.hourglass_rotation * sec.bending),
+            ],
         }
     }
 }

@@ -27,52 +27,97 @@ use serde::{Deserialize, Serialize};
 /// Hourglass base vector h = (1, -1, 1, -1).
 const HG: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
 
-/// Reference data of one quad.
+/// Reference data of one quad. What can be derived exactly from fewer numbers is (the
+/// element loop streams these bytes every cycle): the gradients of nodes 1 and 2, the
+/// hourglass shape vector and the hourglass stiffnesses.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct QuadElem {
     pub nodes: [u32; 4],
-    /// Reference gradients, antisymmetric across the diagonals: bx0[0] = -bx0[2] and
-    /// bx0[1] = -bx0[3] exactly (likewise by0; `quad_gradients`). The kernel reads only
-    /// bx0[2..4], by0[2..4].
-    pub bx0: [f64; 4],
-    pub by0: [f64; 4],
-    /// Hourglass shape vector gamma_I = (h_I - (h.X) bx_I - (h.Y) by_I) / 4.
-    pub gamma: [f64; 4],
+    /// Reference gradients of nodes 3 and 4. Those of nodes 1 and 2 are their
+    /// negatives, exactly (`quad_gradients`; `bx0_all`).
+    pub bx0: [f64; 2],
+    pub by0: [f64; 2],
+    /// h.X and h.Y, the hourglass vector h = (1, -1, 1, -1) on the reference local
+    /// coordinates (`hourglass_shape`).
+    pub hx: f64,
+    pub hy: f64,
     pub area0: f64,
     /// Green strain of the reference configuration (subtracted: stress-free start).
     pub e0: [f64; 3],
-    /// Hourglass stiffnesses: in-plane [N/m], w [N/m], rotation [N m].
-    pub k_m: f64,
-    pub k_w: f64,
-    pub k_th: f64,
+    /// sum_I (bx_I^2 + by_I^2) of the reference gradients (`hourglass_stiffness`).
+    pub bb: f64,
 }
 
 impl QuadElem {
     /// Reference data (once per element at input, outside the SIMD kernels).
     #[allow(clippy::disallowed_methods)]
-    pub fn new(nodes: [u32; 4], x: &[Vec3; 4], sec: &Section, stab: &Stabilization) -> Self {
+    pub fn new(nodes: [u32; 4], x: &[Vec3; 4]) -> Self {
         let (fr, c) = Frame::quad(x);
         let xl = x.map(|p| (p - c).dot(&fr.e1));
         let yl = x.map(|p| (p - c).dot(&fr.e2));
         let (bx0, by0, area0) = quad_gradients(xl, yl);
         let hx: f64 = (0..4).map(|i| HG[i] * xl[i]).sum();
         let hy: f64 = (0..4).map(|i| HG[i] * yl[i]).sum();
-        let gamma = std::array::from_fn(|i| 0.25 * (HG[i] - hx * bx0[i] - hy * by0[i]));
         let (f1, f2) = gradient(x, &bx0, &by0);
         let e0 = green(&f1, &f2);
         let bb: f64 = (0..4).map(|i| bx0[i] * bx0[i] + by0[i] * by0[i]).sum();
         Self {
             nodes,
-            bx0,
-            by0,
-            gamma,
+            bx0: [bx0[2], bx0[3]],
+            by0: [by0[2], by0[3]],
+            hx,
+            hy,
             area0,
             e0,
-            k_m: stab.hourglass_membrane * sec.membrane * area0 * bb,
-            k_w: stab.hourglass_w * sec.bending * area0 * bb * bb,
-            k_th: stab.hourglass_rotation * sec.bending * area0 * bb,
+            bb,
         }
     }
+
+    /// The reference x-gradients of the four nodes (-b3, -b4, b3, b4).
+    pub fn bx0_all(&self) -> [f64; 4] {
+        let [b3, b4] = self.bx0;
+        [-b3, -b4, b3, b4]
+    }
+
+    /// The reference y-gradients of the four nodes.
+    pub fn by0_all(&self) -> [f64; 4] {
+        let [b3, b4] = self.by0;
+        [-b3, -b4, b3, b4]
+    }
+
+    /// The hourglass shape vector gamma (`hourglass_shape`).
+    pub fn gamma(&self) -> [f64; 4] {
+        hourglass_shape(self.bx0, self.by0, self.hx, self.hy)
+    }
+
+    /// The hourglass stiffnesses k_m, k_w, k_th of this element in `sec`, `stab`.
+    pub fn stiffness(&self, sec: &Section, stab: &Stabilization) -> [f64; 3] {
+        hourglass_stiffness(&Consts::<f64>::new(sec, stab), self.area0, self.bb)
+    }
+}
+
+/// Hourglass shape vector gamma_I = (h_I - (h.X) bx_I - (h.Y) by_I) / 4 from the
+/// gradients bx, by of nodes 3 and 4 (those of 1 and 2 their negatives): the operations
+/// of that formula on the four gradients, in its order, so the same bits as computing it
+/// from stored gradients (negation is exact).
+#[inline(always)]
+pub fn hourglass_shape<S: Real>(bx: [S; 2], by: [S; 2], hx: S, hy: S) -> [S; 4] {
+    let (q, one) = (S::splat(0.25), S::splat(1.0));
+    [
+        q * ((one - hx * -bx[0]) - hy * -by[0]),
+        q * ((-one - hx * -bx[1]) - hy * -by[1]),
+        q * ((one - hx * bx[0]) - hy * by[0]),
+        q * ((-one - hx * bx[1]) - hy * by[1]),
+    ]
+}
+
+/// Hourglass stiffnesses [k_m, k_w, k_th]: in-plane r_m C A0 bb [N/m], w r_w D A0 bb^2
+/// [N/m], rotation r_th D A0 bb [N m] (C, D the section's membrane and bending
+/// stiffness; `Consts::hourglass` holds r C, r D), multiplied left to right.
+#[inline(always)]
+pub fn hourglass_stiffness<S: Real>(k: &Consts<S>, area0: S, bb: S) -> [S; 3] {
+    let [m, w, th] = k.hourglass;
+    [m * area0 * bb, w * area0 * bb * bb, th * area0 * bb]
 }
 
 /// Rate-form hourglass resultants in kernel form.
@@ -339,17 +384,67 @@ mod tests {
 
     #[test]
     fn reference_gradients_are_exactly_antisymmetric_across_the_diagonals() {
+        // what lets QuadElem keep the gradients of nodes 3 and 4 only
         let x = [
             Vec3::new(0.0, 0.0, 0.0),
             Vec3::new(1.3, 0.1, 0.01),
             Vec3::new(1.1, 0.9, -0.02),
             Vec3::new(-0.2, 0.7, 0.01),
         ];
-        let sec = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid"), 0.01);
-        let q = QuadElem::new([0, 1, 2, 3], &x, &sec, &Stabilization::default());
+        let (fr, c) = Frame::quad(&x);
+        let xl = x.map(|p| (p - c).dot(&fr.e1));
+        let yl = x.map(|p| (p - c).dot(&fr.e2));
+        let (bx0, by0, _) = quad_gradients(xl, yl);
         for i in 0..2 {
-            assert_eq!(q.bx0[i].to_bits(), (-q.bx0[i + 2]).to_bits());
-            assert_eq!(q.by0[i].to_bits(), (-q.by0[i + 2]).to_bits());
+            assert_eq!(bx0[i].to_bits(), (-bx0[i + 2]).to_bits());
+            assert_eq!(by0[i].to_bits(), (-by0[i + 2]).to_bits());
+        }
+        let q = QuadElem::new([0, 1, 2, 3], &x);
+        assert_eq!(q.bx0_all().map(f64::to_bits), bx0.map(f64::to_bits));
+        assert_eq!(q.by0_all().map(f64::to_bits), by0.map(f64::to_bits));
+    }
+
+    #[test]
+    fn derived_hourglass_data_have_the_bits_of_the_direct_formulas() {
+        // QuadElem stores h.X, h.Y and bb in place of gamma and the three stiffnesses:
+        // what it derives each cycle must be what the formulas give from the full
+        // gradients (the state hashes depend on it)
+        let sec = Section::new(Material::new(7800.0, 200e9, 0.3, 0.0).expect("valid"), 0.01);
+        let stab = Stabilization::default();
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..1000 {
+            let mut x = [
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ];
+            for p in &mut x {
+                *p = 0.37 * (*p + 0.3 * Vec3::new(next(), next(), 0.05 * next()));
+            }
+            let q = QuadElem::new([0, 1, 2, 3], &x);
+            let (bx0, by0) = (q.bx0_all(), q.by0_all());
+            let mut gamma = [0.0; 4];
+            for (i, g) in gamma.iter_mut().enumerate() {
+                *g = 0.25 * (HG[i] - q.hx * bx0[i] - q.hy * by0[i]);
+            }
+            assert_eq!(q.gamma().map(f64::to_bits), gamma.map(f64::to_bits));
+            let bb = q.bb;
+            let k = [
+                stab.hourglass_membrane * sec.membrane * q.area0 * bb,
+                stab.hourglass_w * sec.bending * q.area0 * bb * bb,
+                stab.hourglass_rotation * sec.bending * q.area0 * bb,
+            ];
+            assert_eq!(
+                q.stiffness(&sec, &stab).map(f64::to_bits),
+                k.map(f64::to_bits)
+            );
         }
     }
 }

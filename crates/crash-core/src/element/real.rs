@@ -210,6 +210,23 @@ pub trait Lanes: Real {
             rows[first + stride * k] = [c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k]];
         }
     }
+
+    /// The `N` force rows of each of the W lanes' elements, `rows[N k + i] = cols[i]` of
+    /// lane k, written in row order with non-temporal stores where the type has them
+    /// (the same values as `scatter_rows6`): whole cache lines go to memory without
+    /// first being read, for force slots that would leave the cache before the
+    /// integration reads them. Call `stream_fence` before another thread reads them.
+    #[inline(always)]
+    fn stream_rows6<const N: usize>(cols: &[[Self; 6]; N], rows: &mut [[f64; 6]]) {
+        for (i, c) in cols.iter().enumerate() {
+            Self::scatter_rows6(c, rows, i, N);
+        }
+    }
+
+    /// Order this thread's earlier `stream_rows6` stores before its later stores (the
+    /// release that hands the rows to another thread).
+    #[inline(always)]
+    fn stream_fence() {}
 }
 
 impl Lanes for f64 {
