@@ -65,19 +65,16 @@ pub fn search(
     let tie = TIE * c;
     let (lo, hi) = reach_box(surf, sb, nb);
     let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] && p[d] <= hi[d]);
-    let chunks: Vec<Vec<Hit>> = nb
-        .state
-        .x
-        .par_chunks(NODE_CHUNK)
-        .zip(lists.fit(nb.state.x.len()).par_chunks_mut(NODE_CHUNK))
-        .enumerate()
+    // only the chunks whose box meets the reach go to the pool (`live_chunks`)
+    let live = lists.live_chunks(&nb.state.x, NODE_CHUNK, |ci| {
+        !chunks.get(ci).is_some_and(|k| !k.meets(&lo, &hi, 0.0))
+    });
+    let chunks: Vec<Vec<Hit>> = live
+        .into_par_iter()
         // single chunks: the few near the other body hold all the work (forces.rs)
         .with_max_len(1)
-        .map(|(ci, (xs, lists))| {
+        .map(|(ci, xs, lists)| {
             let mut out = Vec::new();
-            if chunks.get(ci).is_some_and(|k| !k.meets(&lo, &hi, 0.0)) {
-                return out;
-            }
             let mut cand = Vec::new();
             let mut close: Vec<(Projection, u32)> = Vec::new();
             for (k, p) in xs.iter().enumerate() {

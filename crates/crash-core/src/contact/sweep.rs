@@ -160,22 +160,17 @@ pub fn first_crossing(
     // max |v| h = (max |v|) h exactly: rounding x -> x h is monotone for h > 0
     let seg_move = surf.chunks.iter().map(|k| k.vmax).fold(0.0, f64::max) * h;
     let (lo, hi) = super::narrow::reach_box(surf, sb, nb);
-    let chunks: Vec<Option<Crossing>> = nb
-        .state
-        .x
-        .par_chunks(NODE_CHUNK)
-        .zip(lists.fit(nb.state.x.len()).par_chunks_mut(NODE_CHUNK))
-        .enumerate()
+    // each node's reach below is at most the chunk's: skip what none can meet
+    let live = lists.live_chunks(&nb.state.x, NODE_CHUNK, |ci| {
+        !chunks
+            .get(ci)
+            .is_some_and(|k| !k.meets(&lo, &hi, k.vmax * h + seg_move))
+    });
+    let chunks: Vec<Option<Crossing>> = live
+        .into_par_iter()
         // single chunks: the few near the other body hold all the work (forces.rs)
         .with_max_len(1)
-        .map(|(ci, (xs, lists))| {
-            // each node's reach below is at most the chunk's: skip what none can meet
-            if chunks
-                .get(ci)
-                .is_some_and(|k| !k.meets(&lo, &hi, k.vmax * h + seg_move))
-            {
-                return None;
-            }
+        .map(|(ci, xs, lists)| {
             let mut cand = Vec::new();
             for (k, p1) in xs.iter().enumerate() {
                 let i = ci * NODE_CHUNK + k;
