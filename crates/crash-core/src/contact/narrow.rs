@@ -67,7 +67,7 @@ pub fn search(
     let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] && p[d] <= hi[d]);
     // only the chunks whose box meets the reach go to the pool (`live_chunks`)
     let live = lists.live_chunks(&nb.state.x, NODE_CHUNK, |ci| {
-        !chunks.get(ci).is_some_and(|k| !k.meets(&lo, &hi, 0.0))
+        chunks.get(ci).is_none_or(|k| k.meets(&lo, &hi, 0.0))
     });
     let chunks: Vec<Vec<Hit>> = live
         .into_par_iter()

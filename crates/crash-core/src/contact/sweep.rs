@@ -162,9 +162,9 @@ pub fn first_crossing(
     let (lo, hi) = super::narrow::reach_box(surf, sb, nb);
     // each node's reach below is at most the chunk's: skip what none can meet
     let live = lists.live_chunks(&nb.state.x, NODE_CHUNK, |ci| {
-        !chunks
+        chunks
             .get(ci)
-            .is_some_and(|k| !k.meets(&lo, &hi, k.vmax * h + seg_move))
+            .is_none_or(|k| k.meets(&lo, &hi, k.vmax * h + seg_move))
     });
     let chunks: Vec<Option<Crossing>> = live
         .into_par_iter()
