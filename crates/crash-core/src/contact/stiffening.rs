@@ -2,7 +2,9 @@
 //! into the contact surface (delta = -g, c the contact distance) stores
 //! k c^2 psi(x) and is pushed by k c phi(x), phi = psi', with
 //!
-//!     phi(x) = x / (1 - x)^2 + x^3 / X1^2
+//! ```text
+//! phi(x) = x / (1 - x)^2 + x^3 / X1^2
+//! ```
 //!
 //! (k the point's linear stiffness). At small depth phi = x: the linear penalty. The
 //! cubic term stiffens it from about X1 c on, where a curved body's contact patch is
