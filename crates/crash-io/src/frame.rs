@@ -112,9 +112,8 @@ impl FrameBody {
         self.tris.extend(b.def.tris.iter().map(|e| e.nodes));
         self.quads.clear();
         self.quads.extend(b.def.quads.iter().map(|e| e.nodes));
-        for v in [&mut self.von_mises_top, &mut self.von_mises_bottom] {
-            v.clear();
-        }
+        self.von_mises_top.clear();
+        self.von_mises_bottom.clear();
         self.n.clear();
         self.m.clear();
         b.resultants_each(|r| {

@@ -210,7 +210,7 @@ fn ensure_surface<'s>(
     if !s.fits(body) {
         *s = Surface::new(body);
     }
-    s.refresh_chunks(body, skin);
+    s.refresh(body, skin);
     s
 }
 
@@ -321,17 +321,13 @@ pub(crate) fn contact_forces_given(
     state.stats.clear();
     for b in bodies.iter_mut() {
         if b.def.contact && cfg.enabled {
+            // zeroed on the pool: a serial memset of a large body's forces was a tenth
+            // of the showcase's contact stage at 2 threads
+            use rayon::prelude::*;
             let f = &mut b.state.f_contact;
-            if f.len() == b.state.x.len() {
-                // on the pool: a serial memset of a large body's forces was a tenth of
-                // the showcase's contact stage at 2 threads
-                use rayon::prelude::*;
-                f.par_chunks_mut(PAR_CHUNK)
-                    .for_each(|c| c.fill(Vec3::zeros()));
-            } else {
-                f.clear();
-                f.resize(b.state.x.len(), Vec3::zeros());
-            }
+            f.resize(b.state.x.len(), Vec3::zeros());
+            f.par_chunks_mut(PAR_CHUNK)
+                .for_each(|c| c.fill(Vec3::zeros()));
         } else if !b.state.f_contact.is_empty() {
             b.state.f_contact.clear();
         }

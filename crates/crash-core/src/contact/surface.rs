@@ -233,33 +233,10 @@ impl Surface {
     }
 
     /// Rebuild the tree if it is missing, the skin changed or a node moved farther than
-    /// the skin since the last build. Returns whether it rebuilt.
+    /// the skin since the last build; the node chunks of this pass come with the answer
+    /// (`node_chunks_moved` against `self.reference`: the nodes are read once for both).
+    /// Returns whether it rebuilt.
     pub fn refresh(&mut self, body: &Body, skin: f64) -> bool {
-        // any node beyond the skin (a yes/no: the same answer in any order, on the pool)
-        let moved = || {
-            use rayon::prelude::*;
-            let s2 = skin * skin;
-            body.state
-                .x
-                .par_chunks(super::stage::PAR_CHUNK)
-                .zip(self.reference.par_chunks(super::stage::PAR_CHUNK))
-                .any(|(xs, rs)| {
-                    xs.iter().zip(rs).any(|(a, b)| {
-                        let d2 = (a - b).norm_squared();
-                        d2.is_nan() || d2 > s2
-                    })
-                })
-        };
-        if self.current(body, skin) && !moved() {
-            return false;
-        }
-        self.rebuild(body, skin)
-    }
-
-    /// `refresh` with the node chunks of this pass: they come with the answer to "did a
-    /// node move beyond the skin" (`node_chunks_moved` against `self.reference`), so the
-    /// nodes are read once for both. Returns whether it rebuilt.
-    pub fn refresh_chunks(&mut self, body: &Body, skin: f64) -> bool {
         let (chunks, moved) = node_chunks_moved(body, &self.reference, skin);
         self.chunks = chunks;
         if self.current(body, skin) && !moved {
