@@ -11,6 +11,7 @@ use crate::error::Fault;
 use crate::forces::ForceSums;
 use crate::probe::{nodes_of, NodeProbe};
 use crate::Vec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
 
@@ -297,21 +298,39 @@ impl Group {
         let hbar = 0.5 * (sc.h_prev + sc.h);
         let t0 = Instant::now();
         let probes: &[(u32, u32)] = if due.probes { &self.probes } else { &[] };
-        for b in &mut self.bodies {
+        // Bodies go to the pool as a whole (each body's own loops split it further): a
+        // group of many small bodies (spheres on a floor) would otherwise pay a fork-join
+        // per body and stage for a chunk or two of work. A body's result depends on its
+        // own state only, and faults and probe rows are taken in body order: same bits.
+        let gravity = self.gravity;
+        let stepped: Vec<_> = self
+            .bodies
+            .par_iter_mut()
+            .map(|b| {
+                let before = b.probe_velocities(nodes_of(probes, b.def.id));
+                b.integrate(&sc, gravity).map(|s| (s, before))
+            })
+            .collect();
+        for (b, r) in self.bodies.iter().zip(stepped) {
+            let (s, before) = r?;
             let nodes = nodes_of(probes, b.def.id);
-            let before = b.probe_velocities(nodes);
-            sums.push(b.integrate(&sc, self.gravity)?);
             if !nodes.is_empty() {
                 b.probe(nodes, &before, hbar, &mut self.probed);
             }
+            sums.push(s);
         }
         let step = clock.after(h).step;
         let moves: Vec<(f64, usize)> = sums.iter().map(|s| (s.max_move, s.max_move_node)).collect();
         crate::contact::check_moves(&self.bodies, &self.contact, &moves, h, step)?;
         let t1 = Instant::now();
+        let forces: Vec<_> = self
+            .bodies
+            .par_iter_mut()
+            .map(|b| b.internal_forces(h, step))
+            .collect();
         let mut out = Vec::with_capacity(self.bodies.len());
-        for (b, s) in self.bodies.iter_mut().zip(&sums) {
-            let f = b.internal_forces(h, step)?;
+        for ((b, s), f) in self.bodies.iter().zip(&sums).zip(forces) {
+            let f = f?;
             let mut r = report(b, &f, s.lo, s.hi, s.max_move);
             if self.reactions && due.reactions && b.def.fixed.iter().any(|&m| m != 0) {
                 r.reaction = Some(Reaction {
