@@ -239,7 +239,7 @@ impl Default for RunOptions {
             margin_factor: 2.0,
             split_after: 50,
             cost: CostModel::Measured,
-            balance_tolerance: 0.25,
+            balance_tolerance: 0.1,
             rebalance_interval: 500,
             checkpoint_every: 0,
             checkpoint_seconds: 0.0,

@@ -7,6 +7,12 @@ use crate::input::CostModel;
 use crash_core::{BodyReport, Clock, Fault};
 use crash_link::{escape_peer, Command, GroupTime, LinkError, Reply, StepReport, WorkerLink};
 
+/// Weight of one step's measured group time in a body's cost average. One step's time
+/// jitters by tens of percent on a shared VM (wake-ups, a neighbour's build); a window
+/// of ~32 steps keeps placement from balancing on noise yet follows an impact (which
+/// changes a group's cost over hundreds of steps) well within the 500-step rebalance.
+const COST_SMOOTHING: f64 = 1.0 / 32.0;
+
 impl<L: WorkerLink> Master<'_, L> {
     pub(super) fn worker_error(&self, w: usize, e: LinkError) -> MasterError {
         MasterError::Worker {
@@ -206,7 +212,8 @@ impl<L: WorkerLink> Master<'_, L> {
         Ok(())
     }
 
-    /// Measured group times shared among members by their estimated cost (EMA).
+    /// Measured group times shared among members by their estimated cost (EMA over
+    /// about `1 / COST_SMOOTHING` steps).
     fn account(&mut self, groups: &[GroupTime]) {
         for g in groups {
             self.group_ns.insert(g.first, g.nanos);
@@ -229,7 +236,7 @@ impl<L: WorkerLink> Master<'_, L> {
                 let Some(b) = self.index(id) else { continue };
                 let t = g.nanos as f64 * self.info[b].estimate / total;
                 self.measured[b] = Some(match self.measured[b] {
-                    Some(old) => 0.8 * old + 0.2 * t,
+                    Some(old) => old + COST_SMOOTHING * (t - old),
                     None => t,
                 });
             }
