@@ -22,6 +22,7 @@ use std::collections::BTreeMap;
 pub(crate) type PairHits = (Vec<Hit>, Vec<Hit>);
 
 /// One pass: its crossing check, then (`find`, and no crossing) its search.
+#[allow(clippy::too_many_arguments)]
 fn pass(
     nb: &Body,
     ns: &Surface,
