@@ -5,7 +5,9 @@
 pub mod broad;
 pub mod config;
 pub mod curved;
+pub mod forest;
 pub mod narrow;
+pub(crate) mod passes;
 pub mod quadrature;
 pub mod segment;
 pub mod smooth;

@@ -12,11 +12,12 @@ use super::config::{
     ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
 };
 use super::narrow::{forces, search, Hit, Normals, Push};
+use super::passes::pair_passes;
 use super::quadrature::segment_pair;
 use super::segment::Segment;
 use super::stiffening;
 use super::surface::Surface;
-use super::sweep::{closing_speed, first_crossing, mean_velocity};
+use super::sweep::{closing_speed, mean_velocity};
 use super::verlet::NodeLists;
 use crate::body::{Body, NO_PROGRAM};
 use crate::error::Fault;
@@ -239,39 +240,6 @@ pub(crate) fn element_form_dt(cfg: &ContactConfig, nb: &Surface, surf: &Surface)
     (2.0 * m_over_k).sqrt()
 }
 
-/// The crossing check of a pair (both passes), as a fault naming both bodies.
-fn check_crossing(
-    a: &Body,
-    b: &Body,
-    sa: &Surface,
-    sb: &Surface,
-    lists: &mut BTreeMap<(u32, u32), NodeLists>,
-    h: f64,
-    step: u64,
-) -> Result<(), Fault> {
-    let self_pair = a.def.id == b.def.id;
-    let mut passes = vec![(a, sa, b, sb)];
-    if !self_pair {
-        passes.push((b, sb, a, sa));
-    }
-    for (nb, ns, segb, surf) in passes {
-        let l = lists.entry((nb.def.id, segb.def.id)).or_default();
-        if let Some(c) = first_crossing(nb, &ns.chunks, segb, surf, self_pair, h, l) {
-            return Err(Fault::PassThrough {
-                step,
-                body: nb.def.id,
-                body_name: nb.def.name.clone(),
-                node: c.node,
-                other: segb.def.id,
-                other_name: segb.def.name.clone(),
-                segment: c.segment,
-                closing_speed: c.closing_speed,
-            });
-        }
-    }
-    Ok(())
-}
-
 /// Compute contact forces at the current positions into `f_contact` of every contact
 /// body. `bounds[k]` is body k's node box at these positions (the integration has it).
 /// `element_dt[k]` is body k's element critical step of this force pass (sets the
@@ -351,13 +319,26 @@ pub(crate) fn contact_forces_given(
     let mut in_pairs: Vec<usize> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
     in_pairs.sort_unstable();
     in_pairs.dedup();
+    // the mean velocities (serial sums in node order: their bits) beside the surface
+    // refreshes on the pool, instead of after them on one thread
+    let bodies_ = &*bodies;
+    let surfaces = &mut state.surfaces;
+    let ((), means) = rayon::join(
+        || {
+            for &k in &in_pairs {
+                let skin = cfg.margin_for(&bodies_[k]);
+                ensure_surface(surfaces, &bodies_[k], skin);
+            }
+        },
+        || {
+            let want = cfg.speed_rule == SpeedRule::LimitDt && closing.is_none();
+            let mean = |&k: &usize| (k, mean_velocity(&bodies_[k]));
+            want.then(|| in_pairs.iter().map(mean).collect::<Vec<_>>())
+        },
+    );
     let mut mean_v = vec![Vec3::zeros(); bodies.len()];
-    for &k in &in_pairs {
-        let skin = cfg.margin_for(&bodies[k]);
-        ensure_surface(&mut state.surfaces, &bodies[k], skin);
-        if cfg.speed_rule == SpeedRule::LimitDt && closing.is_none() {
-            mean_v[k] = mean_velocity(&bodies[k]);
-        }
+    for (k, u) in means.into_iter().flatten() {
+        mean_v[k] = u;
     }
     for &(ia, ib) in &pairs {
         let (a, b) = (&bodies[ia], &bodies[ib]);
@@ -365,31 +346,47 @@ pub(crate) fn contact_forces_given(
         else {
             continue;
         };
-        check_crossing(a, b, sa, sb, &mut state.lists, h, step)?;
+        // the pair's limits on both bodies' steps (booked once the crossing check passed)
+        let mut limit = f64::INFINITY;
         if cfg.penalty == PenaltyKind::Element {
-            let d = element_form_dt(cfg, sa, sb).min(element_form_dt(cfg, sb, sa));
-            dt[ia] = dt[ia].min(d);
-            dt[ib] = dt[ib].min(d);
+            limit = element_form_dt(cfg, sa, sb).min(element_form_dt(cfg, sb, sa));
         }
         let self_pair = ia == ib;
         let mut pair_dt = element_dt[ia].min(element_dt[ib]);
-        if cfg.penalty == PenaltyKind::Soft && !(pair_dt.is_finite() && pair_dt > 0.0) {
-            continue; // two kinematic bodies: contact cannot move anything
-        }
-        if cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
+        // the soft penalty needs a reference step (none: two kinematic bodies, which
+        // contact cannot move)
+        let soft = cfg.penalty == PenaltyKind::Soft;
+        let usable = |d: f64| d.is_finite() && d > 0.0;
+        let mut find = !soft || usable(pair_dt);
+        if find && cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
             let given = closing.map(|m| m.get(&(a.def.id, b.def.id)).copied().flatten());
             let d = given.unwrap_or_else(|| closing_dt(a, b, mean_v[ia], mean_v[ib]));
             if let Some(d) = d {
-                dt[ia] = dt[ia].min(d);
-                dt[ib] = dt[ib].min(d);
+                limit = limit.min(d);
                 pair_dt = pair_dt.min(d);
             }
         }
         let dt_ref = REFERENCE_SAFETY * pair_dt;
-        if cfg.penalty == PenaltyKind::Soft && !(dt_ref.is_finite() && dt_ref > 0.0) {
+        find = find && (!soft || usable(dt_ref));
+        let segment_pass = cfg.pass == ContactPass::Segments && !self_pair;
+        // the crossing check of both passes first (a crossing is the fault), with the
+        // search of both passes when the node passes follow
+        let (hits_a, hits_b) = pair_passes(
+            a,
+            b,
+            sa,
+            sb,
+            &mut state.lists,
+            h,
+            step,
+            find && !segment_pass,
+        )?;
+        dt[ia] = dt[ia].min(limit);
+        dt[ib] = dt[ib].min(limit);
+        if !find {
             continue;
         }
-        if cfg.pass == ContactPass::Segments && !self_pair {
+        if segment_pass {
             let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref);
             // the stiffening law's step (docs/theory-contact.md, "Depth")
             let (a, b) = (&bodies[ia], &bodies[ib]);
@@ -401,14 +398,6 @@ pub(crate) fn contact_forces_given(
             state.stats.push(st);
             continue;
         }
-        let lists_a = state.lists.entry((a.def.id, b.def.id)).or_default();
-        let hits_a = search(a, &sa.chunks, b, sb, self_pair, lists_a);
-        let hits_b = if self_pair {
-            Vec::new()
-        } else {
-            let lists_b = state.lists.entry((b.def.id, a.def.id)).or_default();
-            search(b, &sb.chunks, a, sa, false, lists_b)
-        };
         // nodal normals where the passes read them: the hit nodes and the corners of
         // their segments (stale values elsewhere are never read)
         for b_ in [a, b] {

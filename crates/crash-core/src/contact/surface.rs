@@ -1,21 +1,25 @@
-//! Level ii of the search, per body: the body's segments in a bulk-loaded R-tree whose
-//! boxes are inflated by half the thickness plus a Verlet skin. The tree is rebuilt only
-//! when some node has moved farther than the skin since the last build; between builds
-//! every segment still lies inside its stored box grown by its nodes' displacement, so
-//! a query never misses a segment within the capture distance. A cache: the segments a
-//! query returns are filtered by exact distance, so results never depend on it.
+//! Level ii of the search, per body: the body's segments in bulk-loaded R-trees
+//! (`forest.rs`, a few spatial groups built on the pool) whose boxes are inflated by
+//! half the thickness plus a Verlet skin. The trees are rebuilt only when some node has
+//! moved farther than the skin since the last build; between builds every segment still
+//! lies inside its stored box grown by its nodes' displacement, so a query never misses
+//! a segment within the capture distance. A cache: the segments a query returns are
+//! filtered by exact distance, so results never depend on it.
 
+use super::forest::{Entry, Forest};
 use super::segment::{segments, Segment};
 use crate::body::Body;
 use crate::Vec3;
+use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
-use rstar::{RTree, RTreeObject, AABB};
+use rstar::RTreeObject;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Ids of the trees built in this process (`Surface::tree_id`).
 static NEXT_TREE: AtomicU64 = AtomicU64::new(0);
 
-type Entry = GeomWithData<Rectangle<[f64; 3]>, u32>;
+/// Segments per task of a tree build's box pass.
+const SEG_CHUNK: usize = 2048;
 
 /// Nodes per task of the node passes (fixed: results are concatenated in node order).
 pub const NODE_CHUNK: usize = 512;
@@ -48,7 +52,6 @@ pub fn node_chunks(body: &Body) -> Vec<NodeChunk> {
 /// empty or shorter reference says nothing). One pass over x, v and the reference
 /// instead of two: each pass over a large body costs a stream of its nodes.
 pub fn node_chunks_moved(body: &Body, reference: &[Vec3], skin: f64) -> (Vec<NodeChunk>, bool) {
-    use rayon::prelude::*;
     let x = &body.state.x;
     let s2 = skin * skin;
     let check = reference.len() == x.len();
@@ -98,7 +101,7 @@ pub struct Surface {
     inc: Vec<u32>,
     /// Chunk boxes and speeds of the body's nodes at the current pass (idem).
     pub chunks: Vec<NodeChunk>,
-    tree: RTree<Entry>,
+    tree: Forest,
     /// Each segment's stored box (the tree's entries, by segment index).
     boxes: Vec<([f64; 3], [f64; 3])>,
     /// `tree_id()`.
@@ -217,7 +220,7 @@ impl Surface {
             inc_start,
             inc,
             chunks: node_chunks(body),
-            tree: RTree::new(),
+            tree: Forest::default(),
             boxes: Vec::new(),
             tree_id: u64::MAX - 1,
             reference: Vec::new(),
@@ -250,12 +253,14 @@ impl Surface {
         self.built && self.skin == skin && self.reference.len() == body.state.x.len()
     }
 
+    /// Build the trees on the pool: boxes by segment chunks, then `Forest::build`.
     fn rebuild(&mut self, body: &Body, skin: f64) -> bool {
         let pad = 0.5 * body.def.section.thickness + skin;
         let x = &body.state.x;
         let entries: Vec<Entry> = self
             .segments
-            .iter()
+            .par_iter()
+            .with_min_len(SEG_CHUNK)
             .enumerate()
             .map(|(j, s)| {
                 let mut lo = Vec3::repeat(f64::INFINITY);
@@ -272,16 +277,20 @@ impl Surface {
             })
             .collect();
         self.boxes = entries
-            .iter()
+            .par_iter()
+            .with_min_len(SEG_CHUNK)
             .map(|e| {
                 let env = e.geom().envelope();
                 (env.lower(), env.upper())
             })
             .collect();
-        self.tree = RTree::bulk_load(entries);
+        self.tree = Forest::build(entries);
         self.tree_id = NEXT_TREE.fetch_add(1, Ordering::Relaxed);
-        self.reference.clear();
-        self.reference.extend_from_slice(x);
+        self.reference.resize(x.len(), Vec3::zeros());
+        self.reference
+            .par_chunks_mut(SEG_CHUNK)
+            .zip(x.par_chunks(SEG_CHUNK))
+            .for_each(|(r, x)| r.copy_from_slice(x));
         self.skin = skin;
         self.built = true;
         self.builds += 1;
@@ -297,15 +306,10 @@ impl Surface {
         );
     }
 
-    /// Segments whose stored box meets the box `lo`..`hi` (lo <= hi), into `out`.
+    /// Segments whose stored box meets the box `lo`..`hi` (lo <= hi), into `out`, in no
+    /// particular order (`forest.rs`).
     pub fn query(&self, lo: [f64; 3], hi: [f64; 3], out: &mut Vec<u32>) {
-        out.clear();
-        let q = AABB::from_corners(lo, hi);
-        out.extend(
-            self.tree
-                .locate_in_envelope_intersecting(&q)
-                .map(|e| e.data),
-        );
+        self.tree.query(lo, hi, out);
     }
 
     /// Whether segment `j`'s stored box meets the box `lo`..`hi`: the tree's own test
