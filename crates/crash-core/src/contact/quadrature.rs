@@ -124,8 +124,18 @@ fn live_boxes(
     (live, boxes)
 }
 
+/// The union of boxes (empty: inverted, infinitely far from everything).
+fn union(boxes: &[(Vec3, Vec3)]) -> (Vec3, Vec3) {
+    boxes.iter().fold(
+        (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY)),
+        |(lo, hi), b| (lo.inf(&b.0), hi.sup(&b.1)),
+    )
+}
+
 /// All active points of slave body `sb` against master body `mb`. `slave`: the slave's
-/// segments that can come near the master (ascending) and their node boxes; `curved`:
+/// segments that can come near the master (ascending) and their node boxes;
+/// `master_near`: the box of the master's segments that can come near the slave (every
+/// master a point can reach lies in it); `curved`:
 /// both bodies' curved data near the other (slave's, master's); `kappa`: penalty
 /// stiffness per unit area of this direction (weight included); `mu`: areal mass for
 /// the damping.
@@ -136,6 +146,7 @@ pub fn point_pushes(
     slave: (&[u32], &[(Vec3, Vec3)]),
     mb: &Body,
     msurf: &Surface,
+    master_near: (Vec3, Vec3),
     curved: (&NearCurved, &NearCurved),
     cfg: &ContactConfig,
     kappa: f64,
@@ -148,7 +159,7 @@ pub fn point_pushes(
     // the slave's own points stand off its flat boxes by up to its bulge
     let reach = c + (BULGE_REACH * c).max(hm_max);
     let box_reach = reach + hs_max;
-    let (mlo, mhi) = msurf.bounds();
+    let (mlo, mhi) = master_near;
     let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
     let xm = &mb.state.x;
     let (live, sboxes) = slave;
@@ -420,17 +431,22 @@ pub(crate) fn segment_pair(
     let live = c * (1.0 + BULGE_REACH) + sa.loose_bulge_ub + sb.loose_bulge_ub;
     let (live_a, boxes_a) = live_boxes(sa, &a.state.x, &bounds_b, live);
     let (live_b, boxes_b) = live_boxes(sb, &b.state.x, &bounds_a, live);
+    // a segment that can touch the other body is within `live` of it, so the other's
+    // segments it can touch lie in the box of the other's live segments: a tighter box
+    // than the other's whole body (a sphere's cap, not the sphere)
+    let (near_a, near_b) = (union(&boxes_a), union(&boxes_b));
     let grow = c * (1.0 + BULGE_REACH)
         + loose_bulge_bound(sa, &live_a, &boxes_a)
         + loose_bulge_bound(sb, &live_b, &boxes_b);
-    let ca = near_curved(sa, &a.state.x, &live_a, &boxes_a, &bounds_b, grow);
-    let cb = near_curved(sb, &b.state.x, &live_b, &boxes_b, &bounds_a, grow);
+    let ca = near_curved(sa, &a.state.x, &live_a, &boxes_a, &near_b, grow);
+    let cb = near_curved(sb, &b.state.x, &live_b, &boxes_b, &near_a, grow);
     let first = point_pushes(
         a,
         sa,
         (&live_a, &boxes_a),
         b,
         sb,
+        near_b,
         (&ca, &cb),
         cfg,
         kappa,
@@ -442,6 +458,7 @@ pub(crate) fn segment_pair(
         (&live_b, &boxes_b),
         a,
         sa,
+        near_a,
         (&cb, &ca),
         cfg,
         kappa,
