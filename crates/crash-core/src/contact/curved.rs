@@ -194,16 +194,19 @@ pub fn bulge_bound(b: &[[f64; 4]; 4]) -> f64 {
     0.25 * s
 }
 
-/// A loose bound on any segment's bulge, from the largest node box (`boxes`, by
-/// segment): corner normals lie within the crease angle (30 degrees) of the segment's
+/// A loose bound on the bulge of the segments `live` (node boxes `boxes`, by position in
+/// `live`): corner normals lie within the crease angle (30 degrees) of the segment's
 /// normal, so |n_j - n_i| <= 1, |b_ij| <= |e_ij| / 2 and |h| <= sum |e_ij| / 8 <=
 /// (pairs / 8) x the box diagonal.
-pub fn loose_bulge_bound(surf: &Surface, boxes: &[(Vec3, Vec3)]) -> f64 {
-    surf.segments
-        .iter()
+pub fn loose_bulge_bound(surf: &Surface, live: &[u32], boxes: &[(Vec3, Vec3)]) -> f64 {
+    live.iter()
         .zip(boxes)
-        .map(|(seg, (lo, hi))| {
-            let pairs = if seg.count == 3 { 3.0 } else { 6.0 };
+        .map(|(&j, (lo, hi))| {
+            let pairs = if surf.segments[j as usize].count == 3 {
+                3.0
+            } else {
+                6.0
+            };
             (hi - lo).norm_squared() * (pairs * pairs / 64.0)
         })
         .fold(0.0, f64::max)
@@ -246,8 +249,8 @@ impl Curved {
 /// and the largest bulge bound over them.
 #[derive(Debug)]
 pub struct NearCurved {
-    /// Index into `data` by segment, `u32::MAX` where the segment is not near.
-    index: Vec<u32>,
+    /// The near segments, ascending, and their data.
+    segs: Vec<u32>,
     data: Vec<Curved>,
     pub bound: f64,
 }
@@ -256,49 +259,42 @@ impl NearCurved {
     /// Segment j's curved data: the stored one, or computed now for a segment outside
     /// the near set (the same values either way).
     pub fn get(&self, j: u32, surf: &Surface, x: &[Vec3]) -> Curved {
-        match self.index[j as usize] {
-            u32::MAX => Curved::of(&surf.segments[j as usize], surf, x),
-            k => self.data[k as usize],
+        match self.segs.binary_search(&j) {
+            Ok(k) => self.data[k],
+            Err(_) => Curved::of(&surf.segments[j as usize], surf, x),
         }
     }
 }
 
-/// The curved data of the segments of a body whose node box comes within `grow` of the
-/// box `near` (the other body's, grown by what a bulge can add), and the largest bulge
-/// bound over them: how far its curved surface can stand off its facets where contact
-/// can happen. Max is order-free and the data are collected in segment order: the same
-/// bits on any thread count.
+/// The curved data of the segments `live` (ascending; node boxes `boxes`, by position
+/// in `live`) of a body whose node box comes within `grow` of the box `near` (the other
+/// body's, grown by what a bulge can add), and the largest bulge bound over them: how
+/// far its curved surface can stand off its facets where contact can happen. `live`
+/// must hold every segment of the body that comes that near. Max is order-free and the
+/// data are collected in segment order: the same bits on any thread count.
 pub fn near_curved(
     surf: &Surface,
     x: &[Vec3],
+    live: &[u32],
     boxes: &[(Vec3, Vec3)],
     near: &(Vec3, Vec3),
     grow: f64,
 ) -> NearCurved {
     use rayon::prelude::*;
-    let data: Vec<(u32, Curved)> = surf
-        .segments
+    let data: Vec<(u32, Curved)> = live
         .par_iter()
         .zip(boxes)
-        .enumerate()
-        .filter(|(_, (_, (lo, hi)))| {
+        .filter(|(_, (lo, hi))| {
             (0..3).all(|d| hi[d] >= near.0[d] - grow && lo[d] <= near.1[d] + grow)
         })
-        .map(|(j, (seg, _))| (j as u32, Curved::of(seg, surf, x)))
+        .map(|(&j, _)| (j, Curved::of(&surf.segments[j as usize], surf, x)))
         .collect();
-    let mut index = vec![u32::MAX; surf.segments.len()];
-    for (k, (j, _)) in data.iter().enumerate() {
-        index[*j as usize] = k as u32;
-    }
     let bound = data
         .iter()
         .map(|(_, cv)| bulge_bound(&cv.b))
         .fold(0.0, f64::max);
-    NearCurved {
-        index,
-        data: data.into_iter().map(|(_, cv)| cv).collect(),
-        bound,
-    }
+    let (segs, data) = data.into_iter().unzip();
+    NearCurved { segs, data, bound }
 }
 
 /// h(w) and its partial derivatives dh/dw_k.

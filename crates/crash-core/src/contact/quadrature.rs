@@ -105,17 +105,48 @@ struct Master {
     nodal: [bool; 4],
 }
 
-/// All active points of slave body `sb` against master body `mb`. `curved`: both
-/// bodies' curved data near the other (slave's, master's); `kappa`: penalty stiffness
-/// per unit area of this direction (weight included); `mu`: areal mass for the damping.
+/// The segments of `surf` whose stored box comes within `grow` of the box `near` (per
+/// axis), ascending, and their node boxes: a test per `BOX_CHUNK` segments far from it,
+/// so a pass costs what lies near the other body, not the whole body.
+fn live_boxes(
+    surf: &Surface,
+    x: &[Vec3],
+    near: &(Vec3, Vec3),
+    grow: f64,
+) -> (Vec<u32>, Vec<(Vec3, Vec3)>) {
+    let (lo, hi) = (near.0.add_scalar(-grow), near.1.add_scalar(grow));
+    let mut live = Vec::new();
+    surf.near_segments(&[lo.x, lo.y, lo.z], &[hi.x, hi.y, hi.z], &mut live);
+    let boxes = live
+        .iter()
+        .map(|&j| node_box(&surf.segments[j as usize], x))
+        .collect();
+    (live, boxes)
+}
+
+/// The union of boxes (empty: inverted, infinitely far from everything).
+fn union(boxes: &[(Vec3, Vec3)]) -> (Vec3, Vec3) {
+    boxes.iter().fold(
+        (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY)),
+        |(lo, hi), b| (lo.inf(&b.0), hi.sup(&b.1)),
+    )
+}
+
+/// All active points of slave body `sb` against master body `mb`. `slave`: the slave's
+/// segments that can come near the master (ascending) and their node boxes;
+/// `master_near`: the box of the master's segments that can come near the slave (every
+/// master a point can reach lies in it); `curved`:
+/// both bodies' curved data near the other (slave's, master's); `kappa`: penalty
+/// stiffness per unit area of this direction (weight included); `mu`: areal mass for
+/// the damping.
 #[allow(clippy::too_many_arguments)]
 pub fn point_pushes(
     sb: &Body,
     ssurf: &Surface,
-    sboxes: &[(Vec3, Vec3)],
+    slave: (&[u32], &[(Vec3, Vec3)]),
     mb: &Body,
     msurf: &Surface,
-    mboxes: &[(Vec3, Vec3)],
+    master_near: (Vec3, Vec3),
     curved: (&NearCurved, &NearCurved),
     cfg: &ContactConfig,
     kappa: f64,
@@ -128,20 +159,19 @@ pub fn point_pushes(
     // the slave's own points stand off its flat boxes by up to its bulge
     let reach = c + (BULGE_REACH * c).max(hm_max);
     let box_reach = reach + hs_max;
-    let (mlo, mhi) = msurf.bounds();
+    let (mlo, mhi) = master_near;
     let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
     let xm = &mb.state.x;
-    let chunks: Vec<Points> = ssurf
-        .segments
+    let (live, sboxes) = slave;
+    let chunks: Vec<Points> = live
         .par_chunks(SEG_CHUNK)
-        .enumerate()
-        .map(|(ci, segs)| {
+        .zip(sboxes.par_chunks(SEG_CHUNK))
+        .map(|(segs, bxs)| {
             let mut out = Points::default();
             let mut cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
-            for (k, seg) in segs.iter().enumerate() {
-                let js = (ci * SEG_CHUNK + k) as u32;
-                let sbx = sboxes[js as usize];
+            for (&js, &sbx) in segs.iter().zip(bxs) {
+                let seg = &ssurf.segments[js as usize];
                 if box_gap(&sbx, &mbox) > 0.0 {
                     continue;
                 }
@@ -154,7 +184,7 @@ pub fn point_pushes(
                 cand.sort_unstable();
                 masters.clear();
                 for &j in &cand {
-                    let bx = mboxes[j as usize];
+                    let bx = node_box(&msurf.segments[j as usize], xm);
                     if box_gap(&sbx, &bx) >= box_reach {
                         continue;
                     }
@@ -374,12 +404,6 @@ fn slave_segment(
     }
 }
 
-/// The node box of every segment of a body, by segment (once per pass: the bounds, the
-/// culls and the searches of both directions read them).
-fn seg_boxes(surf: &Surface, x: &[Vec3]) -> Vec<(Vec3, Vec3)> {
-    surf.segments.par_iter().map(|s| node_box(s, x)).collect()
-}
-
 /// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
 /// `sb`): each body slave once with half the weight; stiffness per unit area
 /// kappa = s mu / dt_ref^2 (the soft rule per area, mu the lighter areal mass).
@@ -398,15 +422,48 @@ pub(crate) fn segment_pair(
     // how far each body's curved surface can stand off its facets where the other body
     // is near: exact bounds over the segments within reach of the other's node box
     // (grown by the loose bounds of both), so the search misses no point of a coarse mesh
+    // Only segments whose tree box comes within `live` of the other body are read: every
+    // distance below (the near set's `grow`, the culls' reaches) is at most `live`, since
+    // the loose bounds of the near segments are at most the surfaces' bounds until their
+    // next build.
     let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let boxes_a = seg_boxes(sa, &a.state.x);
-    let boxes_b = seg_boxes(sb, &b.state.x);
-    let grow =
-        c * (1.0 + BULGE_REACH) + loose_bulge_bound(sa, &boxes_a) + loose_bulge_bound(sb, &boxes_b);
-    let ca = near_curved(sa, &a.state.x, &boxes_a, &sb.bounds(), grow);
-    let cb = near_curved(sb, &b.state.x, &boxes_b, &sa.bounds(), grow);
-    let first = point_pushes(a, sa, &boxes_a, b, sb, &boxes_b, (&ca, &cb), cfg, kappa, mu);
-    let second = point_pushes(b, sb, &boxes_b, a, sa, &boxes_a, (&cb, &ca), cfg, kappa, mu);
+    let (bounds_a, bounds_b) = (sa.bounds(), sb.bounds());
+    let live = c * (1.0 + BULGE_REACH) + sa.loose_bulge_ub + sb.loose_bulge_ub;
+    let (live_a, boxes_a) = live_boxes(sa, &a.state.x, &bounds_b, live);
+    let (live_b, boxes_b) = live_boxes(sb, &b.state.x, &bounds_a, live);
+    // a segment that can touch the other body is within `live` of it, so the other's
+    // segments it can touch lie in the box of the other's live segments: a tighter box
+    // than the other's whole body (a sphere's cap, not the sphere)
+    let (near_a, near_b) = (union(&boxes_a), union(&boxes_b));
+    let grow = c * (1.0 + BULGE_REACH)
+        + loose_bulge_bound(sa, &live_a, &boxes_a)
+        + loose_bulge_bound(sb, &live_b, &boxes_b);
+    let ca = near_curved(sa, &a.state.x, &live_a, &boxes_a, &near_b, grow);
+    let cb = near_curved(sb, &b.state.x, &live_b, &boxes_b, &near_a, grow);
+    let first = point_pushes(
+        a,
+        sa,
+        (&live_a, &boxes_a),
+        b,
+        sb,
+        near_b,
+        (&ca, &cb),
+        cfg,
+        kappa,
+        mu,
+    );
+    let second = point_pushes(
+        b,
+        sb,
+        (&live_b, &boxes_b),
+        a,
+        sa,
+        near_a,
+        (&cb, &ca),
+        cfg,
+        kappa,
+        mu,
+    );
     let mut st = PairStats::empty(a.def.id, b.def.id, first.pushes.len() + second.pushes.len());
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, ia, ib, &first.pushes, &mut st, true);
