@@ -157,7 +157,11 @@ impl Body {
                         // the force slots of a node a few places ahead (see `prefetch`)
                         if let Some(range) = gs.get(i + PREFETCH..i + PREFETCH + 2) {
                             for &sl in &gi[range[0] as usize..range[1] as usize] {
-                                prefetch(&slots[sl as usize]);
+                                // a 48-byte slot starts at byte 0, 16, 32 or 48 of a
+                                // line: it may end on the next one
+                                let q = &slots[sl as usize];
+                                prefetch(&q[0]);
+                                prefetch(&q[5]);
                             }
                         }
                     }
