@@ -43,20 +43,83 @@ fn pass(
     })
 }
 
+/// What the passes of one pair are asked to do: the pair's body indices, and whether
+/// the search follows the crossing check (`find`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PairJob {
+    pub ia: usize,
+    pub ib: usize,
+    pub find: bool,
+}
+
+/// The passes of every pair of `jobs` at once on the pool, with the hits of each pair in
+/// `jobs` order. Pairs of a floor under many small bodies each hold a few chunks of
+/// work: one after the other they paid a fork-join each and left a thread idle.
+///
+/// Same results as pair after pair: a pass reads positions, surfaces and its own node
+/// lists only (each (node body, segment body) list belongs to one pass of one pair), and
+/// the fault is that of the first pair in `jobs` order that has one, as when the pairs
+/// ran in that order (the later pairs' lists are refreshed too, a cache: exact either way).
+pub(crate) fn all_pair_passes(
+    bodies: &[Body],
+    surfaces: &BTreeMap<u32, Surface>,
+    lists: &mut BTreeMap<(u32, u32), NodeLists>,
+    jobs: &[PairJob],
+    h: f64,
+    step: u64,
+) -> Result<Vec<PairHits>, Fault> {
+    use rayon::prelude::*;
+    let ids = |j: &PairJob| (bodies[j.ia].def.id, bodies[j.ib].def.id);
+    // every pair's lists out of the map (their keys are distinct: pairs are), back after
+    let mut own: Vec<(NodeLists, NodeLists)> = jobs
+        .iter()
+        .map(|j| {
+            let (a, b) = ids(j);
+            let la = lists.remove(&(a, b)).unwrap_or_default();
+            let lb = if a == b {
+                NodeLists::default()
+            } else {
+                lists.remove(&(b, a)).unwrap_or_default()
+            };
+            (la, lb)
+        })
+        .collect();
+    let out: Vec<Result<PairHits, Fault>> = jobs
+        .par_iter()
+        .zip(own.par_iter_mut())
+        .map(|(j, (la, lb))| {
+            let (a, b) = (&bodies[j.ia], &bodies[j.ib]);
+            match (surfaces.get(&a.def.id), surfaces.get(&b.def.id)) {
+                (Some(sa), Some(sb)) => pair_passes(a, b, sa, sb, la, lb, h, step, j.find),
+                _ => Ok((Vec::new(), Vec::new())),
+            }
+        })
+        .collect();
+    for (j, (la, lb)) in jobs.iter().zip(own) {
+        let (a, b) = ids(j);
+        lists.insert((a, b), la);
+        if a != b {
+            lists.insert((b, a), lb);
+        }
+    }
+    out.into_iter().collect()
+}
+
 /// The crossing check of both passes of pair (a, b) as a fault naming both bodies, and
-/// when `find` their hits. `lists`: the node lists per (node body, segment body).
+/// when `find` their hits. `la`, `lb`: the node lists of a's nodes against b's segments
+/// and the reverse (`lb` unused for a self pair).
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn pair_passes(
+fn pair_passes(
     a: &Body,
     b: &Body,
     sa: &Surface,
     sb: &Surface,
-    lists: &mut BTreeMap<(u32, u32), NodeLists>,
+    la: &mut NodeLists,
+    lb: &mut NodeLists,
     h: f64,
     step: u64,
     find: bool,
 ) -> Result<PairHits, Fault> {
-    let (ia, ib) = (a.def.id, b.def.id);
     let fault = |nb: &Body, other: &Body, c: Crossing| Fault::PassThrough {
         step,
         body: nb.def.id,
@@ -67,20 +130,14 @@ pub(crate) fn pair_passes(
         segment: c.segment,
         closing_speed: c.closing_speed,
     };
-    if ia == ib {
-        let l = lists.entry((ia, ib)).or_default();
-        let hits = pass(a, sa, b, sb, true, h, l, find).map_err(|c| fault(a, b, c))?;
+    if a.def.id == b.def.id {
+        let hits = pass(a, sa, b, sb, true, h, la, find).map_err(|c| fault(a, b, c))?;
         return Ok((hits, Vec::new()));
     }
-    // the two lists out of the map for the join, back in after
-    let mut la = lists.remove(&(ia, ib)).unwrap_or_default();
-    let mut lb = lists.remove(&(ib, ia)).unwrap_or_default();
     let (first, second) = rayon::join(
-        || pass(a, sa, b, sb, false, h, &mut la, find),
-        || pass(b, sb, a, sa, false, h, &mut lb, find),
+        || pass(a, sa, b, sb, false, h, la, find),
+        || pass(b, sb, a, sa, false, h, lb, find),
     );
-    lists.insert((ia, ib), la);
-    lists.insert((ib, ia), lb);
     let first = first.map_err(|c| fault(a, b, c))?;
     let second = second.map_err(|c| fault(b, a, c))?;
     Ok((first, second))

@@ -12,7 +12,7 @@ use super::config::{
     ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
 };
 use super::narrow::{forces, search, Hit, Normals, Push};
-use super::passes::pair_passes;
+use super::passes::{all_pair_passes, PairJob};
 use super::quadrature::segment_pair;
 use super::segment::Segment;
 use super::stiffening;
@@ -340,6 +340,9 @@ pub(crate) fn contact_forces_given(
     for (k, u) in means.into_iter().flatten() {
         mean_v[k] = u;
     }
+    // every pair's limits and whether its search runs (serial: a few figures a pair),
+    // then the passes of all pairs at once on the pool, then the rest pair by pair
+    let mut plans = Vec::with_capacity(pairs.len());
     for &(ia, ib) in &pairs {
         let (a, b) = (&bodies[ia], &bodies[ib]);
         let (Some(sa), Some(sb)) = (state.surfaces.get(&a.def.id), state.surfaces.get(&b.def.id))
@@ -369,18 +372,32 @@ pub(crate) fn contact_forces_given(
         let dt_ref = REFERENCE_SAFETY * pair_dt;
         find = find && (!soft || usable(dt_ref));
         let segment_pass = cfg.pass == ContactPass::Segments && !self_pair;
-        // the crossing check of both passes first (a crossing is the fault), with the
-        // search of both passes when the node passes follow
-        let (hits_a, hits_b) = pair_passes(
-            a,
-            b,
-            sa,
-            sb,
-            &mut state.lists,
-            h,
-            step,
-            find && !segment_pass,
-        )?;
+        plans.push((
+            limit,
+            pair_dt,
+            dt_ref,
+            segment_pass,
+            PairJob {
+                ia,
+                ib,
+                // the crossing check of both passes first (a crossing is the fault), with
+                // the search of both passes when the node passes follow
+                find: find && !segment_pass,
+            },
+            find,
+        ));
+    }
+    let jobs: Vec<PairJob> = plans.iter().map(|p| p.4).collect();
+    let all_hits = all_pair_passes(bodies, &state.surfaces, &mut state.lists, &jobs, h, step)?;
+    for ((limit, pair_dt, dt_ref, segment_pass, job, find), (hits_a, hits_b)) in
+        plans.into_iter().zip(all_hits)
+    {
+        let (ia, ib) = (job.ia, job.ib);
+        let (a, b) = (&bodies[ia], &bodies[ib]);
+        let (Some(sa), Some(sb)) = (state.surfaces.get(&a.def.id), state.surfaces.get(&b.def.id))
+        else {
+            continue;
+        };
         dt[ia] = dt[ia].min(limit);
         dt[ib] = dt[ib].min(limit);
         if !find {
