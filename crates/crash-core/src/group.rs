@@ -155,6 +155,31 @@ fn finite_reports(out: &[BodyReport], step: u64) -> Result<(), Fault> {
     Ok(())
 }
 
+/// Bodies below this many elements go to the pool as a whole, side by side (a floor's
+/// spheres: one or two chunks each, which one after the other paid a fork-join apiece);
+/// larger ones run one after the other, each split in chunks on the pool (two large
+/// bodies side by side ran the showcase's stages 10-20 % slower on 2 threads).
+const WHOLE_ON_POOL_BELOW: usize = 8 * crate::forces::CHUNK;
+
+/// `f` on every body, results in body order: the large bodies one after the other, the
+/// small ones side by side on the pool. A body's result depends on its own state only,
+/// so the bits are those of a plain loop.
+fn each_body<R: Send>(bodies: &mut [Body], f: impl Fn(&mut Body) -> R + Sync) -> Vec<R> {
+    let small = |b: &Body| b.def.element_count() < WHOLE_ON_POOL_BELOW;
+    let mut out: Vec<Option<R>> = bodies.iter().map(|_| None).collect();
+    for (b, o) in bodies.iter_mut().zip(out.iter_mut()) {
+        if !small(b) {
+            *o = Some(f(b));
+        }
+    }
+    bodies
+        .par_iter_mut()
+        .zip(out.par_iter_mut())
+        .filter(|(b, _)| small(b))
+        .for_each(|(b, o)| *o = Some(f(b)));
+    out.into_iter().flatten().collect()
+}
+
 fn report(b: &Body, f: &ForceSums, lo: Vec3, hi: Vec3, max_move: f64) -> BodyReport {
     BodyReport {
         id: b.def.id,
@@ -298,19 +323,13 @@ impl Group {
         let hbar = 0.5 * (sc.h_prev + sc.h);
         let t0 = Instant::now();
         let probes: &[(u32, u32)] = if due.probes { &self.probes } else { &[] };
-        // Bodies go to the pool as a whole (each body's own loops split it further): a
-        // group of many small bodies (spheres on a floor) would otherwise pay a fork-join
-        // per body and stage for a chunk or two of work. A body's result depends on its
-        // own state only, and faults and probe rows are taken in body order: same bits.
+        // small bodies go to the pool side by side (`each_body`); faults and probe rows
+        // are taken in body order: same bits
         let gravity = self.gravity;
-        let stepped: Vec<_> = self
-            .bodies
-            .par_iter_mut()
-            .map(|b| {
-                let before = b.probe_velocities(nodes_of(probes, b.def.id));
-                b.integrate(&sc, gravity).map(|s| (s, before))
-            })
-            .collect();
+        let stepped = each_body(&mut self.bodies, |b| {
+            let before = b.probe_velocities(nodes_of(probes, b.def.id));
+            b.integrate(&sc, gravity).map(|s| (s, before))
+        });
         for (b, r) in self.bodies.iter().zip(stepped) {
             let (s, before) = r?;
             let nodes = nodes_of(probes, b.def.id);
@@ -323,11 +342,7 @@ impl Group {
         let moves: Vec<(f64, usize)> = sums.iter().map(|s| (s.max_move, s.max_move_node)).collect();
         crate::contact::check_moves(&self.bodies, &self.contact, &moves, h, step)?;
         let t1 = Instant::now();
-        let forces: Vec<_> = self
-            .bodies
-            .par_iter_mut()
-            .map(|b| b.internal_forces(h, step))
-            .collect();
+        let forces = each_body(&mut self.bodies, |b| b.internal_forces(h, step));
         let mut out = Vec::with_capacity(self.bodies.len());
         for ((b, s), f) in self.bodies.iter().zip(&sums).zip(forces) {
             let f = f?;
