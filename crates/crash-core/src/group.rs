@@ -172,11 +172,14 @@ fn each_body<R: Send>(bodies: &mut [Body], f: impl Fn(&mut Body) -> R + Sync) ->
             *o = Some(f(b));
         }
     }
-    bodies
-        .par_iter_mut()
-        .zip(out.par_iter_mut())
-        .filter(|(b, _)| small(b))
-        .for_each(|(b, o)| *o = Some(f(b)));
+    // no pool dispatch per stage and step for groups of large bodies only (the showcase)
+    if bodies.iter().any(small) {
+        bodies
+            .par_iter_mut()
+            .zip(out.par_iter_mut())
+            .filter(|(b, _)| small(b))
+            .for_each(|(b, o)| *o = Some(f(b)));
+    }
     out.into_iter().flatten().collect()
 }
 
