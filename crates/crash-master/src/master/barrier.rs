@@ -153,7 +153,6 @@ impl<L: WorkerLink> Master<'_, L> {
         // `seen` (kept between steps) marks the slots filled by this step.
         let n = self.info.len();
         self.contacts.clear();
-        self.group_ns.clear();
         self.probed.clear();
         if self.reports.len() != n {
             self.reports.clear();
@@ -162,15 +161,27 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         self.seen.clear();
         self.seen.resize(n, false);
+        self.group_ns.clear();
+        self.group_ns.resize(n, 0);
+        // one pass for every worker's count (one pass per worker cost 0.7 ms a step
+        // with 10 000 bodies on 64 workers)
+        let mut held = vec![0usize; reps.len()];
+        for w in self.worker_of.iter().flatten() {
+            if let Some(c) = held.get_mut(*w) {
+                *c += 1;
+            }
+        }
         let mut count = 0;
         for (w, rep) in reps.into_iter().enumerate() {
             // marks `seen` for the worker's bodies (plausible.rs)
-            if let Err(what) = self.check_report(w, &rep) {
+            if let Err(what) = self.check_report(w, held[w], &rep) {
                 return Err(self.implausible(w, &what));
             }
-            for r in rep.bodies {
+            // by reference: one copy of each report into its slot (moving them out of
+            // the vector copied each twice)
+            for r in &rep.bodies {
                 if let Some(i) = self.index(r.id) {
-                    self.reports[i] = r;
+                    self.reports[i] = *r;
                     count += 1;
                 }
             }
@@ -216,7 +227,9 @@ impl<L: WorkerLink> Master<'_, L> {
     /// about `1 / COST_SMOOTHING` steps).
     fn account(&mut self, groups: &[GroupTime]) {
         for g in groups {
-            self.group_ns.insert(g.first, g.nanos);
+            if let Some(i) = self.index(g.first) {
+                self.group_ns[i] = g.nanos;
+            }
         }
         if self.opts.cost != CostModel::Measured {
             return;

@@ -37,7 +37,11 @@ impl<L: WorkerLink> Master<'_, L> {
                     bodies: ids.iter().map(|&id| self.name(id).to_string()).collect(),
                     worker,
                     elements,
-                    step_ns: self.group_ns.get(&first).copied().unwrap_or(0),
+                    step_ns: self
+                        .index(first)
+                        .and_then(|i| self.group_ns.get(i))
+                        .copied()
+                        .unwrap_or(0),
                 });
             }
         }

@@ -128,8 +128,10 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     kinematic: KinematicWork,
     /// Body names (index = position in the sorted id list), for messages.
     names: Vec<String>,
-    /// Compute time of each group (by its smallest id) in the last step [ns].
-    group_ns: std::collections::BTreeMap<u32, u64>,
+    /// Compute time of each group in the last step [ns], at the index of its smallest
+    /// id (0: no group starts there). A vector, not a map: filled for every group of
+    /// every step.
+    group_ns: Vec<u64>,
     /// Step of the last group rows handed to the sink.
     groups_step: Option<u64>,
     search: PairSearch,

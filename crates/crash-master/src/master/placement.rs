@@ -23,23 +23,27 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     pub(super) fn box_of(&self, r: &BodyReport) -> BodyBox {
-        let thickness = self.index(r.id).map_or(0.0, |i| self.info[i].thickness);
-        self.inflate(BodyBox {
+        let (thickness, extra) = self
+            .index(r.id)
+            .map_or((0.0, 0.0), |i| (self.info[i].thickness, self.info[i].extra));
+        let e = Vec3::repeat(extra);
+        BodyBox {
             id: r.id,
-            lo: r.lo,
-            hi: r.hi,
+            lo: r.lo - e,
+            hi: r.hi + e,
             thickness,
-        })
+        }
     }
 
     /// Level-i search over the contact bodies (MEIM boxes) and the MEIM update.
     pub(super) fn update_meim(&mut self, boxes: &[BodyBox]) -> bool {
         let pairs = if self.contact.enabled {
-            let meshes: Vec<BodyBox> = boxes
-                .iter()
-                .filter(|b| self.index(b.id).is_some_and(|i| self.info[i].meshes))
-                .copied()
-                .collect();
+            let mut meshes: Vec<BodyBox> = Vec::with_capacity(boxes.len());
+            meshes.extend(
+                boxes
+                    .iter()
+                    .filter(|b| self.index(b.id).is_some_and(|i| self.info[i].meshes)),
+            );
             self.search.pairs(&meshes)
         } else {
             Vec::new()
