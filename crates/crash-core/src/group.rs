@@ -329,9 +329,16 @@ impl Group {
         // small bodies go to the pool side by side (`each_body`); faults and probe rows
         // are taken in body order: same bits
         let gravity = self.gravity;
+        let copies = &self.copies;
         let stepped = each_body(&mut self.bodies, |b| {
             let before = b.probe_velocities(nodes_of(probes, b.def.id));
-            b.integrate(&sc, gravity).map(|s| (s, before))
+            // a copy's energies are never reported: its owner's are (kinematic.rs)
+            if copies.binary_search(&b.def.id).is_ok() {
+                b.copy_step(&sc, gravity)
+            } else {
+                b.integrate(&sc, gravity)
+            }
+            .map(|s| (s, before))
         });
         for (b, r) in self.bodies.iter().zip(stepped) {
             let (s, before) = r?;

@@ -75,7 +75,7 @@ impl Default for NodeSums {
 }
 
 impl NodeSums {
-    fn merge(mut self, o: &NodeSums) -> Self {
+    pub(crate) fn merge(mut self, o: &NodeSums) -> Self {
         self.kinetic += o.kinetic;
         self.external += o.external;
         self.reaction += o.reaction;
@@ -114,11 +114,14 @@ pub struct StepClock {
 impl Body {
     /// Advance the nodes of this body from x_n to x_{n+1} (all but a part's halo nodes).
     pub fn integrate(&mut self, clock: &StepClock, gravity: Vec3) -> Result<NodeSums, Fault> {
+        if self.def.kinematic {
+            // the same bits without the per-node program and force terms (kinematic.rs)
+            return self.integrate_kinematic(clock, gravity);
+        }
         let h = clock.h;
         let hbar = 0.5 * (clock.h_prev + h);
         let c = self.def.mass_damping;
         let (dn, dd) = (1.0 - 0.5 * c * hbar, 1.0 / (1.0 + 0.5 * c * hbar));
-        let kinematic = self.def.kinematic;
         let gs = &self.def.gather_start;
         let gi = &self.def.gather_slot;
         // the force slots and, with Kelvin damping, the Kelvin part of each (empty
@@ -153,16 +156,14 @@ impl Body {
                 let mut s = NodeSums::default();
                 for k in 0..xs.len() {
                     let i = ci * CHUNK + k;
-                    if !kinematic {
-                        // the force slots of a node a few places ahead (see `prefetch`)
-                        if let Some(range) = gs.get(i + PREFETCH..i + PREFETCH + 2) {
-                            for &sl in &gi[range[0] as usize..range[1] as usize] {
-                                // a 48-byte slot starts at byte 0, 16, 32 or 48 of a
-                                // line: it may end on the next one
-                                let q = &slots[sl as usize];
-                                prefetch(&q[0]);
-                                prefetch(&q[5]);
-                            }
+                    // the force slots of a node a few places ahead (see `prefetch`)
+                    if let Some(range) = gs.get(i + PREFETCH..i + PREFETCH + 2) {
+                        for &sl in &gi[range[0] as usize..range[1] as usize] {
+                            // a 48-byte slot starts at byte 0, 16, 32 or 48 of a
+                            // line: it may end on the next one
+                            let q = &slots[sl as usize];
+                            prefetch(&q[0]);
+                            prefetch(&q[5]);
                         }
                     }
                     let m = mass[i];
@@ -183,10 +184,7 @@ impl Body {
                     }
                     let (fe, me) = (f, mom);
                     let mut fcon = Vec3::zeros();
-                    // a kinematic body's motion never feels contact: the work contact
-                    // does on it is counted per pair (PairStats::work_on_a, KinematicWork)
-                    // so that it does not depend on which group holds which copy
-                    if !fc.is_empty() && !kinematic {
+                    if !fc.is_empty() {
                         fcon = fc[i];
                         f += fcon;
                     }
@@ -194,20 +192,18 @@ impl Body {
                     let mut mi = Vec3::zeros();
                     let mut fd = Vec3::zeros();
                     let mut md = Vec3::zeros();
-                    if !kinematic {
+                    for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
+                        let q = &slots[sl as usize];
+                        fi += Vec3::new(q[0], q[1], q[2]);
+                        mi += Vec3::new(q[3], q[4], q[5]);
+                    }
+                    f -= fi;
+                    mom -= mi;
+                    if !kelvin.is_empty() {
                         for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
-                            let q = &slots[sl as usize];
-                            fi += Vec3::new(q[0], q[1], q[2]);
-                            mi += Vec3::new(q[3], q[4], q[5]);
-                        }
-                        f -= fi;
-                        mom -= mi;
-                        if !kelvin.is_empty() {
-                            for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
-                                let q = &kelvin[sl as usize];
-                                fd += Vec3::new(q[0], q[1], q[2]);
-                                md += Vec3::new(q[3], q[4], q[5]);
-                            }
+                            let q = &kelvin[sl as usize];
+                            fd += Vec3::new(q[0], q[1], q[2]);
+                            md += Vec3::new(q[3], q[4], q[5]);
                         }
                     }
                     let v_old = vs[k];
@@ -298,6 +294,12 @@ impl Body {
                 what: "velocity or position",
             });
         }
+        self.book(h, &total);
+        Ok(total)
+    }
+
+    /// The step's sums into the energy record (a step of length h).
+    pub(crate) fn book(&mut self, h: f64, total: &NodeSums) {
         let e = &mut self.state.energy;
         e.kinetic = total.kinetic;
         // Shadow internal energy at t_{n+1/2}: E(x_n) + h/2 f_int(x_n) . v_{n+1/2}, which
@@ -309,6 +311,5 @@ impl Body {
         e.external += total.external + total.reaction;
         e.contact -= total.contact;
         e.damping += total.mass_damping + total.kelvin;
-        Ok(total)
     }
 }

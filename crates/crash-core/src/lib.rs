@@ -22,6 +22,7 @@ pub mod forces;
 pub mod group;
 pub mod hash;
 pub mod integrate;
+pub mod kinematic;
 pub mod material;
 pub mod mesh;
 pub mod modal;

@@ -17,7 +17,7 @@ use super::quadrature::segment_pair;
 use super::segment::Segment;
 use super::stiffening;
 use super::surface::Surface;
-use super::sweep::{closing_speed, mean_velocity};
+use super::sweep::{closing_speed, BodySpeed};
 use super::verlet::NodeLists;
 use crate::body::{Body, NO_PROGRAM};
 use crate::error::Fault;
@@ -263,10 +263,10 @@ pub fn contact_forces(
 
 /// The closing-speed step of a pair of different bodies (`SpeedRule::LimitDt`): a
 /// fraction of the mean thickness over the pair's closing speed, None when they do not
-/// close. `ua`, `ub`: the bodies' mean velocities (`mean_velocity`).
-pub(crate) fn closing_dt(a: &Body, b: &Body, ua: Vec3, ub: Vec3) -> Option<f64> {
+/// close. `sa`, `sb`: the bodies' `BodySpeed`.
+pub(crate) fn closing_dt(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> Option<f64> {
     let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let v = closing_speed(a, b, ua, ub);
+    let v = closing_speed(a, b, sa, sb);
     (v > 0.0).then(|| CLOSING_FRACTION * c / v)
 }
 
@@ -332,13 +332,13 @@ pub(crate) fn contact_forces_given(
         },
         || {
             let want = cfg.speed_rule == SpeedRule::LimitDt && closing.is_none();
-            let mean = |&k: &usize| (k, mean_velocity(&bodies_[k]));
-            want.then(|| in_pairs.iter().map(mean).collect::<Vec<_>>())
+            let speed = |&k: &usize| (k, BodySpeed::of(&bodies_[k]));
+            want.then(|| in_pairs.iter().map(speed).collect::<Vec<_>>())
         },
     );
-    let mut mean_v = vec![Vec3::zeros(); bodies.len()];
+    let mut speeds = vec![BodySpeed::default(); bodies.len()];
     for (k, u) in means.into_iter().flatten() {
-        mean_v[k] = u;
+        speeds[k] = u;
     }
     // every pair's limits and whether its search runs (serial: a few figures a pair),
     // then the passes of all pairs at once on the pool, then the rest pair by pair
@@ -363,7 +363,7 @@ pub(crate) fn contact_forces_given(
         let mut find = !soft || usable(pair_dt);
         if find && cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
             let given = closing.map(|m| m.get(&(a.def.id, b.def.id)).copied().flatten());
-            let d = given.unwrap_or_else(|| closing_dt(a, b, mean_v[ia], mean_v[ib]));
+            let d = given.unwrap_or_else(|| closing_dt(a, b, &speeds[ia], &speeds[ib]));
             if let Some(d) = d {
                 limit = limit.min(d);
                 pair_dt = pair_dt.min(d);

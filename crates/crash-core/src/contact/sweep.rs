@@ -42,9 +42,61 @@ pub fn mean_velocity(b: &Body) -> Vec3 {
     }
 }
 
+/// What the closing speed needs of one body, taken once per contact pass however many
+/// pairs it is in: its mean velocity and, for a kinematic body whose nodes move with
+/// one velocity per program (they do: the integration gives every node its program's
+/// value; checked here, a state that does not fit takes the node loop), those
+/// velocities: the maxima over the nodes are then maxima over a few values.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BodySpeed {
+    pub mean: Vec3,
+    /// The distinct velocities of the nodes (one per program, and rest), if known.
+    uniform: Option<Vec<Vec3>>,
+}
+
+impl BodySpeed {
+    pub fn of(b: &Body) -> Self {
+        Self {
+            mean: mean_velocity(b),
+            uniform: if b.def.kinematic {
+                program_velocities(b)
+            } else {
+                None
+            },
+        }
+    }
+}
+
+/// The velocity of each program's nodes (nodes without one last) when all nodes of a
+/// program have the same velocity, else None (one serial read of v: comparisons only).
+fn program_velocities(b: &Body) -> Option<Vec<Vec3>> {
+    let d = &*b.def;
+    let rest = d.programs.len();
+    let mut seen: Vec<Option<Vec3>> = vec![None; rest + 1];
+    for (v, &p) in b.state.v.iter().zip(&d.program) {
+        let c = if p == crate::body::NO_PROGRAM {
+            rest
+        } else {
+            p as usize
+        };
+        match seen.get_mut(c)? {
+            Some(r) if r != v => return None,
+            Some(_) => {}
+            slot => *slot = Some(*v),
+        }
+    }
+    Some(seen.into_iter().flatten().collect())
+}
+
 /// Largest |v - u1| and |v - u2| over the nodes, in one pass (maxima: the same bits in
-/// any order, so on the pool).
-fn max_speeds_rel(b: &Body, u1: &Vec3, u2: &Vec3) -> (f64, f64) {
+/// any order, so on the pool); over the distinct velocities when they are known (the
+/// same maxima: equal velocities give equal norms, +0 and -0 alike).
+fn max_speeds_rel(b: &Body, speed: &BodySpeed, u1: &Vec3, u2: &Vec3) -> (f64, f64) {
+    if let Some(vs) = &speed.uniform {
+        return vs.iter().fold((0.0, 0.0), |(m1, m2): (f64, f64), v| {
+            (m1.max((v - u1).norm()), m2.max((v - u2).norm()))
+        });
+    }
     b.state
         .v
         .par_chunks(super::stage::PAR_CHUNK)
@@ -57,10 +109,11 @@ fn max_speeds_rel(b: &Body, u1: &Vec3, u2: &Vec3) -> (f64, f64) {
 }
 
 /// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
-/// `ua`, `ub`: their `mean_velocity` (a body in many pairs computes it once per pass).
-pub fn closing_speed(a: &Body, b: &Body, ua: Vec3, ub: Vec3) -> f64 {
-    let (a_ua, a_ub) = max_speeds_rel(a, &ua, &ub);
-    let (b_ua, b_ub) = max_speeds_rel(b, &ua, &ub);
+/// `sa`, `sb`: their `BodySpeed` (a body in many pairs takes it once per pass).
+pub fn closing_speed(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> f64 {
+    let (ua, ub) = (sa.mean, sb.mean);
+    let (a_ua, a_ub) = max_speeds_rel(a, sa, &ua, &ub);
+    let (b_ua, b_ub) = max_speeds_rel(b, sb, &ua, &ub);
     let with_a = a_ua + b_ua;
     let with_b = a_ub + b_ub;
     with_a.min(with_b)

@@ -33,7 +33,7 @@ use crate::body::Body;
 use crate::clock::Clock;
 use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, pairs_of};
 use crate::contact::surface::Surface;
-use crate::contact::sweep::mean_velocity;
+use crate::contact::sweep::BodySpeed;
 use crate::contact::{body_bounds, check_moves, ContactConfig, ContactState, PenaltyKind};
 use crate::contact::{ContactPass, SpeedRule};
 use crate::error::{CoreError, Fault};
@@ -298,7 +298,7 @@ impl GroupSplit {
             })
             .collect();
         let pairs = pairs_of(&self.whole, &cfg, &bounds);
-        let mut mean_v: BTreeMap<usize, Vec3> = BTreeMap::new();
+        let mut speeds: BTreeMap<usize, BodySpeed> = BTreeMap::new();
         for &(ia, ib) in &pairs {
             let (a, b) = (&self.whole[ia], &self.whole[ib]);
             if cfg.penalty == PenaltyKind::Element {
@@ -313,9 +313,9 @@ impl GroupSplit {
                 continue;
             }
             if cfg.speed_rule == SpeedRule::LimitDt && ia != ib {
-                let ua = *mean_v.entry(ia).or_insert_with(|| mean_velocity(a));
-                let ub = *mean_v.entry(ib).or_insert_with(|| mean_velocity(b));
-                let d = closing_dt(a, b, ua, ub);
+                speeds.entry(ia).or_insert_with(|| BodySpeed::of(a));
+                speeds.entry(ib).or_insert_with(|| BodySpeed::of(b));
+                let d = closing_dt(a, b, &speeds[&ia], &speeds[&ib]);
                 if let Some(d) = d {
                     dt[ia] = dt[ia].min(d);
                     dt[ib] = dt[ib].min(d);
