@@ -158,6 +158,9 @@ mod tests {
             }
             gone
         });
-        assert!(gone, "the spinner must stop when dropped (still listed after 5 s)");
+        assert!(
+            gone,
+            "the spinner must stop when dropped (still listed after 5 s)"
+        );
     }
 }
