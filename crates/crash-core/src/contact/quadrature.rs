@@ -207,7 +207,10 @@ pub fn point_pushes(
             let passing: Vec<(u32, (Vec3, Vec3))> = segs
                 .iter()
                 .zip(bxs)
-                .filter(|(_, sbx)| !(box_gap(sbx, &mbox) > 0.0))
+                .filter(|(_, sbx)| {
+                    let gap = box_gap(sbx, &mbox);
+                    gap.is_nan() || gap <= 0.0
+                })
                 .map(|(&js, &sbx)| (js, sbx))
                 .collect();
             for group in passing.chunks(QUERY_GROUP) {
@@ -217,10 +220,8 @@ pub fn point_pushes(
                 let (mut glo, mut ghi) = query_box(&group[0].1);
                 for (_, sbx) in &group[1..] {
                     let (lo, hi) = query_box(sbx);
-                    for d in 0..3 {
-                        glo[d] = glo[d].min(lo[d]);
-                        ghi[d] = ghi[d].max(hi[d]);
-                    }
+                    glo = std::array::from_fn(|d| glo[d].min(lo[d]));
+                    ghi = std::array::from_fn(|d| ghi[d].max(hi[d]));
                 }
                 msurf.query(glo, ghi, &mut group_cand);
                 group_cand.sort_unstable();
