@@ -6,7 +6,7 @@
 //! |e|^2 / 8R, the sagitta); on a flat segment it is zero. Along an edge only that edge's
 //! two nodes count, so neighbours share the edge's curve: the surface is continuous.
 
-use super::segment::Segment;
+use super::segment::{Corners, Segment};
 use super::smooth::CREASE_COS;
 use super::surface::{face_vector, Surface};
 use crate::Vec3;
@@ -15,13 +15,23 @@ use crate::Vec3;
 /// corner on a crease (more than 30 degrees off), where a bulge would not be the surface;
 /// and which corners took their nodal normal.
 pub fn corner_normals(seg: &Segment, surf: &Surface, x: &[Vec3]) -> ([Vec3; 4], [bool; 4]) {
+    corner_normals_with(seg, x, |n| surf.nodal_normal(n, x))
+}
+
+/// `corner_normals` with the nodal normals from `nodal` (a cache of
+/// `Surface::nodal_normal`).
+fn corner_normals_with(
+    seg: &Segment,
+    x: &[Vec3],
+    nodal_normal: impl Fn(u32) -> Vec3,
+) -> ([Vec3; 4], [bool; 4]) {
     let f = face_vector(seg, x);
     let l = f.norm();
     let ns = if l > 0.0 { f / l } else { Vec3::zeros() };
     let mut out = [ns; 4];
     let mut nodal = [false; 4];
     for (k, &n) in seg.nodes().iter().enumerate() {
-        let nn = surf.nodal_normal(n, x);
+        let nn = nodal_normal(n);
         if nn.dot(&ns) >= CREASE_COS {
             out[k] = nn;
             nodal[k] = true;
@@ -235,7 +245,12 @@ pub struct Curved {
 
 impl Curved {
     pub fn of(seg: &Segment, surf: &Surface, x: &[Vec3]) -> Self {
-        let (normals, nodal) = corner_normals(seg, surf, x);
+        Self::with(seg, x, |n| surf.nodal_normal(n, x))
+    }
+
+    /// `of` with the nodal normals from `nodal` (a cache of `Surface::nodal_normal`).
+    fn with(seg: &Segment, x: &[Vec3], nodal: impl Fn(u32) -> Vec3) -> Self {
+        let (normals, nodal) = corner_normals_with(seg, x, nodal);
         Curved {
             normals,
             nodal,
@@ -259,10 +274,20 @@ impl NearCurved {
     /// Segment j's curved data: the stored one, or computed now for a segment outside
     /// the near set (the same values either way).
     pub fn get(&self, j: u32, surf: &Surface, x: &[Vec3]) -> Curved {
-        match self.segs.binary_search(&j) {
-            Ok(k) => self.data[k],
-            Err(_) => Curved::of(&surf.segments[j as usize], surf, x),
+        match self.index(j) {
+            Some(k) => self.data[k],
+            None => Curved::of(&surf.segments[j as usize], surf, x),
         }
+    }
+
+    /// Where segment j's data are stored (`at`), if it is in the near set.
+    pub fn index(&self, j: u32) -> Option<usize> {
+        self.segs.binary_search(&j).ok()
+    }
+
+    /// The stored data at position k (`index`).
+    pub fn at(&self, k: usize) -> &Curved {
+        &self.data[k]
     }
 }
 
@@ -281,19 +306,41 @@ pub fn near_curved(
     grow: f64,
 ) -> NearCurved {
     use rayon::prelude::*;
-    let data: Vec<(u32, Curved)> = live
-        .par_iter()
+    let segs: Vec<u32> = live
+        .iter()
         .zip(boxes)
         .filter(|(_, (lo, hi))| {
             (0..3).all(|d| hi[d] >= near.0[d] - grow && lo[d] <= near.1[d] + grow)
         })
-        .map(|(&j, _)| (j, Curved::of(&surf.segments[j as usize], surf, x)))
+        .map(|(&j, _)| j)
         .collect();
-    let bound = data
-        .iter()
-        .map(|(_, cv)| bulge_bound(&cv.b))
-        .fold(0.0, f64::max);
-    let (segs, data) = data.into_iter().unzip();
+    // each corner node's normal once (a node is a corner of about six segments): the
+    // same function, so the same bits
+    let mut slot = vec![u32::MAX; x.len()];
+    let mut nodes = Vec::new();
+    for &j in &segs {
+        for &n in surf.segments[j as usize].nodes() {
+            if slot[n as usize] == u32::MAX {
+                slot[n as usize] = nodes.len() as u32;
+                nodes.push(n);
+            }
+        }
+    }
+    let normals: Vec<Vec3> = nodes
+        .par_iter()
+        .with_min_len(256)
+        .map(|&n| surf.nodal_normal(n, x))
+        .collect();
+    let data: Vec<Curved> = segs
+        .par_iter()
+        .with_min_len(128)
+        .map(|&j| {
+            Curved::with(&surf.segments[j as usize], x, |n| {
+                normals[slot[n as usize] as usize]
+            })
+        })
+        .collect();
+    let bound = data.iter().map(|cv| bulge_bound(&cv.b)).fold(0.0, f64::max);
     NearCurved { segs, data, bound }
 }
 
@@ -319,8 +366,13 @@ pub struct SubTriangle {
 }
 
 pub fn sub_triangle(seg: &Segment, x: &[Vec3], sub: usize) -> SubTriangle {
-    let xs = seg.nodes.map(|i| x[i as usize]);
-    if seg.count == 3 {
+    sub_triangle_at(&Corners::of(seg, x), sub)
+}
+
+/// `sub_triangle` from gathered corners (the same bits: the centroid is summed alike).
+pub fn sub_triangle_at(at: &Corners, sub: usize) -> SubTriangle {
+    let xs = at.xs;
+    if at.count == 3 {
         return SubTriangle {
             a: xs[0],
             b: xs[1],
@@ -335,7 +387,7 @@ pub fn sub_triangle(seg: &Segment, x: &[Vec3], sub: usize) -> SubTriangle {
     dw_du[k] += 1.0;
     dw_dv[k1] += 1.0;
     SubTriangle {
-        a: (xs[0] + xs[1] + xs[2] + xs[3]) * 0.25,
+        a: at.centroid,
         b: xs[k],
         c: xs[k1],
         dw_du,

@@ -16,10 +16,10 @@
 use super::config::ContactConfig;
 use super::curved::{
     bulge, bulge_bound, bulge_parts, corner_a_weights, loose_bulge_bound, near_curved, node_box,
-    normal_pullback, normal_rate, sub_triangle, Curved, NearCurved, NormalOf,
+    normal_pullback, normal_rate, sub_triangle, sub_triangle_at, Curved, NearCurved, NormalOf,
 };
 use super::narrow::TIE;
-use super::segment::{project, Projection, Segment};
+use super::segment::{closest, Closest, Corners, Segment};
 use super::stage::{KinLoad, PairStats};
 use super::stiffening;
 use super::surface::Surface;
@@ -42,6 +42,9 @@ pub const MAX_PARTS: usize = 24;
 pub const BULGE_REACH: f64 = 0.25;
 /// Slave segments per task.
 const SEG_CHUNK: usize = 256;
+/// Slave segments per master tree query (consecutive ones: the mesh order keeps them
+/// near each other).
+const QUERY_GROUP: usize = 8;
 
 /// One active quadrature point: its forces on the corner nodes of its two segments. The
 /// bulge terms through the corner normals are not here: they go to `NormalLoad`s,
@@ -96,13 +99,36 @@ fn box_gap(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
     d.norm()
 }
 
-/// The master data of one candidate segment: its index, node box and bulge coefficients.
+/// The master data of one candidate segment: its index, node box, corners and where its
+/// curved data are (an index, not a copy: the data are 232 bytes).
 struct Master {
     j: u32,
     bx: (Vec3, Vec3),
-    b: [[f64; 4]; 4],
-    normals: [Vec3; 4],
-    nodal: [bool; 4],
+    at: Corners,
+    cv: CurvedAt,
+}
+
+/// Where a master's curved data are: in the pass's near set, or computed for this slave
+/// segment (a segment outside the near set; the same values either way).
+#[derive(Clone, Copy)]
+enum CurvedAt {
+    Near(usize),
+    Extra(usize),
+}
+
+/// The master body's curved data as the point loop reads them.
+struct MasterCurved<'a> {
+    near: &'a NearCurved,
+    extra: &'a [Curved],
+}
+
+impl MasterCurved<'_> {
+    fn of(&self, m: &Master) -> &Curved {
+        match m.cv {
+            CurvedAt::Near(k) => self.near.at(k),
+            CurvedAt::Extra(k) => &self.extra[k],
+        }
+    }
 }
 
 /// The segments of `surf` whose stored box comes within `grow` of the box `near` (per
@@ -151,7 +177,7 @@ pub fn point_pushes(
     cfg: &ContactConfig,
     kappa: f64,
     mu: f64,
-) -> Points {
+) -> Vec<Points> {
     let (scurv, mcurv) = curved;
     let (hs_max, hm_max) = (scurv.bound, mcurv.bound);
     let c = 0.5 * (sb.def.section.thickness + mb.def.section.thickness);
@@ -163,59 +189,103 @@ pub fn point_pushes(
     let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
     let xm = &mb.state.x;
     let (live, sboxes) = slave;
-    let chunks: Vec<Points> = live
-        .par_chunks(SEG_CHUNK)
+    live.par_chunks(SEG_CHUNK)
         .zip(sboxes.par_chunks(SEG_CHUNK))
         .map(|(segs, bxs)| {
             let mut out = Points::default();
             let mut cand = Vec::new();
+            let mut group_cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
-            for (&js, &sbx) in segs.iter().zip(bxs) {
-                let seg = &ssurf.segments[js as usize];
-                if box_gap(&sbx, &mbox) > 0.0 {
-                    continue;
+            let mut extra: Vec<Curved> = Vec::new();
+            // master segments whose stored box meets the slave's box grown by the
+            // slave's half-thickness and the bulge reach
+            let g = 0.5 * sb.def.section.thickness + (BULGE_REACH * c).max(hm_max + hs_max);
+            let query_box = |sbx: &(Vec3, Vec3)| {
+                let (lo, hi) = (sbx.0.add_scalar(-g), sbx.1.add_scalar(g));
+                ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
+            };
+            let passing: Vec<(u32, (Vec3, Vec3))> = segs
+                .iter()
+                .zip(bxs)
+                .filter(|(_, sbx)| {
+                    let gap = box_gap(sbx, &mbox);
+                    gap.is_nan() || gap <= 0.0
+                })
+                .map(|(&js, &sbx)| (js, sbx))
+                .collect();
+            for group in passing.chunks(QUERY_GROUP) {
+                // one tree query for the group's union box; each segment keeps the
+                // segments whose stored box meets its own box (the tree's test: the set
+                // its own query gives), already in index order
+                let (mut glo, mut ghi) = query_box(&group[0].1);
+                for (_, sbx) in &group[1..] {
+                    let (lo, hi) = query_box(sbx);
+                    glo = std::array::from_fn(|d| glo[d].min(lo[d]));
+                    ghi = std::array::from_fn(|d| ghi[d].max(hi[d]));
                 }
-                // master segments whose stored box meets the slave's box grown by the
-                // slave's half-thickness and the bulge reach
-                let g = 0.5 * sb.def.section.thickness + (BULGE_REACH * c).max(hm_max + hs_max);
-                let lo = sbx.0.add_scalar(-g);
-                let hi = sbx.1.add_scalar(g);
-                msurf.query([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z], &mut cand);
-                cand.sort_unstable();
-                masters.clear();
-                for &j in &cand {
-                    let bx = node_box(&msurf.segments[j as usize], xm);
-                    if box_gap(&sbx, &bx) >= box_reach {
+                msurf.query(glo, ghi, &mut group_cand);
+                group_cand.sort_unstable();
+                for &(js, sbx) in group {
+                    let seg = &ssurf.segments[js as usize];
+                    let (lo, hi) = query_box(&sbx);
+                    cand.clear();
+                    cand.extend(
+                        group_cand
+                            .iter()
+                            .copied()
+                            .filter(|&j| msurf.box_meets(j, &lo, &hi)),
+                    );
+                    masters.clear();
+                    extra.clear();
+                    for &j in &cand {
+                        let ms = &msurf.segments[j as usize];
+                        let bx = node_box(ms, xm);
+                        if box_gap(&sbx, &bx) >= box_reach {
+                            continue;
+                        }
+                        let cv = match mcurv.index(j) {
+                            Some(k) => CurvedAt::Near(k),
+                            None => {
+                                extra.push(Curved::of(ms, msurf, xm));
+                                CurvedAt::Extra(extra.len() - 1)
+                            }
+                        };
+                        masters.push(Master {
+                            j,
+                            bx,
+                            at: Corners::of(ms, xm),
+                            cv,
+                        });
+                    }
+                    if masters.is_empty() {
                         continue;
                     }
-                    let cv = mcurv.get(j, msurf, xm);
-                    masters.push(Master {
-                        j,
-                        bx,
-                        b: cv.b,
-                        normals: cv.normals,
-                        nodal: cv.nodal,
-                    });
+                    let scv = scurv.get(js, ssurf, &sb.state.x);
+                    let mc = MasterCurved {
+                        near: mcurv,
+                        extra: &extra,
+                    };
+                    slave_segment(
+                        sb,
+                        ssurf,
+                        js,
+                        seg,
+                        &scv,
+                        mb,
+                        msurf,
+                        (&masters, &mc),
+                        c,
+                        reach,
+                        kappa,
+                        mu,
+                        cfg,
+                        &mut out,
+                    );
                 }
-                if masters.is_empty() {
-                    continue;
-                }
-                let scv = scurv.get(js, ssurf, &sb.state.x);
-                slave_segment(
-                    sb, ssurf, js, seg, &scv, mb, msurf, &masters, c, reach, kappa, mu, cfg,
-                    &mut out,
-                );
             }
             out
         })
-        .collect();
-    let mut all = Points::default();
-    for ch in chunks {
-        all.pushes.extend(ch.pushes);
-        all.slave_loads.extend(ch.slave_loads);
-        all.master_loads.extend(ch.master_loads);
-    }
-    all
+        .collect()
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -227,7 +297,7 @@ fn slave_segment(
     scv: &Curved,
     mb: &Body,
     msurf: &Surface,
-    masters: &[Master],
+    masters: (&[Master], &MasterCurved),
     c: f64,
     reach: f64,
     kappa: f64,
@@ -237,6 +307,7 @@ fn slave_segment(
 ) {
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
+    let (masters, mcurv) = masters;
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
     let mut near: Vec<usize> = Vec::with_capacity(masters.len());
@@ -287,7 +358,7 @@ fn slave_segment(
                 let (hs, _) = bulge(&sb_coef, &w);
                 let xa = flat + nsub * hs;
                 // closest master segment (ties within TIE c: lowest index; `masters` sorted)
-                let mut best: Option<(Projection, usize)> = None;
+                let mut best: Option<(Closest, usize)> = None;
                 let mut dmin = f64::INFINITY;
                 for &mi in near.iter() {
                     let m = &masters[mi];
@@ -295,7 +366,7 @@ fn slave_segment(
                     if lb >= reach || lb > dmin + TIE * c {
                         continue;
                     }
-                    let pr = project(&xa, &msurf.segments[m.j as usize], xm);
+                    let pr = closest(&xa, &m.at);
                     if pr.dist.is_nan() {
                         continue;
                     }
@@ -313,15 +384,16 @@ fn slave_segment(
                     continue;
                 }
                 let m = &masters[mi];
+                let mcv = mcurv.of(m);
                 let ms = &msurf.segments[m.j as usize];
-                let mt = sub_triangle(ms, xm, pr.sub as usize);
+                let mt = sub_triangle_at(&m.at, pr.sub as usize);
                 let dir = (xa - pr.point) / pr.dist;
                 let side = if dir.dot(&mt.unit_normal()) >= 0.0 {
                     1.0
                 } else {
                     -1.0
                 };
-                let (hm, dhm) = bulge(&m.b, &pr.weights);
+                let (hm, dhm) = bulge(&mcv.b, &pr.weights);
                 let gap = pr.dist - side * hm - c;
                 if gap >= 0.0 {
                     continue;
@@ -340,7 +412,7 @@ fn slave_segment(
                     gm[q] = -dir * pr.weights[q];
                 }
                 mt.spread(ms, pr.sub as usize, &cg.map(|g| -g * side), &mut gm);
-                let (direct, m_tau) = bulge_parts(ms, xm, &m.normals, &pr.weights, -side);
+                let (direct, m_tau) = bulge_parts(ms, xm, &mcv.normals, &pr.weights, -side);
                 for q in 0..4 {
                     gm[q] += direct[q];
                 }
@@ -367,7 +439,7 @@ fn slave_segment(
                     }
                     for q in 0..ms.count as usize {
                         gdot += gm[q].dot(&mb.state.v[ms.nodes[q] as usize]);
-                        let of = NormalOf::of_corner(ms, m.j, &m.nodal, q);
+                        let of = NormalOf::of_corner(ms, m.j, &mcv.nodal, q);
                         gdot += m_tau[q].dot(&normal_rate(of, msurf, xm, &mb.state.v));
                     }
                     let ma = mu * area0 / (n * n) as f64;
@@ -384,7 +456,7 @@ fn slave_segment(
                 }
                 for q in 0..ms.count as usize {
                     out.master_loads.push(NormalLoad {
-                        of: NormalOf::of_corner(ms, m.j, &m.nodal, q),
+                        of: NormalOf::of_corner(ms, m.j, &mcv.nodal, q),
                         tau: m_tau[q] * phi,
                     });
                 }
@@ -464,27 +536,28 @@ pub(crate) fn segment_pair(
         kappa,
         mu,
     );
-    let mut st = PairStats::empty(a.def.id, b.def.id, first.pushes.len() + second.pushes.len());
+    let count = |p: &[Points]| p.iter().map(|c| c.pushes.len()).sum::<usize>();
+    let mut st = PairStats::empty(a.def.id, b.def.id, count(&first) + count(&second));
     let thin = a.def.section.thickness.min(b.def.section.thickness);
-    apply_points(bodies, ia, ib, &first.pushes, &mut st, true);
-    apply_points(bodies, ib, ia, &second.pushes, &mut st, false);
+    apply_points(bodies, ia, ib, &first, &mut st, true);
+    apply_points(bodies, ib, ia, &second, &mut st, false);
     // the loads on each body's normals, summed per normal (in point order), then pulled
     // back once per normal in normal order
-    let on_a = first.slave_loads.iter().chain(&second.master_loads);
-    let on_b = first.master_loads.iter().chain(&second.slave_loads);
+    let on_a = first
+        .iter()
+        .flat_map(|c| &c.slave_loads)
+        .chain(second.iter().flat_map(|c| &c.master_loads));
+    let on_b = first
+        .iter()
+        .flat_map(|c| &c.master_loads)
+        .chain(second.iter().flat_map(|c| &c.slave_loads));
     let mut buf = Vec::new();
     for (ib_, loads, surf, is_a) in [
         (ia, on_a.collect::<Vec<_>>(), sa, true),
         (ib, on_b.collect(), sb, false),
     ] {
-        let mut sums: BTreeMap<NormalOf, Vec3> = BTreeMap::new();
-        for l in loads {
-            *sums.entry(l.of).or_insert_with(Vec3::zeros) += l.tau;
-        }
         buf.clear();
-        for (of, tau) in &sums {
-            normal_pullback(*of, surf, &bodies[ib_].state.x, tau, &mut buf);
-        }
+        pull_back_loads(&loads, surf, &bodies[ib_].state.x, &mut buf);
         let kin = if is_a { &mut st.kin_a } else { &mut st.kin_b };
         add_forces(&mut bodies[ib_], &buf, kin);
     }
@@ -492,6 +565,37 @@ pub(crate) fn segment_pair(
     st.kin_b.settle_nodes();
     st.max_penetration_ratio = st.max_penetration / thin;
     st
+}
+
+/// The loads on a body's normals summed per normal, each sum in load order from zero,
+/// then pulled back to node forces once per normal in `NormalOf` order (nodes
+/// ascending, then crease segments ascending), into `out`. Node sums in an array by
+/// node (the bits of a map: each sum's terms and order are the same), not a map: a
+/// map insert per load cost more than the sums.
+fn pull_back_loads(loads: &[&NormalLoad], surf: &Surface, x: &[Vec3], out: &mut Vec<(u32, Vec3)>) {
+    let mut node_sum = vec![Vec3::zeros(); x.len()];
+    let mut seen = vec![false; x.len()];
+    let mut touched: Vec<u32> = Vec::new();
+    let mut seg_sum: BTreeMap<u32, Vec3> = BTreeMap::new();
+    for l in loads {
+        match l.of {
+            NormalOf::Node(n) => {
+                if !seen[n as usize] {
+                    seen[n as usize] = true;
+                    touched.push(n);
+                }
+                node_sum[n as usize] += l.tau;
+            }
+            NormalOf::Segment(j) => *seg_sum.entry(j).or_insert_with(Vec3::zeros) += l.tau,
+        }
+    }
+    touched.sort_unstable();
+    for n in touched {
+        normal_pullback(NormalOf::Node(n), surf, x, &node_sum[n as usize], out);
+    }
+    for (j, tau) in &seg_sum {
+        normal_pullback(NormalOf::Segment(*j), surf, x, tau, out);
+    }
 }
 
 /// Add node forces to a body's `f_contact` in order; on a kinematic body they go into
@@ -513,7 +617,7 @@ fn apply_points(
     bodies: &mut [Body],
     islave: usize,
     imaster: usize,
-    pushes: &[PointPush],
+    chunks: &[Points],
     st: &mut PairStats,
     slave_is_a: bool,
 ) {
@@ -522,7 +626,7 @@ fn apply_points(
     } else {
         (take(&mut st.kin_b), take(&mut st.kin_a))
     };
-    for p in pushes {
+    for p in chunks.iter().flat_map(|c| &c.pushes) {
         add_forces(
             &mut bodies[islave],
             &p.slave_f[..p.slave_count as usize],

@@ -105,53 +105,114 @@ fn unit_normal(a: &Vec3, b: &Vec3, c: &Vec3) -> Vec3 {
     }
 }
 
-/// Closest point of segment `seg` (positions `x`) to `p`.
-pub fn project(p: &Vec3, seg: &Segment, x: &[Vec3]) -> Projection {
-    let xs = seg.nodes.map(|n| x[n as usize]);
-    if seg.count == 3 {
+/// A segment's corner positions (a triangle's fourth repeats its third) and a quad's
+/// centroid, gathered once for the many points the segment pass projects on it.
+#[derive(Debug, Clone, Copy)]
+pub struct Corners {
+    pub xs: [Vec3; 4],
+    /// The quad's centroid (unused for a triangle).
+    pub centroid: Vec3,
+    pub count: u8,
+}
+
+impl Corners {
+    pub fn of(seg: &Segment, x: &[Vec3]) -> Self {
+        let xs = seg.nodes.map(|n| x[n as usize]);
+        let centroid = if seg.count == 3 {
+            Vec3::zeros()
+        } else {
+            (xs[0] + xs[1] + xs[2] + xs[3]) * 0.25
+        };
+        Corners {
+            xs,
+            centroid,
+            count: seg.count,
+        }
+    }
+}
+
+/// `Projection` without the face normal (the segment pass does not read it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Closest {
+    pub dist: f64,
+    pub point: Vec3,
+    pub weights: [f64; 4],
+    pub sub: u8,
+    pub bary: [f64; 3],
+}
+
+/// Closest point of a segment (corners `k`) to `p`: the bits of `project`. A quad's
+/// sub-triangle whose squared distance exceeds the best's skips its square root (sqrt
+/// is monotone, so it could not be strictly closer).
+pub fn closest(p: &Vec3, k: &Corners) -> Closest {
+    let xs = &k.xs;
+    if k.count == 3 {
         let w = triangle_weights(p, &xs[0], &xs[1], &xs[2]);
         let point = xs[0] * w[0] + xs[1] * w[1] + xs[2] * w[2];
-        return Projection {
+        return Closest {
             dist: (p - point).norm(),
             point,
             weights: [w[0], w[1], w[2], 0.0],
-            face_normal: unit_normal(&xs[0], &xs[1], &xs[2]),
             sub: 0,
             bary: w,
         };
     }
-    let c = (xs[0] + xs[1] + xs[2] + xs[3]) * 0.25;
-    let mut best: Option<Projection> = None;
-    for k in 0..4 {
-        let (a, b) = (xs[k], xs[(k + 1) % 4]);
-        let w = triangle_weights(p, &c, &a, &b);
-        let mut weights = [0.25 * w[0]; 4];
-        weights[k] += w[1];
-        weights[(k + 1) % 4] += w[2];
-        let point =
-            xs[0] * weights[0] + xs[1] * weights[1] + xs[2] * weights[2] + xs[3] * weights[3];
-        let dist = (p - point).norm();
-        // strict comparison: the first sub-triangle wins ties (deterministic)
-        if best.is_none_or(|b| dist < b.dist) {
-            best = Some(Projection {
-                dist,
-                point,
-                weights,
-                face_normal: unit_normal(&c, &a, &b),
-                sub: k as u8,
-                bary: w,
-            });
-        }
-    }
-    // four sub-triangles were tried, so `best` is set
-    best.unwrap_or(Projection {
+    let c = k.centroid;
+    let mut best = Closest {
         dist: f64::INFINITY,
         point: c,
         weights: [0.25; 4],
-        face_normal: Vec3::z(),
         sub: 0,
         bary: [1.0, 0.0, 0.0],
-    })
+    };
+    let mut best_sq = f64::INFINITY;
+    for s in 0..4 {
+        let (a, b) = (xs[s], xs[(s + 1) % 4]);
+        let w = triangle_weights(p, &c, &a, &b);
+        let mut weights = [0.25 * w[0]; 4];
+        weights[s] += w[1];
+        weights[(s + 1) % 4] += w[2];
+        let point =
+            xs[0] * weights[0] + xs[1] * weights[1] + xs[2] * weights[2] + xs[3] * weights[3];
+        let sq = (p - point).norm_squared();
+        if s > 0 && sq > best_sq {
+            continue;
+        }
+        let dist = sq.sqrt();
+        // strict comparison: the first sub-triangle wins ties (deterministic)
+        if s == 0 || dist < best.dist {
+            best_sq = sq;
+            best = Closest {
+                dist,
+                point,
+                weights,
+                sub: s as u8,
+                bary: w,
+            };
+        }
+    }
+    best
+}
+
+/// Closest point of segment `seg` (positions `x`) to `p`.
+pub fn project(p: &Vec3, seg: &Segment, x: &[Vec3]) -> Projection {
+    let k = Corners::of(seg, x);
+    let cl = closest(p, &k);
+    let xs = &k.xs;
+    let face_normal = if seg.count == 3 {
+        unit_normal(&xs[0], &xs[1], &xs[2])
+    } else {
+        let s = cl.sub as usize;
+        unit_normal(&k.centroid, &xs[s], &xs[(s + 1) % 4])
+    };
+    Projection {
+        dist: cl.dist,
+        point: cl.point,
+        weights: cl.weights,
+        face_normal,
+        sub: cl.sub,
+        bary: cl.bary,
+    }
 }
 
 #[cfg(test)]
