@@ -99,6 +99,79 @@ impl NodeSums {
     }
 }
 
+impl NodeSums {
+    /// Node i's reaction terms: the impulses (jf, jm) the constraints applied over the
+    /// step, the mean velocities (vn, wn), x_n where they act.
+    #[inline(always)]
+    pub(crate) fn add_reaction(
+        &mut self,
+        jf: Vec3,
+        jm: Vec3,
+        (vn, wn): (Vec3, Vec3),
+        hbar: f64,
+        x: &Vec3,
+    ) {
+        self.reaction += jf.dot(&vn) + jm.dot(&wn);
+        let (rf, rm) = (jf / hbar, jm / hbar);
+        self.reaction_force += rf;
+        self.reaction_moment += rm;
+        self.reaction_moment_origin += x.cross(&rf) + rm;
+    }
+
+    /// x_{n+1} = x_n + h v_{n+1/2} for node i, with its new velocities stored; the box
+    /// and largest move grow. A non-finite result is recorded (`bad_node`) and stores
+    /// nothing.
+    #[inline(always)]
+    pub(crate) fn advance(
+        &mut self,
+        i: usize,
+        h: f64,
+        (x, v, w): (&mut Vec3, &mut Vec3, &mut Vec3),
+        v_new: Vec3,
+        w_new: Vec3,
+    ) {
+        let dx = v_new * h;
+        let xn = *x + dx;
+        let mv = dx.norm();
+        if !(mv.is_finite()
+            && xn.x.is_finite()
+            && xn.y.is_finite()
+            && xn.z.is_finite()
+            && w_new.x.is_finite()
+            && w_new.y.is_finite()
+            && w_new.z.is_finite())
+        {
+            if self.bad_node.is_none() {
+                self.bad_node = Some(i);
+            }
+            return;
+        }
+        if mv > self.max_move {
+            self.max_move = mv;
+            self.max_move_node = i;
+        }
+        self.lo = self.lo.inf(&xn);
+        self.hi = self.hi.sup(&xn);
+        *x = xn;
+        *v = v_new;
+        *w = w_new;
+    }
+
+    /// The chunks' sums merged in chunk order, or the fault of the first bad node.
+    pub(crate) fn total(parts: &[NodeSums], step: u64, body: u32) -> Result<NodeSums, Fault> {
+        let total = parts.iter().fold(NodeSums::default(), |a, b| a.merge(b));
+        match total.bad_node {
+            Some(n) => Err(Fault::NonFinite {
+                step,
+                body,
+                place: format!("node {n}"),
+                what: "velocity or position",
+            }),
+            None => Ok(total),
+        }
+    }
+}
+
 /// Time and step data of one integration step.
 #[derive(Debug, Clone, Copy)]
 pub struct StepClock {
@@ -245,55 +318,19 @@ impl Body {
                             m * (v_new - free_v) * dd.recip(),
                             inr * (w_new - free_w) * dd.recip(),
                         );
-                        s.reaction += jf.dot(&vn) + jm.dot(&wn);
-                        let (rf, rm) = (jf / hbar, jm / hbar);
-                        s.reaction_force += rf;
-                        s.reaction_moment += rm;
                         // xs[k] is still x_n, the position the reaction acts at
-                        s.reaction_moment_origin += xs[k].cross(&rf) + rm;
+                        s.add_reaction(jf, jm, (vn, wn), hbar, &xs[k]);
                     }
                     if c > 0.0 {
                         s.mass_damping +=
                             hbar * c * (m * vn.norm_squared() + inr * wn.norm_squared());
                     }
-                    let dx = v_new * h;
-                    let xn = xs[k] + dx;
-                    let mv = dx.norm();
-                    if !(mv.is_finite()
-                        && xn.x.is_finite()
-                        && xn.y.is_finite()
-                        && xn.z.is_finite()
-                        && w_new.x.is_finite()
-                        && w_new.y.is_finite()
-                        && w_new.z.is_finite())
-                    {
-                        if s.bad_node.is_none() {
-                            s.bad_node = Some(i);
-                        }
-                        continue;
-                    }
-                    if mv > s.max_move {
-                        s.max_move = mv;
-                        s.max_move_node = i;
-                    }
-                    s.lo = s.lo.inf(&xn);
-                    s.hi = s.hi.sup(&xn);
-                    xs[k] = xn;
-                    vs[k] = v_new;
-                    ws[k] = w_new;
+                    s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
                 }
                 s
             })
             .collect();
-        let total = parts.iter().fold(NodeSums::default(), |a, b| a.merge(b));
-        if let Some(n) = total.bad_node {
-            return Err(Fault::NonFinite {
-                step: clock.step,
-                body: self.def.id,
-                place: format!("node {n}"),
-                what: "velocity or position",
-            });
-        }
+        let total = NodeSums::total(&parts, clock.step, self.def.id)?;
         self.book(h, &total);
         Ok(total)
     }

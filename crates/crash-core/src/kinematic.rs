@@ -124,54 +124,19 @@ impl Body {
                             m * (v_new - free_v) * dd.recip(),
                             inr * (w_new - free_w) * dd.recip(),
                         );
-                        s.reaction += jf.dot(&vn) + jm.dot(&wn);
-                        let (rf, rm) = (jf / hbar, jm / hbar);
-                        s.reaction_force += rf;
-                        s.reaction_moment += rm;
-                        s.reaction_moment_origin += xs[k].cross(&rf) + rm;
+                        // xs[k] is still x_n, the position the reaction acts at
+                        s.add_reaction(jf, jm, (vn, wn), hbar, &xs[k]);
                         if c > 0.0 {
                             s.mass_damping +=
                                 hbar * c * (m * vn.norm_squared() + inr * wn.norm_squared());
                         }
                     }
-                    let dx = v_new * h;
-                    let xn = xs[k] + dx;
-                    let mv = dx.norm();
-                    if !(mv.is_finite()
-                        && xn.x.is_finite()
-                        && xn.y.is_finite()
-                        && xn.z.is_finite()
-                        && w_new.x.is_finite()
-                        && w_new.y.is_finite()
-                        && w_new.z.is_finite())
-                    {
-                        if s.bad_node.is_none() {
-                            s.bad_node = Some(i);
-                        }
-                        continue;
-                    }
-                    if mv > s.max_move {
-                        s.max_move = mv;
-                        s.max_move_node = i;
-                    }
-                    s.lo = s.lo.inf(&xn);
-                    s.hi = s.hi.sup(&xn);
-                    xs[k] = xn;
-                    vs[k] = v_new;
-                    ws[k] = w_new;
+                    s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
                 }
                 s
             })
             .collect();
-        let total = parts.iter().fold(NodeSums::default(), |a, b| a.merge(b));
-        if let Some(n) = total.bad_node {
-            return Err(Fault::NonFinite {
-                step: clock.step,
-                body: self.def.id,
-                place: format!("node {n}"),
-                what: "velocity or position",
-            });
-        }
+        let total = NodeSums::total(&parts, clock.step, self.def.id)?;
         if energy {
             self.book(h, &total);
         }
