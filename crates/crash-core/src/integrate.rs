@@ -7,7 +7,7 @@
 //! Mass damping c (f = -c m v_n, v_n the mean of the two half-step velocities) is
 //! integrated implicitly: v_{n+1/2} = ((1 - c hbar/2) v_{n-1/2} + hbar a) / (1 + c hbar/2).
 
-use crate::body::{Body, NO_PROGRAM};
+use crate::body::{Body, BodyDef, NO_PROGRAM};
 use crate::element::simd::prefetch;
 use crate::error::Fault;
 use crate::forces::CHUNK;
@@ -99,23 +99,61 @@ impl NodeSums {
     }
 }
 
+impl BodyDef {
+    /// Gravity's force `g` on node i plus its nodal loads at time t: (force, moment).
+    #[inline(always)]
+    pub(crate) fn external_at(&self, i: usize, g: Vec3, t: f64) -> (Vec3, Vec3) {
+        let mut f = g;
+        let mut mom = Vec3::zeros();
+        let first = self.load_of[i];
+        if first != u32::MAX {
+            for l in self.loads[first as usize..]
+                .iter()
+                .take_while(|l| l.node as usize == i)
+            {
+                let sc = l.scale(t, &self.curves);
+                f += l.force * sc;
+                mom += l.moment * sc;
+            }
+        }
+        (f, mom)
+    }
+}
+
 impl NodeSums {
-    /// Node i's reaction terms: the impulses (jf, jm) the constraints applied over the
-    /// step, the mean velocities (vn, wn), x_n where they act.
+    /// Node i's reaction terms: the impulses the constraints applied over the step
+    /// (mass and inertia (m, inr) times the velocity changes `dv` they made, over the
+    /// implicit damping factor `dd`), the mean velocities (vn, wn), x_n where they act.
     #[inline(always)]
     pub(crate) fn add_reaction(
         &mut self,
-        jf: Vec3,
-        jm: Vec3,
+        (m, inr): (f64, f64),
+        dv: (Vec3, Vec3),
+        dd: f64,
         (vn, wn): (Vec3, Vec3),
         hbar: f64,
         x: &Vec3,
     ) {
+        let (jf, jm) = (m * dv.0 * dd.recip(), inr * dv.1 * dd.recip());
         self.reaction += jf.dot(&vn) + jm.dot(&wn);
         let (rf, rm) = (jf / hbar, jm / hbar);
         self.reaction_force += rf;
         self.reaction_moment += rm;
         self.reaction_moment_origin += x.cross(&rf) + rm;
+    }
+
+    /// Work of the mass damping c over the step at the mean velocities (dissipated).
+    #[inline(always)]
+    pub(crate) fn add_damping(
+        &mut self,
+        c: f64,
+        hbar: f64,
+        (m, inr): (f64, f64),
+        (vn, wn): (Vec3, Vec3),
+    ) {
+        if c > 0.0 {
+            self.mass_damping += hbar * c * (m * vn.norm_squared() + inr * wn.norm_squared());
+        }
     }
 
     /// x_{n+1} = x_n + h v_{n+1/2} for node i, with its new velocities stored; the box
@@ -172,6 +210,23 @@ impl NodeSums {
     }
 }
 
+/// `f(chunk index, x, v, w)` over the nodes' chunks of `CHUNK` on the pool, the sums in
+/// chunk order; single chunks, for an even end of the loop on every thread (forces.rs).
+pub(crate) fn node_chunks(
+    x: &mut [Vec3],
+    v: &mut [Vec3],
+    w: &mut [Vec3],
+    f: impl Fn(usize, &mut [Vec3], &mut [Vec3], &mut [Vec3]) -> NodeSums + Sync + Send,
+) -> Vec<NodeSums> {
+    x.par_chunks_mut(CHUNK)
+        .zip(v.par_chunks_mut(CHUNK))
+        .zip(w.par_chunks_mut(CHUNK))
+        .enumerate()
+        .with_max_len(1)
+        .map(|(ci, ((xs, vs), ws))| f(ci, xs, vs, ws))
+        .collect()
+}
+
 /// Time and step data of one integration step.
 #[derive(Debug, Clone, Copy)]
 pub struct StepClock {
@@ -204,8 +259,7 @@ impl Body {
             .get(..self.def.slot_count() - gi.len())
             .unwrap_or_default();
         let fc = &self.state.f_contact;
-        let loads = &self.def.loads;
-        let load_of = &self.def.load_of;
+        let d = &*self.def;
         let programs = &self.def.programs;
         let curves = &self.def.curves;
         let (mass, inertia, fixed, program) = (
@@ -218,118 +272,97 @@ impl Body {
         // a part's halo nodes (the last ones) take their state from their owner
         let n = self.state.x.len().saturating_sub(self.def.halo_nodes);
 
-        let parts: Vec<NodeSums> = self.state.x[..n]
-            .par_chunks_mut(CHUNK)
-            .zip(self.state.v[..n].par_chunks_mut(CHUNK))
-            .zip(self.state.w[..n].par_chunks_mut(CHUNK))
-            .enumerate()
-            // single chunks, for an even end of the loop on every thread (forces.rs)
-            .with_max_len(1)
-            .map(|(ci, ((xs, vs), ws))| {
-                let mut s = NodeSums::default();
-                for k in 0..xs.len() {
-                    let i = ci * CHUNK + k;
-                    // the force slots of a node a few places ahead (see `prefetch`)
-                    if let Some(range) = gs.get(i + PREFETCH..i + PREFETCH + 2) {
-                        for &sl in &gi[range[0] as usize..range[1] as usize] {
-                            // a 48-byte slot starts at byte 0, 16, 32 or 48 of a
-                            // line: it may end on the next one
-                            let q = &slots[sl as usize];
-                            prefetch(&q[0]);
-                            prefetch(&q[5]);
-                        }
-                    }
-                    let m = mass[i];
-                    let inr = inertia[i];
-                    // forces: external (gravity, loads), contact, minus internal
-                    let mut f = gravity * m;
-                    let mut mom = Vec3::zeros();
-                    let first = load_of[i];
-                    if first != u32::MAX {
-                        for l in loads[first as usize..]
-                            .iter()
-                            .take_while(|l| l.node as usize == i)
-                        {
-                            let sc = l.scale(t, curves);
-                            f += l.force * sc;
-                            mom += l.moment * sc;
-                        }
-                    }
-                    let (fe, me) = (f, mom);
-                    let mut fcon = Vec3::zeros();
-                    if !fc.is_empty() {
-                        fcon = fc[i];
-                        f += fcon;
-                    }
-                    let mut fi = Vec3::zeros();
-                    let mut mi = Vec3::zeros();
-                    let mut fd = Vec3::zeros();
-                    let mut md = Vec3::zeros();
-                    for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
+        let (x, v, w) = (
+            &mut self.state.x[..n],
+            &mut self.state.v[..n],
+            &mut self.state.w[..n],
+        );
+        let parts = node_chunks(x, v, w, |ci, xs, vs, ws| {
+            let mut s = NodeSums::default();
+            for k in 0..xs.len() {
+                let i = ci * CHUNK + k;
+                // the force slots of a node a few places ahead (see `prefetch`)
+                if let Some(range) = gs.get(i + PREFETCH..i + PREFETCH + 2) {
+                    for &sl in &gi[range[0] as usize..range[1] as usize] {
+                        // a 48-byte slot starts at byte 0, 16, 32 or 48 of a
+                        // line: it may end on the next one
                         let q = &slots[sl as usize];
-                        fi += Vec3::new(q[0], q[1], q[2]);
-                        mi += Vec3::new(q[3], q[4], q[5]);
+                        prefetch(&q[0]);
+                        prefetch(&q[5]);
                     }
-                    f -= fi;
-                    mom -= mi;
-                    if !kelvin.is_empty() {
-                        for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
-                            let q = &kelvin[sl as usize];
-                            fd += Vec3::new(q[0], q[1], q[2]);
-                            md += Vec3::new(q[3], q[4], q[5]);
-                        }
-                    }
-                    let v_old = vs[k];
-                    let w_old = ws[k];
-                    let mut v_new = (v_old * dn + f * (hbar / m)) * dd;
-                    let mut w_new = (w_old * dn + mom * (hbar / inr)) * dd;
-                    let free_v = v_new;
-                    let free_w = w_new;
-                    let fx = fixed[i];
-                    if fx != 0 {
-                        let (pv, pw) = match program[i] {
-                            NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
-                            p => programs[p as usize].over_step(t, h, curves),
-                        };
-                        for d in 0..3 {
-                            if fx & (1 << d) != 0 {
-                                v_new[d] = pv[d];
-                            }
-                            if fx & (8 << d) != 0 {
-                                w_new[d] = pw[d];
-                            }
-                        }
-                    }
-                    let vn = (v_old + v_new) * 0.5;
-                    let wn = (w_old + w_new) * 0.5;
-                    s.kinetic += 0.5 * (m * v_new.norm_squared() + inr * w_new.norm_squared());
-                    s.external += hbar * (fe.dot(&vn) + me.dot(&wn));
-                    s.contact += hbar * fcon.dot(&vn);
-                    s.internal_power += fi.dot(&v_new) + mi.dot(&w_new);
-                    if !kelvin.is_empty() {
-                        // the Kelvin force's work at the kinetic energy's time levels;
-                        // the shadow internal energy takes the elastic part only
-                        s.kelvin += hbar * (fd.dot(&vn) + md.dot(&wn));
-                        s.internal_power -= fd.dot(&v_new) + md.dot(&w_new);
-                    }
-                    if fx != 0 {
-                        // impulse the constraint applied, times the mean velocity
-                        let (jf, jm) = (
-                            m * (v_new - free_v) * dd.recip(),
-                            inr * (w_new - free_w) * dd.recip(),
-                        );
-                        // xs[k] is still x_n, the position the reaction acts at
-                        s.add_reaction(jf, jm, (vn, wn), hbar, &xs[k]);
-                    }
-                    if c > 0.0 {
-                        s.mass_damping +=
-                            hbar * c * (m * vn.norm_squared() + inr * wn.norm_squared());
-                    }
-                    s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
                 }
-                s
-            })
-            .collect();
+                let m = mass[i];
+                let inr = inertia[i];
+                // forces: external (gravity, loads), contact, minus internal
+                let (mut f, mut mom) = d.external_at(i, gravity * m, t);
+                let (fe, me) = (f, mom);
+                let mut fcon = Vec3::zeros();
+                if !fc.is_empty() {
+                    fcon = fc[i];
+                    f += fcon;
+                }
+                let mut fi = Vec3::zeros();
+                let mut mi = Vec3::zeros();
+                let mut fd = Vec3::zeros();
+                let mut md = Vec3::zeros();
+                for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
+                    let q = &slots[sl as usize];
+                    fi += Vec3::new(q[0], q[1], q[2]);
+                    mi += Vec3::new(q[3], q[4], q[5]);
+                }
+                f -= fi;
+                mom -= mi;
+                if !kelvin.is_empty() {
+                    for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
+                        let q = &kelvin[sl as usize];
+                        fd += Vec3::new(q[0], q[1], q[2]);
+                        md += Vec3::new(q[3], q[4], q[5]);
+                    }
+                }
+                let v_old = vs[k];
+                let w_old = ws[k];
+                let mut v_new = (v_old * dn + f * (hbar / m)) * dd;
+                let mut w_new = (w_old * dn + mom * (hbar / inr)) * dd;
+                let free_v = v_new;
+                let free_w = w_new;
+                let fx = fixed[i];
+                if fx != 0 {
+                    let (pv, pw) = match program[i] {
+                        NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
+                        p => programs[p as usize].over_step(t, h, curves),
+                    };
+                    for d in 0..3 {
+                        if fx & (1 << d) != 0 {
+                            v_new[d] = pv[d];
+                        }
+                        if fx & (8 << d) != 0 {
+                            w_new[d] = pw[d];
+                        }
+                    }
+                }
+                let vn = (v_old + v_new) * 0.5;
+                let wn = (w_old + w_new) * 0.5;
+                s.kinetic += 0.5 * (m * v_new.norm_squared() + inr * w_new.norm_squared());
+                s.external += hbar * (fe.dot(&vn) + me.dot(&wn));
+                s.contact += hbar * fcon.dot(&vn);
+                s.internal_power += fi.dot(&v_new) + mi.dot(&w_new);
+                if !kelvin.is_empty() {
+                    // the Kelvin force's work at the kinetic energy's time levels;
+                    // the shadow internal energy takes the elastic part only
+                    s.kelvin += hbar * (fd.dot(&vn) + md.dot(&wn));
+                    s.internal_power -= fd.dot(&v_new) + md.dot(&w_new);
+                }
+                if fx != 0 {
+                    // impulse the constraint applied, times the mean velocity
+                    // xs[k] is still x_n, the position the reaction acts at
+                    let dv = (v_new - free_v, w_new - free_w);
+                    s.add_reaction((m, inr), dv, dd, (vn, wn), hbar, &xs[k]);
+                }
+                s.add_damping(c, hbar, (m, inr), (vn, wn));
+                s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
+            }
+            s
+        });
         let total = NodeSums::total(&parts, clock.step, self.def.id)?;
         self.book(h, &total);
         Ok(total)

@@ -16,9 +16,8 @@
 use crate::body::{Body, NO_PROGRAM};
 use crate::error::Fault;
 use crate::forces::CHUNK;
-use crate::integrate::{NodeSums, StepClock};
+use crate::integrate::{node_chunks, NodeSums, StepClock};
 use crate::Vec3;
-use rayon::prelude::*;
 
 impl Body {
     /// Half-step velocity and angular velocity of each program over the step of `clock`,
@@ -67,7 +66,6 @@ impl Body {
         let rest = table.len() - 1;
         let d = &*self.def;
         let (mass, inertia, program) = (&d.mass, &d.inertia, &d.program);
-        let (loads, load_of, curves) = (&d.loads, &d.load_of, &d.curves);
         // with Kelvin damping the integration books the (zero) Kelvin work of the slots
         let kelvin =
             d.slot_count() > d.gather_slot.len() && self.state.slots.len() >= d.slot_count();
@@ -75,67 +73,47 @@ impl Body {
         let n = self.state.x.len().saturating_sub(d.halo_nodes);
 
         // the chunks and their merge of `Body::integrate` (the sums' bits)
-        let parts: Vec<NodeSums> = self.state.x[..n]
-            .par_chunks_mut(CHUNK)
-            .zip(self.state.v[..n].par_chunks_mut(CHUNK))
-            .zip(self.state.w[..n].par_chunks_mut(CHUNK))
-            .enumerate()
-            .with_max_len(1)
-            .map(|(ci, ((xs, vs), ws))| {
-                let mut s = NodeSums::default();
-                for k in 0..xs.len() {
-                    let i = ci * CHUNK + k;
-                    let p = match program[i] {
-                        NO_PROGRAM => rest,
-                        p => p as usize,
-                    };
-                    let (v_new, w_new) = table[p];
-                    if energy {
-                        let m = mass[i];
-                        let inr = inertia[i];
-                        let mut f = gravity * m;
-                        let mut mom = Vec3::zeros();
-                        let first = load_of[i];
-                        if first != u32::MAX {
-                            for l in loads[first as usize..]
-                                .iter()
-                                .take_while(|l| l.node as usize == i)
-                            {
-                                let sc = l.scale(t, curves);
-                                f += l.force * sc;
-                                mom += l.moment * sc;
-                            }
-                        }
-                        let (v_old, w_old) = (vs[k], ws[k]);
-                        let free_v = (v_old * dn + f * (hbar / m)) * dd;
-                        let free_w = (w_old * dn + mom * (hbar / inr)) * dd;
-                        let vn = (v_old + v_new) * 0.5;
-                        let wn = (w_old + w_new) * 0.5;
-                        let zero = Vec3::zeros();
-                        s.kinetic += 0.5 * (m * v_new.norm_squared() + inr * w_new.norm_squared());
-                        s.external += hbar * (f.dot(&vn) + mom.dot(&wn));
-                        s.contact += hbar * zero.dot(&vn);
-                        s.internal_power += zero.dot(&v_new) + zero.dot(&w_new);
-                        if kelvin {
-                            s.kelvin += hbar * (zero.dot(&vn) + zero.dot(&wn));
-                            s.internal_power -= zero.dot(&v_new) + zero.dot(&w_new);
-                        }
-                        let (jf, jm) = (
-                            m * (v_new - free_v) * dd.recip(),
-                            inr * (w_new - free_w) * dd.recip(),
-                        );
-                        // xs[k] is still x_n, the position the reaction acts at
-                        s.add_reaction(jf, jm, (vn, wn), hbar, &xs[k]);
-                        if c > 0.0 {
-                            s.mass_damping +=
-                                hbar * c * (m * vn.norm_squared() + inr * wn.norm_squared());
-                        }
+        let (x, v, w) = (
+            &mut self.state.x[..n],
+            &mut self.state.v[..n],
+            &mut self.state.w[..n],
+        );
+        let parts = node_chunks(x, v, w, |ci, xs, vs, ws| {
+            let mut s = NodeSums::default();
+            for k in 0..xs.len() {
+                let i = ci * CHUNK + k;
+                let p = match program[i] {
+                    NO_PROGRAM => rest,
+                    p => p as usize,
+                };
+                let (v_new, w_new) = table[p];
+                if energy {
+                    let m = mass[i];
+                    let inr = inertia[i];
+                    let (f, mom) = d.external_at(i, gravity * m, t);
+                    let (v_old, w_old) = (vs[k], ws[k]);
+                    let free_v = (v_old * dn + f * (hbar / m)) * dd;
+                    let free_w = (w_old * dn + mom * (hbar / inr)) * dd;
+                    let vn = (v_old + v_new) * 0.5;
+                    let wn = (w_old + w_new) * 0.5;
+                    let zero = Vec3::zeros();
+                    s.kinetic += 0.5 * (m * v_new.norm_squared() + inr * w_new.norm_squared());
+                    s.external += hbar * (f.dot(&vn) + mom.dot(&wn));
+                    s.contact += hbar * zero.dot(&vn);
+                    s.internal_power += zero.dot(&v_new) + zero.dot(&w_new);
+                    if kelvin {
+                        s.kelvin += hbar * (zero.dot(&vn) + zero.dot(&wn));
+                        s.internal_power -= zero.dot(&v_new) + zero.dot(&w_new);
                     }
-                    s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
+                    // xs[k] is still x_n, the position the reaction acts at
+                    let dv = (v_new - free_v, w_new - free_w);
+                    s.add_reaction((m, inr), dv, dd, (vn, wn), hbar, &xs[k]);
+                    s.add_damping(c, hbar, (m, inr), (vn, wn));
                 }
-                s
-            })
-            .collect();
+                s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
+            }
+            s
+        });
         let total = NodeSums::total(&parts, clock.step, self.def.id)?;
         if energy {
             self.book(h, &total);
