@@ -13,25 +13,24 @@ use crash_link::{BodyLoad, Command, Reply, WorkerLink};
 
 impl<L: WorkerLink> Master<'_, L> {
     /// The MEIM box of a body: its contact search box grown by the extra margin.
-    pub(super) fn inflate(&self, mut b: BodyBox) -> BodyBox {
-        if let Some(i) = self.index(b.id) {
-            let e = Vec3::repeat(self.info[i].extra);
-            b.lo -= e;
-            b.hi += e;
+    pub(super) fn inflate(&self, b: BodyBox) -> BodyBox {
+        match self.index(b.id) {
+            Some(i) => grown(b, self.info[i].extra),
+            None => b,
         }
-        b
     }
 
+    /// `inflate` of a report's box, with one lookup of its body.
     pub(super) fn box_of(&self, r: &BodyReport) -> BodyBox {
-        let (thickness, extra) = self
-            .index(r.id)
-            .map_or((0.0, 0.0), |i| (self.info[i].thickness, self.info[i].extra));
-        let e = Vec3::repeat(extra);
-        BodyBox {
+        let b = |thickness| BodyBox {
             id: r.id,
-            lo: r.lo - e,
-            hi: r.hi + e,
+            lo: r.lo,
+            hi: r.hi,
             thickness,
+        };
+        match self.index(r.id) {
+            Some(i) => grown(b(self.info[i].thickness), self.info[i].extra),
+            None => b(0.0),
         }
     }
 
@@ -362,4 +361,12 @@ impl<L: WorkerLink> Master<'_, L> {
         self.layout = layout;
         Ok(())
     }
+}
+
+/// `b` grown by `extra` on every side.
+fn grown(mut b: BodyBox, extra: f64) -> BodyBox {
+    let e = Vec3::repeat(extra);
+    b.lo -= e;
+    b.hi += e;
+    b
 }
