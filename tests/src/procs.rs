@@ -9,8 +9,14 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// A release binary of the workspace, next to the running test executable
-/// (`target/release/deps/..` -> `target/release/NAME`).
+/// (`target/release/deps/..` -> `target/release/NAME`), or in `$CRASH_BIN_DIR` when set
+/// (benches comparing two builds in one sitting run the same bench with each).
 pub fn bin(name: &str) -> String {
+    if let Some(dir) = std::env::var_os("CRASH_BIN_DIR") {
+        let path = Path::new(&dir).join(name);
+        assert!(path.exists(), "{} is missing", path.display());
+        return path.to_string_lossy().into_owned();
+    }
     let exe = std::env::current_exe().unwrap();
     let dir = exe
         .parent()
