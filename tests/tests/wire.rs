@@ -424,7 +424,7 @@ fn part_state() -> PartState {
             Vec3::new(0.1, -2.5e-300, 7.0),
             Vec3::new(-0.0, 1.0, f64::MAX),
         ],
-        v: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.0, 5.5, 1e-310)],
+        v: vec![Vec3::new(-4.0, 5.5, 1e-310)],
         w: vec![Vec3::new(0.0, 0.0, 0.25), Vec3::new(9.0, -1.0 / 3.0, 2.0)],
         lo: Vec3::new(-1.0, f64::MIN_POSITIVE, 0.5),
         hi: Vec3::new(2.0, 1e300, -0.0),
@@ -498,5 +498,23 @@ fn split_group_commands_and_replies_round_trip_bit_exact() {
             reply_from_pb(&crash_proto::pb::WorkerMessage::decode(bytes.as_slice()).unwrap())
                 .unwrap();
         assert_eq!(format!("{back:?}"), format!("{r:?}"));
+    }
+}
+
+/// A part state's block of points (protocol v13) must hold exactly the points it states:
+/// a short or long block is refused, not read past or padded.
+#[test]
+fn a_part_state_whose_points_do_not_match_their_counts_is_refused() {
+    let good = command_to_pb(&Command::Halo(vec![part_state()]), |_| false);
+    assert!(command_from_pb(&good).is_ok());
+    type Change = fn(&mut crash_proto::pb::PartState);
+    let changes: [Change; 2] = [|p| p.nv += 1, |p| drop(p.xvw.pop())];
+    for change in changes {
+        let mut m = good.clone();
+        if let Some(crash_proto::pb::master_message::Command::Halo(h)) = m.command.as_mut() {
+            change(&mut h.parts[0]);
+        }
+        let e = command_from_pb(&m).expect_err("refused");
+        assert!(e.to_string().contains("part 1 of body 3"), "{e}");
     }
 }

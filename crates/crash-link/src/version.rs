@@ -24,7 +24,8 @@ use thiserror::Error;
 /// before a view build; v too under the closing-speed rule), its box and its largest
 /// distance from where the views were built. v12: quad reference data in stride 11
 /// (what the element stores: gradients of nodes 3 and 4, h.X, h.Y, area, e0, bb; was 19).
-pub const PROTOCOL_VERSION: u32 = 12;
+/// v13: a part state's x, v, w travel as one block of raw little-endian doubles.
+pub const PROTOCOL_VERSION: u32 = 13;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -340,9 +340,10 @@ fn part_states_to_pb(parts: &[PartState]) -> pb::PartStates {
             .map(|p| pb::PartState {
                 id: p.id,
                 part: p.part,
-                x: pack3(&p.x),
-                v: pack3(&p.v),
-                w: pack3(&p.w),
+                xvw: raw3(&[&p.x, &p.v, &p.w]),
+                nx: p.x.len() as u32,
+                nv: p.v.len() as u32,
+                nw: p.w.len() as u32,
                 max_move: p.max_move,
                 max_move_node: p.max_move_node,
                 bounds: vec![p.lo.x, p.lo.y, p.lo.z, p.hi.x, p.hi.y, p.hi.z],
@@ -352,6 +353,37 @@ fn part_states_to_pb(parts: &[PartState]) -> pb::PartStates {
     }
 }
 
+/// Points as raw little-endian doubles, one list after the other (x, y, z each).
+fn raw3(lists: &[&[Vec3]]) -> Vec<u8> {
+    let n: usize = lists.iter().map(|l| l.len()).sum();
+    // sized once and written in place: no capacity check per value
+    let mut out = vec![0u8; 24 * n];
+    let points = lists.iter().flat_map(|l| l.iter());
+    for (c, p) in out.chunks_exact_mut(24).zip(points) {
+        c[0..8].copy_from_slice(&p.x.to_le_bytes());
+        c[8..16].copy_from_slice(&p.y.to_le_bytes());
+        c[16..24].copy_from_slice(&p.z.to_le_bytes());
+    }
+    out
+}
+
+/// The three point lists of `raw3`, of the stated lengths; the block must hold exactly
+/// that many points (checked before anything is allocated).
+fn unraw3(id: u32, part: u32, d: &[u8], n: [u32; 3]) -> Result<[Vec<Vec3>; 3], ProtoError> {
+    let want = n.iter().map(|&k| 24 * k as u64).sum::<u64>();
+    if d.len() as u64 != want {
+        return Err(ProtoError::Invalid(format!(
+            "part {part} of body {id}: {} bytes of points, {want} stated",
+            d.len()
+        )));
+    }
+    let f = |b: &[u8]| f64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
+    let mut points = d
+        .chunks_exact(24)
+        .map(|c| Vec3::new(f(&c[0..8]), f(&c[8..16]), f(&c[16..24])));
+    Ok(n.map(|k| points.by_ref().take(k as usize).collect()))
+}
+
 fn part_states_from_pb(p: Option<&pb::PartStates>) -> Result<Vec<PartState>, ProtoError> {
     let Some(p) = p else {
         return Ok(Vec::new());
@@ -359,9 +391,7 @@ fn part_states_from_pb(p: Option<&pb::PartStates>) -> Result<Vec<PartState>, Pro
     p.parts
         .iter()
         .map(|s| {
-            let x = unpack3(s.id, "part x", &s.x)?;
-            let v = unpack3(s.id, "part v", &s.v)?;
-            let w = unpack3(s.id, "part w", &s.w)?;
+            let [x, v, w] = unraw3(s.id, s.part, &s.xvw, [s.nx, s.nv, s.nw])?;
             let [lx, ly, lz, hx, hy, hz] = s.bounds[..] else {
                 return Err(ProtoError::Invalid(format!(
                     "part {} of body {}: a box is 6 numbers",
