@@ -19,7 +19,9 @@ use super::curved::{
     sub_triangle_at, Curved, NearCurved, NormalOf,
 };
 use super::narrow::TIE;
-use super::reach::{box_gap, nearest, CurvedAt, Master, MasterCurved, Slab};
+use super::reach::{
+    box_gap, box_gap2, gap_at_least, nearest, CurvedAt, Master, MasterCurved, Slab,
+};
 use super::segment::{Corners, Segment};
 use super::stiffening;
 use super::surface::Surface;
@@ -117,6 +119,7 @@ pub fn point_pushes(
     // the slave's own points stand off its flat boxes by up to its bulge
     let reach = c + (BULGE_REACH * c).max(hm_max);
     let box_reach = reach + hs_max;
+    let box_reach2 = box_reach * box_reach;
     let (mlo, mhi) = master_near;
     let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
     let xm = &mb.state.x;
@@ -174,7 +177,7 @@ pub fn point_pushes(
                     for &j in &cand {
                         let ms = &msurf.segments[j as usize];
                         let bx = node_box(ms, xm);
-                        if box_gap(&sbx, &bx) >= box_reach {
+                        if gap_at_least(box_gap2(&sbx, &bx), box_reach, box_reach2) {
                             continue;
                         }
                         let at = Corners::of(ms, xm);
@@ -247,6 +250,7 @@ fn slave_segment(
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
     let tie = TIE * c;
+    let reach2 = reach * reach;
     let mut near: Vec<usize> = Vec::with_capacity(masters.len());
     let mut keep: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
@@ -284,7 +288,10 @@ fn slave_segment(
             }
             let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
             near.clear();
-            near.extend((0..masters.len()).filter(|&mi| box_gap(&strip, &masters[mi].bx) < reach));
+            near.extend(
+                (0..masters.len())
+                    .filter(|&mi| !gap_at_least(box_gap2(&strip, &masters[mi].bx), reach, reach2)),
+            );
             // less the masters whose slab puts every point of the strip (within the
             // slave's bulge bound of the strip's flat corners' hull) at or beyond reach:
             // if none is left, every point's candidates lie beyond reach

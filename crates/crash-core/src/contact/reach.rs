@@ -11,8 +11,12 @@ use crate::Vec3;
 
 /// Euclidean gap of two boxes (0 when they meet).
 pub(crate) fn box_gap(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
-    let d = (b.0 - a.1).sup(&Vec3::zeros()) + (a.0 - b.1).sup(&Vec3::zeros());
-    d.norm()
+    box_gap2(a, b).sqrt()
+}
+
+/// Its square (`box_gap` is its correctly rounded root, the bits of `Vec3::norm`).
+pub(crate) fn box_gap2(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
+    ((b.0 - a.1).sup(&Vec3::zeros()) + (a.0 - b.1).sup(&Vec3::zeros())).norm_squared()
 }
 
 /// The segments of `surf` whose stored box comes within `grow` of the box `near` (per
@@ -39,10 +43,10 @@ fn point_gap2(p: &Vec3, b: &(Vec3, Vec3)) -> f64 {
     ((b.0 - p).sup(&Vec3::zeros()) + (p - b.1).sup(&Vec3::zeros())).norm_squared()
 }
 
-/// Whether a squared gap `s` (of a point and a box) has a gap `box_gap` puts at or
-/// beyond `r`: without the square root where `s` is clearly on one side (sqrt is
-/// correctly rounded, so a relative margin of 1e-12 on the squares decides it).
-fn gap_at_least(s: f64, r: f64, r2: f64) -> bool {
+/// `box_gap >= r` from the squared gap `s` (`box_gap2`) and r2 = r r: without the
+/// square root where `s` is clearly on one side (sqrt is correctly rounded, so a
+/// relative margin of 1e-12 on the squares decides it), the same answer always.
+pub(crate) fn gap_at_least(s: f64, r: f64, r2: f64) -> bool {
     if s > r2 * (1.0 + 1e-12) {
         true
     } else if s < r2 * (1.0 - 1e-12) {
