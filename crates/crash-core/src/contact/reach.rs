@@ -68,12 +68,12 @@ pub(crate) fn union(boxes: &[(Vec3, Vec3)]) -> (Vec3, Vec3) {
 /// node boxes and largest bulge bound, `NearCurved`), in three steps so that the loose
 /// bulge bound of a coarse flat body (a 6.7 mm plate quad: 7 mm, its true bulge 0) does
 /// not size the other body's set:
-/// 1. body `p` (the one with the larger loose bound, `Surface::loose_bulge_ub`): its
-///    segments within 1.25 c + both loose bounds of the other's (as before);
-/// 2. body `q`: its segments within 1.25 c + p's exact bound + q's loose bound of the
-///    box of p's set;
-/// 3. p's set kept to the segments within 1.25 c + q's exact bound + p's loose bound
-///    of the box of q's set.
+/// - first body `p` (the one with the larger loose bound, `Surface::loose_bulge_ub`):
+///   its segments within 1.25 c + both loose bounds of the other's (as before);
+/// - then body `q`: its segments within 1.25 c + p's exact bound + q's loose bound of
+///   the box of p's set;
+/// - last, p's set kept to the segments within 1.25 c + q's exact bound + p's loose
+///   bound of the box of q's set.
 ///
 /// A point on segment s touches segment m only if their node boxes are nearer than c +
 /// bulge(s) + bulge(m) (its gap is d - h_m - c with d >= that distance - h_s), and every
