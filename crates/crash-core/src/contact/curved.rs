@@ -264,8 +264,9 @@ impl Curved {
 /// and the largest bulge bound over them.
 #[derive(Debug)]
 pub struct NearCurved {
-    /// The near segments, ascending, and their data.
+    /// The near segments, ascending, their node boxes and their data.
     segs: Vec<u32>,
+    boxes: Vec<(Vec3, Vec3)>,
     data: Vec<Curved>,
     pub bound: f64,
 }
@@ -289,6 +290,46 @@ impl NearCurved {
     pub fn at(&self, k: usize) -> &Curved {
         &self.data[k]
     }
+
+    /// The near segments, ascending.
+    pub fn segs(&self) -> &[u32] {
+        &self.segs
+    }
+
+    /// Their node boxes (by position in `segs`).
+    pub fn boxes(&self) -> &[(Vec3, Vec3)] {
+        &self.boxes
+    }
+
+    /// The segments whose node box comes within `grow` of the box `near` (per axis), and
+    /// the largest bulge bound over them.
+    pub fn within(self, near: &(Vec3, Vec3), grow: f64) -> NearCurved {
+        let mut out = NearCurved {
+            segs: Vec::new(),
+            boxes: Vec::new(),
+            data: Vec::new(),
+            bound: 0.0,
+        };
+        for ((j, bx), cv) in self.segs.into_iter().zip(self.boxes).zip(self.data) {
+            if meets(&bx, near, grow) {
+                out.segs.push(j);
+                out.boxes.push(bx);
+                out.data.push(cv);
+            }
+        }
+        out.bound = out
+            .data
+            .iter()
+            .map(|cv| bulge_bound(&cv.b))
+            .fold(0.0, f64::max);
+        out
+    }
+}
+
+/// Does box `b` come within `grow` of box `near` (per axis)?
+fn meets(b: &(Vec3, Vec3), near: &(Vec3, Vec3), grow: f64) -> bool {
+    let (lo, hi) = b;
+    (0..3).all(|d| hi[d] >= near.0[d] - grow && lo[d] <= near.1[d] + grow)
 }
 
 /// The curved data of the segments `live` (ascending; node boxes `boxes`, by position
@@ -306,14 +347,12 @@ pub fn near_curved(
     grow: f64,
 ) -> NearCurved {
     use rayon::prelude::*;
-    let segs: Vec<u32> = live
+    let (segs, boxes): (Vec<u32>, Vec<(Vec3, Vec3)>) = live
         .iter()
         .zip(boxes)
-        .filter(|(_, (lo, hi))| {
-            (0..3).all(|d| hi[d] >= near.0[d] - grow && lo[d] <= near.1[d] + grow)
-        })
-        .map(|(&j, _)| j)
-        .collect();
+        .filter(|(_, bx)| meets(bx, near, grow))
+        .map(|(&j, &bx)| (j, bx))
+        .unzip();
     // each corner node's normal once (a node is a corner of about six segments): the
     // same function, so the same bits
     let mut slot = vec![u32::MAX; x.len()];
@@ -341,7 +380,12 @@ pub fn near_curved(
         })
         .collect();
     let bound = data.iter().map(|cv| bulge_bound(&cv.b)).fold(0.0, f64::max);
-    NearCurved { segs, data, bound }
+    NearCurved {
+        segs,
+        boxes,
+        data,
+        bound,
+    }
 }
 
 /// h(w) and its partial derivatives dh/dw_k.

@@ -15,19 +15,19 @@
 
 use super::config::ContactConfig;
 use super::curved::{
-    bulge, bulge_bound, bulge_parts, corner_a_weights, loose_bulge_bound, near_curved, node_box,
-    normal_pullback, normal_rate, sub_triangle, sub_triangle_at, Curved, NearCurved, NormalOf,
+    bulge, bulge_bound, bulge_parts, corner_a_weights, node_box, normal_rate, sub_triangle,
+    sub_triangle_at, Curved, NearCurved, NormalOf,
 };
 use super::narrow::TIE;
-use super::segment::{closest, Closest, Corners, Segment};
-use super::stage::{KinLoad, PairStats};
+use super::reach::{
+    box_gap, box_gap2, gap_at_least, nearest, CurvedAt, Master, MasterCurved, Slab,
+};
+use super::segment::{Corners, Segment};
 use super::stiffening;
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
-use std::mem::take;
 
 /// Target spacing of the quadrature points as a fraction of the contact distance c:
 /// each (sub-)triangle edge is split into ceil(L / (SPACING c)) parts. At c a point
@@ -94,82 +94,16 @@ fn strip_points(n: usize, i: usize) -> impl Iterator<Item = (f64, f64)> {
     })
 }
 
-fn box_gap(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
-    let d = (b.0 - a.1).sup(&Vec3::zeros()) + (a.0 - b.1).sup(&Vec3::zeros());
-    d.norm()
-}
-
-/// The master data of one candidate segment: its index, node box, corners and where its
-/// curved data are (an index, not a copy: the data are 232 bytes).
-struct Master {
-    j: u32,
-    bx: (Vec3, Vec3),
-    at: Corners,
-    cv: CurvedAt,
-}
-
-/// Where a master's curved data are: in the pass's near set, or computed for this slave
-/// segment (a segment outside the near set; the same values either way).
-#[derive(Clone, Copy)]
-enum CurvedAt {
-    Near(usize),
-    Extra(usize),
-}
-
-/// The master body's curved data as the point loop reads them.
-struct MasterCurved<'a> {
-    near: &'a NearCurved,
-    extra: &'a [Curved],
-}
-
-impl MasterCurved<'_> {
-    fn of(&self, m: &Master) -> &Curved {
-        match m.cv {
-            CurvedAt::Near(k) => self.near.at(k),
-            CurvedAt::Extra(k) => &self.extra[k],
-        }
-    }
-}
-
-/// The segments of `surf` whose stored box comes within `grow` of the box `near` (per
-/// axis), ascending, and their node boxes: a test per `BOX_CHUNK` segments far from it,
-/// so a pass costs what lies near the other body, not the whole body.
-fn live_boxes(
-    surf: &Surface,
-    x: &[Vec3],
-    near: &(Vec3, Vec3),
-    grow: f64,
-) -> (Vec<u32>, Vec<(Vec3, Vec3)>) {
-    let (lo, hi) = (near.0.add_scalar(-grow), near.1.add_scalar(grow));
-    let mut live = Vec::new();
-    surf.near_segments(&[lo.x, lo.y, lo.z], &[hi.x, hi.y, hi.z], &mut live);
-    let boxes = live
-        .iter()
-        .map(|&j| node_box(&surf.segments[j as usize], x))
-        .collect();
-    (live, boxes)
-}
-
-/// The union of boxes (empty: inverted, infinitely far from everything).
-fn union(boxes: &[(Vec3, Vec3)]) -> (Vec3, Vec3) {
-    boxes.iter().fold(
-        (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY)),
-        |(lo, hi), b| (lo.inf(&b.0), hi.sup(&b.1)),
-    )
-}
-
-/// All active points of slave body `sb` against master body `mb`. `slave`: the slave's
-/// segments that can come near the master (ascending) and their node boxes;
-/// `master_near`: the box of the master's segments that can come near the slave (every
-/// master a point can reach lies in it); `curved`:
-/// both bodies' curved data near the other (slave's, master's); `kappa`: penalty
-/// stiffness per unit area of this direction (weight included); `mu`: areal mass for
-/// the damping.
+/// All active points of slave body `sb` against master body `mb`. `master_near`: the
+/// box of the master's segments that can touch the slave (every master a point can
+/// touch lies in it); `curved`: both bodies' segments that can touch the other
+/// (`reach::near_sets`; slave's, master's): the slave's are the segments searched;
+/// `kappa`: penalty stiffness per unit area of this direction (weight included); `mu`:
+/// areal mass for the damping.
 #[allow(clippy::too_many_arguments)]
 pub fn point_pushes(
     sb: &Body,
     ssurf: &Surface,
-    slave: (&[u32], &[(Vec3, Vec3)]),
     mb: &Body,
     msurf: &Surface,
     master_near: (Vec3, Vec3),
@@ -185,10 +119,11 @@ pub fn point_pushes(
     // the slave's own points stand off its flat boxes by up to its bulge
     let reach = c + (BULGE_REACH * c).max(hm_max);
     let box_reach = reach + hs_max;
+    let box_reach2 = box_reach * box_reach;
     let (mlo, mhi) = master_near;
     let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
     let xm = &mb.state.x;
-    let (live, sboxes) = slave;
+    let (live, sboxes) = (scurv.segs(), scurv.boxes());
     live.par_chunks(SEG_CHUNK)
         .zip(sboxes.par_chunks(SEG_CHUNK))
         .map(|(segs, bxs)| {
@@ -237,12 +172,15 @@ pub fn point_pushes(
                     );
                     masters.clear();
                     extra.clear();
+                    // coordinates' size, for the slabs' round-off margin
+                    let scale = sbx.0.abs().max().max(sbx.1.abs().max()) + box_reach;
                     for &j in &cand {
                         let ms = &msurf.segments[j as usize];
                         let bx = node_box(ms, xm);
-                        if box_gap(&sbx, &bx) >= box_reach {
+                        if gap_at_least(box_gap2(&sbx, &bx), box_reach, box_reach2) {
                             continue;
                         }
+                        let at = Corners::of(ms, xm);
                         let cv = match mcurv.index(j) {
                             Some(k) => CurvedAt::Near(k),
                             None => {
@@ -253,8 +191,9 @@ pub fn point_pushes(
                         masters.push(Master {
                             j,
                             bx,
-                            at: Corners::of(ms, xm),
+                            at,
                             cv,
+                            slab: Slab::of(&at, scale, c),
                         });
                     }
                     if masters.is_empty() {
@@ -310,7 +249,10 @@ fn slave_segment(
     let (masters, mcurv) = masters;
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
+    let tie = TIE * c;
+    let reach2 = reach * reach;
     let mut near: Vec<usize> = Vec::with_capacity(masters.len());
+    let mut keep: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
     for sub in 0..subs {
         let st = sub_triangle(seg, xs_, sub);
@@ -333,20 +275,34 @@ fn slave_segment(
             // box grown by the slave's bulge bound holds its points; a master farther than
             // `reach` from it would be skipped at every point
             let (u0, u1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
-            let mut lo = flat_at(u0, 0.0);
-            let mut hi = lo;
-            for p in [
+            let corners = [
+                flat_at(u0, 0.0),
                 flat_at(u1, 0.0),
                 flat_at(u0, 1.0 - u0),
                 flat_at(u1, 1.0 - u1),
-            ] {
-                lo = lo.inf(&p);
-                hi = hi.sup(&p);
+            ];
+            let (mut lo, mut hi) = (corners[0], corners[0]);
+            for p in &corners[1..] {
+                lo = lo.inf(p);
+                hi = hi.sup(p);
             }
             let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
             near.clear();
-            near.extend((0..masters.len()).filter(|&mi| box_gap(&strip, &masters[mi].bx) < reach));
-            if near.is_empty() {
+            near.extend(
+                (0..masters.len())
+                    .filter(|&mi| !gap_at_least(box_gap2(&strip, &masters[mi].bx), reach, reach2)),
+            );
+            // less the masters whose slab puts every point of the strip (within the
+            // slave's bulge bound of the strip's flat corners' hull) at or beyond reach:
+            // if none is left, every point's candidates lie beyond reach
+            // (`reach::nearest`)
+            keep.clear();
+            keep.extend(near.iter().copied().filter(|&mi| {
+                masters[mi]
+                    .slab
+                    .is_none_or(|sl| sl.gap_hull(&corners, hs_bound) < reach)
+            }));
+            if keep.is_empty() {
                 continue;
             }
             for (u, v) in strip_points(n, i) {
@@ -358,28 +314,9 @@ fn slave_segment(
                 let (hs, _) = bulge(&sb_coef, &w);
                 let xa = flat + nsub * hs;
                 // closest master segment (ties within TIE c: lowest index; `masters` sorted)
-                let mut best: Option<(Closest, usize)> = None;
-                let mut dmin = f64::INFINITY;
-                for &mi in near.iter() {
-                    let m = &masters[mi];
-                    let lb = box_gap(&(xa, xa), &m.bx);
-                    if lb >= reach || lb > dmin + TIE * c {
-                        continue;
-                    }
-                    let pr = closest(&xa, &m.at);
-                    if pr.dist.is_nan() {
-                        continue;
-                    }
-                    let better = match &best {
-                        None => true,
-                        Some((b, _)) => pr.dist < b.dist - TIE * c,
-                    };
-                    dmin = dmin.min(pr.dist);
-                    if better {
-                        best = Some((pr, mi));
-                    }
-                }
-                let Some((pr, mi)) = best else { continue };
+                let Some((pr, mi)) = nearest(&xa, masters, &near, &keep, reach, tie) else {
+                    continue;
+                };
                 if pr.dist >= reach || pr.dist <= 1e-9 * c {
                     continue;
                 }
@@ -473,177 +410,5 @@ fn slave_segment(
                 });
             }
         }
-    }
-}
-
-/// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
-/// `sb`): each body slave once with half the weight; stiffness per unit area
-/// kappa = s mu / dt_ref^2 (the soft rule per area, mu the lighter areal mass).
-pub(crate) fn segment_pair(
-    bodies: &mut [Body],
-    ia: usize,
-    ib: usize,
-    sa: &Surface,
-    sb: &Surface,
-    cfg: &ContactConfig,
-    dt_ref: f64,
-) -> PairStats {
-    let (a, b) = (&bodies[ia], &bodies[ib]);
-    let mu = sa.areal_mass.min(sb.areal_mass);
-    let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
-    // how far each body's curved surface can stand off its facets where the other body
-    // is near: exact bounds over the segments within reach of the other's node box
-    // (grown by the loose bounds of both), so the search misses no point of a coarse mesh
-    // Only segments whose tree box comes within `live` of the other body are read: every
-    // distance below (the near set's `grow`, the culls' reaches) is at most `live`, since
-    // the loose bounds of the near segments are at most the surfaces' bounds until their
-    // next build.
-    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let (bounds_a, bounds_b) = (sa.bounds(), sb.bounds());
-    let live = c * (1.0 + BULGE_REACH) + sa.loose_bulge_ub + sb.loose_bulge_ub;
-    let (live_a, boxes_a) = live_boxes(sa, &a.state.x, &bounds_b, live);
-    let (live_b, boxes_b) = live_boxes(sb, &b.state.x, &bounds_a, live);
-    // a segment that can touch the other body is within `live` of it, so the other's
-    // segments it can touch lie in the box of the other's live segments: a tighter box
-    // than the other's whole body (a sphere's cap, not the sphere)
-    let (near_a, near_b) = (union(&boxes_a), union(&boxes_b));
-    let grow = c * (1.0 + BULGE_REACH)
-        + loose_bulge_bound(sa, &live_a, &boxes_a)
-        + loose_bulge_bound(sb, &live_b, &boxes_b);
-    let ca = near_curved(sa, &a.state.x, &live_a, &boxes_a, &near_b, grow);
-    let cb = near_curved(sb, &b.state.x, &live_b, &boxes_b, &near_a, grow);
-    let first = point_pushes(
-        a,
-        sa,
-        (&live_a, &boxes_a),
-        b,
-        sb,
-        near_b,
-        (&ca, &cb),
-        cfg,
-        kappa,
-        mu,
-    );
-    let second = point_pushes(
-        b,
-        sb,
-        (&live_b, &boxes_b),
-        a,
-        sa,
-        near_a,
-        (&cb, &ca),
-        cfg,
-        kappa,
-        mu,
-    );
-    let count = |p: &[Points]| p.iter().map(|c| c.pushes.len()).sum::<usize>();
-    let mut st = PairStats::empty(a.def.id, b.def.id, count(&first) + count(&second));
-    let thin = a.def.section.thickness.min(b.def.section.thickness);
-    apply_points(bodies, ia, ib, &first, &mut st, true);
-    apply_points(bodies, ib, ia, &second, &mut st, false);
-    // the loads on each body's normals, summed per normal (in point order), then pulled
-    // back once per normal in normal order
-    let on_a = first
-        .iter()
-        .flat_map(|c| &c.slave_loads)
-        .chain(second.iter().flat_map(|c| &c.master_loads));
-    let on_b = first
-        .iter()
-        .flat_map(|c| &c.master_loads)
-        .chain(second.iter().flat_map(|c| &c.slave_loads));
-    let mut buf = Vec::new();
-    for (ib_, loads, surf, is_a) in [
-        (ia, on_a.collect::<Vec<_>>(), sa, true),
-        (ib, on_b.collect(), sb, false),
-    ] {
-        buf.clear();
-        pull_back_loads(&loads, surf, &bodies[ib_].state.x, &mut buf);
-        let kin = if is_a { &mut st.kin_a } else { &mut st.kin_b };
-        add_forces(&mut bodies[ib_], &buf, kin);
-    }
-    st.kin_a.settle_nodes();
-    st.kin_b.settle_nodes();
-    st.max_penetration_ratio = st.max_penetration / thin;
-    st
-}
-
-/// The loads on a body's normals summed per normal, each sum in load order from zero,
-/// then pulled back to node forces once per normal in `NormalOf` order (nodes
-/// ascending, then crease segments ascending), into `out`. Node sums in an array by
-/// node (the bits of a map: each sum's terms and order are the same), not a map: a
-/// map insert per load cost more than the sums.
-fn pull_back_loads(loads: &[&NormalLoad], surf: &Surface, x: &[Vec3], out: &mut Vec<(u32, Vec3)>) {
-    let mut node_sum = vec![Vec3::zeros(); x.len()];
-    let mut seen = vec![false; x.len()];
-    let mut touched: Vec<u32> = Vec::new();
-    let mut seg_sum: BTreeMap<u32, Vec3> = BTreeMap::new();
-    for l in loads {
-        match l.of {
-            NormalOf::Node(n) => {
-                if !seen[n as usize] {
-                    seen[n as usize] = true;
-                    touched.push(n);
-                }
-                node_sum[n as usize] += l.tau;
-            }
-            NormalOf::Segment(j) => *seg_sum.entry(j).or_insert_with(Vec3::zeros) += l.tau,
-        }
-    }
-    touched.sort_unstable();
-    for n in touched {
-        normal_pullback(NormalOf::Node(n), surf, x, &node_sum[n as usize], out);
-    }
-    for (j, tau) in &seg_sum {
-        normal_pullback(NormalOf::Segment(*j), surf, x, tau, out);
-    }
-}
-
-/// Add node forces to a body's `f_contact` in order; on a kinematic body they go into
-/// the pair's `KinLoad` too.
-fn add_forces(b: &mut Body, forces: &[(u32, Vec3)], kin: &mut KinLoad) {
-    let is_kin = b.def.kinematic;
-    for &(n, f) in forces {
-        b.state.f_contact[n as usize] += f;
-        if is_kin {
-            kin.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
-        }
-    }
-}
-
-/// Add the points of one direction of the segment pass: their node forces on the
-/// slave's nodes (body `islave`) and the master's, sequentially in point order; what lands on
-/// a kinematic body goes into the pair's `KinLoad` too.
-fn apply_points(
-    bodies: &mut [Body],
-    islave: usize,
-    imaster: usize,
-    chunks: &[Points],
-    st: &mut PairStats,
-    slave_is_a: bool,
-) {
-    let (mut l_s, mut l_m) = if slave_is_a {
-        (take(&mut st.kin_a), take(&mut st.kin_b))
-    } else {
-        (take(&mut st.kin_b), take(&mut st.kin_a))
-    };
-    for p in chunks.iter().flat_map(|c| &c.pushes) {
-        add_forces(
-            &mut bodies[islave],
-            &p.slave_f[..p.slave_count as usize],
-            &mut l_s,
-        );
-        add_forces(
-            &mut bodies[imaster],
-            &p.master_f[..p.master_count as usize],
-            &mut l_m,
-        );
-        st.max_penetration = st.max_penetration.max(p.depth);
-        st.normal_force += p.normal_force;
-        st.force_on_a += if slave_is_a { p.force } else { -p.force };
-    }
-    if slave_is_a {
-        (st.kin_a, st.kin_b) = (l_s, l_m);
-    } else {
-        (st.kin_b, st.kin_a) = (l_s, l_m);
     }
 }

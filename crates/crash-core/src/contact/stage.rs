@@ -13,8 +13,8 @@ use super::config::{
 };
 use super::narrow::{forces, search, Hit, Normals, Push};
 use super::passes::{all_pair_passes, PairJob};
-use super::quadrature::segment_pair;
 use super::segment::Segment;
+use super::segpair::segment_pair;
 use super::stiffening;
 use super::surface::Surface;
 use super::sweep::{closing_speed, BodySpeed};

@@ -1,0 +1,350 @@
+//! The search of the segment pass (`quadrature.rs`): which segments of a pair can
+//! touch (the near sets), which master segments each slave segment sees, and each
+//! point's master by the pass's rule (closest; ties within TIE c: the first in index
+//! order), with culls that give that rule's answer. docs/theory-contact.md, "Segment
+//! pass", "*Cost.*".
+
+use super::curved::{loose_bulge_bound, near_curved, node_box, Curved, NearCurved};
+use super::segment::{closest, Closest, Corners};
+use super::surface::Surface;
+use crate::Vec3;
+
+/// Euclidean gap of two boxes (0 when they meet).
+pub(crate) fn box_gap(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
+    box_gap2(a, b).sqrt()
+}
+
+/// Its square (`box_gap` is its correctly rounded root, the bits of `Vec3::norm`).
+pub(crate) fn box_gap2(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
+    ((b.0 - a.1).sup(&Vec3::zeros()) + (a.0 - b.1).sup(&Vec3::zeros())).norm_squared()
+}
+
+/// The segments of `surf` whose stored box comes within `grow` of the box `near` (per
+/// axis), ascending, and their node boxes: a test per `BOX_CHUNK` segments far from it,
+/// so a pass costs what lies near the other body, not the whole body.
+fn live_boxes(
+    surf: &Surface,
+    x: &[Vec3],
+    near: &(Vec3, Vec3),
+    grow: f64,
+) -> (Vec<u32>, Vec<(Vec3, Vec3)>) {
+    let (lo, hi) = (near.0.add_scalar(-grow), near.1.add_scalar(grow));
+    let mut live = Vec::new();
+    surf.near_segments(&[lo.x, lo.y, lo.z], &[hi.x, hi.y, hi.z], &mut live);
+    let boxes = live
+        .iter()
+        .map(|&j| node_box(&surf.segments[j as usize], x))
+        .collect();
+    (live, boxes)
+}
+
+/// Squared gap of a point and a box.
+fn point_gap2(p: &Vec3, b: &(Vec3, Vec3)) -> f64 {
+    ((b.0 - p).sup(&Vec3::zeros()) + (p - b.1).sup(&Vec3::zeros())).norm_squared()
+}
+
+/// `box_gap >= r` from the squared gap `s` (`box_gap2`) and r2 = r r: without the
+/// square root where `s` is clearly on one side (sqrt is correctly rounded, so a
+/// relative margin of 1e-12 on the squares decides it), the same answer always.
+pub(crate) fn gap_at_least(s: f64, r: f64, r2: f64) -> bool {
+    if s > r2 * (1.0 + 1e-12) {
+        true
+    } else if s < r2 * (1.0 - 1e-12) {
+        false
+    } else {
+        s.sqrt() >= r
+    }
+}
+
+/// The union of boxes (empty: inverted, infinitely far from everything).
+pub(crate) fn union(boxes: &[(Vec3, Vec3)]) -> (Vec3, Vec3) {
+    boxes.iter().fold(
+        (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY)),
+        |(lo, hi), b| (lo.inf(&b.0), hi.sup(&b.1)),
+    )
+}
+
+/// The segments of both bodies of a pair that can touch the other (their curved data,
+/// node boxes and largest bulge bound, `NearCurved`), in three steps so that the loose
+/// bulge bound of a coarse flat body (a 6.7 mm plate quad: 7 mm, its true bulge 0) does
+/// not size the other body's set:
+/// - first body `p` (the one with the larger loose bound, `Surface::loose_bulge_ub`):
+///   its segments within 1.25 c + both loose bounds of the other's (as before);
+/// - then body `q`: its segments within 1.25 c + p's exact bound + q's loose bound of
+///   the box of p's set;
+/// - last, p's set kept to the segments within 1.25 c + q's exact bound + p's loose
+///   bound of the box of q's set.
+///
+/// A point on segment s touches segment m only if their node boxes are nearer than c +
+/// bulge(s) + bulge(m) (its gap is d - h_m - c with d >= that distance - h_s), and every
+/// bulge is at most its segment's loose bound; so each step keeps every segment that can
+/// touch one of the other's, and each exact bound (a max over a set holding every
+/// segment that can touch) bounds the bulge of every segment a point can touch.
+/// Returns (a's, b's).
+pub(crate) fn near_sets(
+    sa: &Surface,
+    xa: &[Vec3],
+    sb: &Surface,
+    xb: &[Vec3],
+    base: f64,
+) -> (NearCurved, NearCurved) {
+    let flip = sb.loose_bulge_ub > sa.loose_bulge_ub;
+    let ((sp, xp), (sq, xq)) = if flip {
+        ((sb, xb), (sa, xa))
+    } else {
+        ((sa, xa), (sb, xb))
+    };
+    let bounds = |s: &Surface| s.bounds();
+    // 1. as before this step: every segment within the loose reach of the other body
+    let live1 = base + sp.loose_bulge_ub + sq.loose_bulge_ub;
+    let (live_p, boxes_p) = live_boxes(sp, xp, &bounds(sq), live1);
+    let (live_q, boxes_q) = live_boxes(sq, xq, &bounds(sp), live1);
+    let grow1 =
+        base + loose_bulge_bound(sp, &live_p, &boxes_p) + loose_bulge_bound(sq, &live_q, &boxes_q);
+    let cp = near_curved(sp, xp, &live_p, &boxes_p, &union(&boxes_q), grow1);
+    // 2. q's segments against p's set, with p's exact bound
+    let box_p = union(cp.boxes());
+    let live2 = base + cp.bound + sq.loose_bulge_ub;
+    let (live_q, boxes_q) = live_boxes(sq, xq, &box_p, live2);
+    let grow2 = base + cp.bound + loose_bulge_bound(sq, &live_q, &boxes_q);
+    let cq = near_curved(sq, xq, &live_q, &boxes_q, &box_p, grow2);
+    // 3. p's set against q's, with q's exact bound
+    let grow3 = base + cq.bound + loose_bulge_bound(sp, cp.segs(), cp.boxes());
+    let cp = cp.within(&union(cq.boxes()), grow3);
+    if flip {
+        (cq, cp)
+    } else {
+        (cp, cq)
+    }
+}
+
+/// A facet's unit normal and the span of its corners along it: every point of the flat
+/// facet lies in that slab, so a point's distance to the facet is at least its distance
+/// to the slab, less `margin` (round-off of the dot products and of the projection's
+/// closest point, which `segment::closest` builds from weights within round-off of [0,
+/// 1] on a facet that is not degenerate).
+#[derive(Clone, Copy)]
+pub(crate) struct Slab {
+    n: Vec3,
+    lo: f64,
+    hi: f64,
+    margin: f64,
+}
+
+impl Slab {
+    /// The slab of a facet (a quad: its four sub-triangles around the centroid), or
+    /// None when a (sub-)triangle is nearly degenerate (sine of its shape under 1e-3:
+    /// the projection's weights there are not bounded by round-off).
+    pub(crate) fn of(at: &Corners, scale: f64, c: f64) -> Option<Slab> {
+        let xs = &at.xs;
+        let k = at.count as usize;
+        let l2 = (0..k)
+            .map(|i| (xs[(i + 1) % k] - xs[i]).norm_squared())
+            .fold(0.0, f64::max);
+        let shaped = |a: &Vec3, b: &Vec3, c_: &Vec3| {
+            let e = [
+                (b - a).norm_squared(),
+                (c_ - b).norm_squared(),
+                (a - c_).norm_squared(),
+            ];
+            let m = e.iter().copied().fold(0.0, f64::max);
+            (b - a).cross(&(c_ - a)).norm_squared() >= 1e-6 * m * m
+        };
+        let f = if k == 3 {
+            if !shaped(&xs[0], &xs[1], &xs[2]) {
+                return None;
+            }
+            (xs[1] - xs[0]).cross(&(xs[2] - xs[0]))
+        } else {
+            let ce = at.centroid;
+            if !(0..4).all(|s| shaped(&ce, &xs[s], &xs[(s + 1) % 4])) {
+                return None;
+            }
+            (xs[2] - xs[0]).cross(&(xs[3] - xs[1]))
+        };
+        let l = f.norm();
+        if !(l > 0.0 && l.is_finite()) {
+            return None;
+        }
+        let n = f / l;
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for x in &xs[..k] {
+            let s = n.dot(x);
+            lo = lo.min(s);
+            hi = hi.max(s);
+        }
+        let margin = 1e-8 * (c + l2.sqrt()) + 1e-12 * scale;
+        lo.is_finite().then_some(Slab { n, lo, hi, margin })
+    }
+
+    /// A lower bound on the distance of the facet to points whose values along the
+    /// normal lie in [a, b].
+    fn gap_span(&self, a: f64, b: f64) -> f64 {
+        (self.lo - b).max(a - self.hi) - self.margin
+    }
+
+    /// A lower bound on the distance of the facet to `p`.
+    pub(crate) fn gap(&self, p: &Vec3) -> f64 {
+        let s = self.n.dot(p);
+        self.gap_span(s, s)
+    }
+
+    /// A lower bound on the distance of the facet to every point within `h` of the
+    /// convex hull of `corners`.
+    pub(crate) fn gap_hull(&self, corners: &[Vec3], h: f64) -> f64 {
+        let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
+        for x in corners {
+            let s = self.n.dot(x);
+            a = a.min(s);
+            b = b.max(s);
+        }
+        self.gap_span(a - h, b + h)
+    }
+}
+
+/// The master data of one candidate segment: its index, node box, corners, slab and
+/// where its curved data are (an index, not a copy: the data are 232 bytes).
+pub(crate) struct Master {
+    pub j: u32,
+    pub bx: (Vec3, Vec3),
+    pub at: Corners,
+    pub cv: CurvedAt,
+    pub slab: Option<Slab>,
+}
+
+impl Master {
+    /// A lower bound on the distance of the facet to `p` (-inf without a slab).
+    fn slab_gap(&self, p: &Vec3) -> f64 {
+        self.slab.map_or(f64::NEG_INFINITY, |s| s.gap(p))
+    }
+}
+
+/// Where a master's curved data are: in the pass's near set, or computed for this slave
+/// segment (a segment outside the near set; the same values either way).
+#[derive(Clone, Copy)]
+pub(crate) enum CurvedAt {
+    Near(usize),
+    Extra(usize),
+}
+
+/// The master body's curved data as the point loop reads them.
+pub(crate) struct MasterCurved<'a> {
+    pub near: &'a NearCurved,
+    pub extra: &'a [Curved],
+}
+
+impl MasterCurved<'_> {
+    pub(crate) fn of(&self, m: &Master) -> &Curved {
+        match m.cv {
+            CurvedAt::Near(k) => self.near.at(k),
+            CurvedAt::Extra(k) => &self.extra[k],
+        }
+    }
+}
+
+/// The rule itself, as the pass always ran it: over the masters `near` (index order)
+/// those whose node box lies within `reach` of the point are its candidates; the first
+/// is the best, a later one replaces it only when closer by more than `tie`. A
+/// candidate whose box is farther than the closest distance so far plus `tie` is not
+/// projected (it could neither replace the best nor lower that distance).
+fn by_rule(
+    xa: &Vec3,
+    masters: &[Master],
+    near: &[usize],
+    reach: f64,
+    tie: f64,
+) -> Option<(Closest, usize)> {
+    let mut best: Option<(Closest, usize)> = None;
+    let mut dmin = f64::INFINITY;
+    for &mi in near {
+        let m = &masters[mi];
+        let lb = box_gap(&(*xa, *xa), &m.bx);
+        if lb >= reach || lb > dmin + tie {
+            continue;
+        }
+        let pr = closest(xa, &m.at);
+        if pr.dist.is_nan() {
+            continue;
+        }
+        let better = match &best {
+            None => true,
+            Some((b, _)) => pr.dist < b.dist - tie,
+        };
+        dmin = dmin.min(pr.dist);
+        if better {
+            best = Some((pr, mi));
+        }
+    }
+    best
+}
+
+/// The point's master by the rule (`by_rule` over `near`), when it lies within `reach`
+/// (None otherwise, where the pass drops the point either way). `keep` is `near` less
+/// masters whose slab puts every point of the strip at or beyond `reach`; the point
+/// skips those and the ones its own slab puts there too (the set F), and projects the
+/// rest (K) by the rule. That gives the rule's answer:
+/// - a candidate of F (distance >= reach) changes the rule's best only by becoming it;
+///   once a point of K is closer than every earlier candidate and reach by more than
+///   `tie` ("caught up"), it is the best in both runs, the best stays below reach and no
+///   candidate of F can replace it, so both runs end alike;
+/// - if no candidate of K comes within reach, none of near does: the point is dropped
+///   either way;
+/// - otherwise (a candidate within reach but within `tie` of an earlier one or of
+///   reach, never seen on the showcase) the rule runs over `near` again.
+///
+/// A candidate skipped for its box or slab lying beyond the closest distance so far plus
+/// `tie` is one the rule would not take either.
+pub(crate) fn nearest(
+    xa: &Vec3,
+    masters: &[Master],
+    near: &[usize],
+    keep: &[usize],
+    reach: f64,
+    tie: f64,
+) -> Option<(Closest, usize)> {
+    let mut best: Option<(Closest, usize)> = None;
+    let mut dmin = f64::INFINITY;
+    let mut caught_up = false;
+    let reach2 = reach * reach;
+    for &mi in keep {
+        let m = &masters[mi];
+        let sg = m.slab_gap(xa);
+        if sg >= reach {
+            continue;
+        }
+        // the rule's tests on the box gap, squared where that decides them (the second
+        // one only skips a candidate the rule could not take, so erring towards
+        // projecting costs time, not bits)
+        let s = point_gap2(xa, &m.bx);
+        if gap_at_least(s, reach, reach2) || sg > dmin + tie {
+            continue;
+        }
+        let dt = dmin + tie;
+        if s > dt * dt * (1.0 + 1e-12) {
+            continue;
+        }
+        let pr = closest(xa, &m.at);
+        if pr.dist.is_nan() {
+            continue;
+        }
+        if !caught_up && pr.dist < dmin.min(reach) - tie {
+            caught_up = true;
+        }
+        let better = match &best {
+            None => true,
+            Some((b, _)) => pr.dist < b.dist - tie,
+        };
+        dmin = dmin.min(pr.dist);
+        if better {
+            best = Some((pr, mi));
+        }
+    }
+    if caught_up {
+        best
+    } else if dmin >= reach {
+        // dmin is never NaN: it starts infinite and takes only distances that are not
+        None
+    } else {
+        by_rule(xa, masters, near, reach, tie).filter(|(pr, _)| pr.dist < reach)
+    }
+}

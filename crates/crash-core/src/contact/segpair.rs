@@ -1,0 +1,153 @@
+//! The segment pass of a pair (`ContactPass::Segments`): both directions' points
+//! (`quadrature.rs`) and their forces applied, in point order, then the loads on the
+//! normals pulled back once per normal. docs/theory-contact.md, "Segment pass".
+
+use super::config::ContactConfig;
+use super::curved::{normal_pullback, NormalOf};
+use super::quadrature::BULGE_REACH;
+use super::quadrature::{point_pushes, NormalLoad, Points};
+use super::reach::{near_sets, union};
+use super::stage::{KinLoad, PairStats};
+use super::surface::Surface;
+use crate::body::Body;
+use crate::Vec3;
+use std::collections::BTreeMap;
+use std::mem::take;
+
+/// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
+/// `sb`): each body slave once with half the weight; stiffness per unit area
+/// kappa = s mu / dt_ref^2 (the soft rule per area, mu the lighter areal mass).
+pub(crate) fn segment_pair(
+    bodies: &mut [Body],
+    ia: usize,
+    ib: usize,
+    sa: &Surface,
+    sb: &Surface,
+    cfg: &ContactConfig,
+    dt_ref: f64,
+) -> PairStats {
+    let (a, b) = (&bodies[ia], &bodies[ib]);
+    let mu = sa.areal_mass.min(sb.areal_mass);
+    let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
+    // the segments of each body that can touch the other, their curved data and how far
+    // each body's curved surface can stand off its facets there (exact bounds over those
+    // segments, so the search misses no point of a coarse mesh): `reach::near_sets`.
+    // Only segments whose tree box comes within 1.25 c plus both surfaces' loose bulge
+    // bounds of the other body are read.
+    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+    let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
+    // the other's segments a point can touch lie in the box of the other's near set
+    let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
+    let first = point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu);
+    let second = point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu);
+    let count = |p: &[Points]| p.iter().map(|c| c.pushes.len()).sum::<usize>();
+    let mut st = PairStats::empty(a.def.id, b.def.id, count(&first) + count(&second));
+    let thin = a.def.section.thickness.min(b.def.section.thickness);
+    apply_points(bodies, ia, ib, &first, &mut st, true);
+    apply_points(bodies, ib, ia, &second, &mut st, false);
+    // the loads on each body's normals, summed per normal (in point order), then pulled
+    // back once per normal in normal order
+    let on_a = first
+        .iter()
+        .flat_map(|c| &c.slave_loads)
+        .chain(second.iter().flat_map(|c| &c.master_loads));
+    let on_b = first
+        .iter()
+        .flat_map(|c| &c.master_loads)
+        .chain(second.iter().flat_map(|c| &c.slave_loads));
+    let mut buf = Vec::new();
+    for (ib_, loads, surf, is_a) in [
+        (ia, on_a.collect::<Vec<_>>(), sa, true),
+        (ib, on_b.collect(), sb, false),
+    ] {
+        buf.clear();
+        pull_back_loads(&loads, surf, &bodies[ib_].state.x, &mut buf);
+        let kin = if is_a { &mut st.kin_a } else { &mut st.kin_b };
+        add_forces(&mut bodies[ib_], &buf, kin);
+    }
+    st.kin_a.settle_nodes();
+    st.kin_b.settle_nodes();
+    st.max_penetration_ratio = st.max_penetration / thin;
+    st
+}
+
+/// The loads on a body's normals summed per normal, each sum in load order from zero,
+/// then pulled back to node forces once per normal in `NormalOf` order (nodes
+/// ascending, then crease segments ascending), into `out`. Node sums in an array by
+/// node (the bits of a map: each sum's terms and order are the same), not a map: a
+/// map insert per load cost more than the sums.
+fn pull_back_loads(loads: &[&NormalLoad], surf: &Surface, x: &[Vec3], out: &mut Vec<(u32, Vec3)>) {
+    let mut node_sum = vec![Vec3::zeros(); x.len()];
+    let mut seen = vec![false; x.len()];
+    let mut touched: Vec<u32> = Vec::new();
+    let mut seg_sum: BTreeMap<u32, Vec3> = BTreeMap::new();
+    for l in loads {
+        match l.of {
+            NormalOf::Node(n) => {
+                if !seen[n as usize] {
+                    seen[n as usize] = true;
+                    touched.push(n);
+                }
+                node_sum[n as usize] += l.tau;
+            }
+            NormalOf::Segment(j) => *seg_sum.entry(j).or_insert_with(Vec3::zeros) += l.tau,
+        }
+    }
+    touched.sort_unstable();
+    for n in touched {
+        normal_pullback(NormalOf::Node(n), surf, x, &node_sum[n as usize], out);
+    }
+    for (j, tau) in &seg_sum {
+        normal_pullback(NormalOf::Segment(*j), surf, x, tau, out);
+    }
+}
+
+/// Add node forces to a body's `f_contact` in order; on a kinematic body they go into
+/// the pair's `KinLoad` too.
+fn add_forces(b: &mut Body, forces: &[(u32, Vec3)], kin: &mut KinLoad) {
+    let is_kin = b.def.kinematic;
+    for &(n, f) in forces {
+        b.state.f_contact[n as usize] += f;
+        if is_kin {
+            kin.push(n, f, b.state.v[n as usize], b.def.program[n as usize]);
+        }
+    }
+}
+
+/// Add the points of one direction of the segment pass: their node forces on the
+/// slave's nodes (body `islave`) and the master's, sequentially in point order; what lands on
+/// a kinematic body goes into the pair's `KinLoad` too.
+fn apply_points(
+    bodies: &mut [Body],
+    islave: usize,
+    imaster: usize,
+    chunks: &[Points],
+    st: &mut PairStats,
+    slave_is_a: bool,
+) {
+    let (mut l_s, mut l_m) = if slave_is_a {
+        (take(&mut st.kin_a), take(&mut st.kin_b))
+    } else {
+        (take(&mut st.kin_b), take(&mut st.kin_a))
+    };
+    for p in chunks.iter().flat_map(|c| &c.pushes) {
+        add_forces(
+            &mut bodies[islave],
+            &p.slave_f[..p.slave_count as usize],
+            &mut l_s,
+        );
+        add_forces(
+            &mut bodies[imaster],
+            &p.master_f[..p.master_count as usize],
+            &mut l_m,
+        );
+        st.max_penetration = st.max_penetration.max(p.depth);
+        st.normal_force += p.normal_force;
+        st.force_on_a += if slave_is_a { p.force } else { -p.force };
+    }
+    if slave_is_a {
+        (st.kin_a, st.kin_b) = (l_s, l_m);
+    } else {
+        (st.kin_b, st.kin_a) = (l_s, l_m);
+    }
+}
