@@ -508,7 +508,7 @@ fn a_part_state_whose_points_do_not_match_their_counts_is_refused() {
     let good = command_to_pb(&Command::Halo(vec![part_state()]), |_| false);
     assert!(command_from_pb(&good).is_ok());
     type Change = fn(&mut crash_proto::pb::PartState);
-    let changes: [Change; 2] = [|p| p.nv += 1, |p| drop(p.xvw.pop())];
+    let changes: [Change; 2] = [|p| p.nv += 1, |p| p.xvw.truncate(p.xvw.len() - 1)];
     for change in changes {
         let mut m = good.clone();
         if let Some(crash_proto::pb::master_message::Command::Halo(h)) = m.command.as_mut() {

@@ -11,6 +11,7 @@
 
 pub mod auth;
 pub mod command;
+pub mod lane;
 pub mod link;
 pub mod spin;
 pub mod text;

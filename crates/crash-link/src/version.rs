@@ -25,7 +25,9 @@ use thiserror::Error;
 /// distance from where the views were built. v12: quad reference data in stride 11
 /// (what the element stores: gradients of nodes 3 and 4, h.X, h.Y, area, e0, bb; was 19).
 /// v13: a part state's x, v, w travel as one block of raw little-endian doubles.
-pub const PROTOCOL_VERSION: u32 = 13;
+/// v14: the step lane (Welcome.lane_port; commands and replies as length-prefixed
+/// frames on a plain TCP connection of their own, `lane`).
+pub const PROTOCOL_VERSION: u32 = 14;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -5,7 +5,8 @@
 //! session token its Welcome gave it (32 random bytes, compared in constant time), so a
 //! stranger cannot keep a dead worker "alive". The master's link reads the age of the
 //! last beat while it waits for a reply (`RemoteWorker::recv`): the beats are handled
-//! by the master's runtime, which runs only while the master waits, so silence is
+//! by the master's runtime, which without the step lane runs only while the master
+//! waits (with it, on a thread of its own), so silence is
 //! counted from the later of the last beat and the start of the wait (time the master
 //! spent busy elsewhere never counts against a worker).
 
@@ -62,6 +63,15 @@ impl Beats {
         }
         slot.last = Some(Instant::now());
         Ok(())
+    }
+
+    /// Whether `token` is worker `index`'s session token (constant time; no beat).
+    pub fn holds(&self, index: u32, token: &[u8]) -> bool {
+        self.slots
+            .lock()
+            .ok()
+            .and_then(|s| s.get(&index).map(|slot| same(&slot.token, token)))
+            .unwrap_or(false)
     }
 
     /// When worker `index` last beat (None: never, or unknown).

@@ -5,7 +5,8 @@
 //! and the master takes the later ones at step boundaries (`join::Newcomers`).
 
 use crate::heartbeat::{interval_for, Beats, DEFAULT_TIMEOUT};
-use crate::remote_link::RemoteWorker;
+use crate::lane::Desk;
+use crate::remote_link::{Lane, RemoteWorker};
 use crate::server::{Attached, RemoteOptions};
 use crash_link::{escape_peer, PROTOCOL_VERSION};
 use crash_proto::pb::{self, master_message};
@@ -24,6 +25,8 @@ pub struct Joiner {
     rx: Option<mpsc::UnboundedReceiver<Attached>>,
     beats: Arc<Beats>,
     opts: RemoteOptions,
+    /// The step lane's listener (None: commands on the gRPC streams).
+    desk: Option<Arc<Desk>>,
 }
 
 impl std::fmt::Debug for Joiner {
@@ -40,12 +43,14 @@ impl Joiner {
         rx: mpsc::UnboundedReceiver<Attached>,
         beats: Arc<Beats>,
         opts: RemoteOptions,
+        desk: Option<Arc<Desk>>,
     ) -> Self {
         Self {
             rt,
             rx: Some(rx),
             beats,
             opts,
+            desk,
         }
     }
 
@@ -66,6 +71,10 @@ impl Joiner {
             .beats
             .register(index as u32)
             .map_err(|e| e.to_string())?;
+        // expected before the Welcome goes out: the worker opens it right after
+        if let Some(d) = &self.desk {
+            d.expect(index as u32);
+        }
         let every = interval_for(self.opts.heartbeat_timeout.unwrap_or(DEFAULT_TIMEOUT));
         let welcome = pb::MasterMessage {
             command: Some(master_message::Command::Welcome(pb::Welcome {
@@ -74,6 +83,7 @@ impl Joiner {
                 workers: workers as u32,
                 session_token: token,
                 heartbeat_interval_ms: every.as_millis().clamp(1, 60_000) as u32,
+                lane_port: self.desk.as_ref().map_or(0, |d| u32::from(d.port())),
             })),
         };
         if a.outbound.send(Ok(welcome)).is_err() {
@@ -97,6 +107,14 @@ impl Joiner {
             timeout: self.opts.reply_timeout,
             beats: self.beats.clone(),
             heartbeat_timeout: self.opts.heartbeat_timeout,
+            lane: match &self.desk {
+                Some(d) => Lane::Pending {
+                    desk: d.clone(),
+                    deadline: std::time::Instant::now() + crash_link::lane::WAIT,
+                },
+                None => Lane::Off,
+            },
+            limit: self.opts.max_message,
         })
     }
 

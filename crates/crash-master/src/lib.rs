@@ -22,6 +22,7 @@ pub mod heartbeat;
 pub mod input;
 pub mod join;
 pub mod joiner;
+mod lane;
 mod master;
 pub mod meim;
 pub mod pairs;

@@ -105,6 +105,17 @@ struct Args {
     /// The private key of --tls-cert (PEM).
     #[arg(long, value_name = "PEM", requires = "tls_cert")]
     tls_key: Option<PathBuf>,
+    /// Keep every command on the workers' gRPC streams instead of the step lane (a
+    /// plain TCP connection per worker, admitted by its session token, on a second
+    /// port of the --listen address; docs/architecture-cluster.md). With TLS the lane
+    /// is never offered.
+    #[arg(long)]
+    no_step_lane: bool,
+    /// The step lane's port (0: any free port, announced to each worker in its
+    /// Welcome); set it when a firewall must let the lane through. A worker that cannot
+    /// reach the lane keeps its commands on gRPC.
+    #[arg(long, default_value_t = 0, value_name = "PORT")]
+    step_lane_port: u16,
 }
 
 /// `crash-master cert --out DIR --host NAME...`: a self-signed certificate and key.
@@ -261,6 +272,8 @@ fn run(args: Args) -> anyhow::Result<()> {
                 input.briefs.iter().map(|b| b.elements).max().unwrap_or(0),
             ),
             tls,
+            step_lane: !args.no_step_lane,
+            step_lane_port: args.step_lane_port,
         },
     )?;
     // Tests and scripts read this line to learn the port (the address ends it).
@@ -268,6 +281,15 @@ fn run(args: Args) -> anyhow::Result<()> {
         eprintln!("crash-master: TLS on: workers dial https://HOST:PORT with --tls-ca");
     }
     eprintln!("crash-master: listening on {}", cluster.local_addr());
+    match cluster.lane_addr() {
+        Some(a) => eprintln!("crash-master: step lane on {a}"),
+        None if tls_on => {
+            eprintln!(
+                "crash-master: with TLS the step lane is not offered: commands travel on gRPC"
+            )
+        }
+        None => eprintln!("crash-master: step lane off: commands travel on gRPC"),
+    }
     if cluster.secret_required() {
         eprintln!("crash-master: workers must prove the shared secret");
     } else {

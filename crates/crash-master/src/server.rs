@@ -4,9 +4,12 @@
 //! (`remote_link::RemoteWorker`), and `Joiner` those that attach later (the attach
 //! channel stays open for the whole run).
 //!
-//! Threads: one current-thread tokio runtime, owned by the master's thread and driven
-//! only while the master waits for replies (`RemoteWorker::recv` blocks on it). The
-//! master's loop, the tonic server and all connections thus share one thread: a step
+//! Threads: with the step lane (`lane`, plain TCP, the default) the tokio runtime runs
+//! on a thread of its own (heartbeats, admissions, the gRPC streams), and the master's
+//! loop reads and writes each worker's lane with blocking calls. Without it (TLS,
+//! `step_lane` off) one current-thread runtime, owned by the master's thread, is driven
+//! only while the master waits for replies (`RemoteWorker::recv` blocks on it): the
+//! master's loop, the tonic server and all connections share one thread, and a step
 //! exchange costs no thread hand-over on the master side. TCP keepalive (answered by
 //! the kernel) keeps connections alive while the master is busy between steps.
 //!
@@ -62,6 +65,10 @@ pub struct RemoteOptions {
     pub max_message: usize,
     /// TLS: the master's certificate chain and private key (PEM); None: plain TCP.
     pub tls: Option<TlsIdentity>,
+    /// Offer the step lane (`lane`; plain TCP only: with TLS commands stay on gRPC).
+    pub step_lane: bool,
+    /// The step lane's port (0: any free port; it is announced in each Welcome).
+    pub step_lane_port: u16,
 }
 
 /// The master's TLS certificate chain and key, PEM (from `--tls-cert`, `--tls-key`).
@@ -92,6 +99,8 @@ impl Default for RemoteOptions {
             secret: None,
             max_message: MAX_MESSAGE,
             tls: None,
+            step_lane: true,
+            step_lane_port: 0,
         }
     }
 }
@@ -278,6 +287,8 @@ pub struct Cluster {
     links: Vec<RemoteWorker>,
     /// Workers admitted after the start (the attach channel stays open for the run).
     joiner: Joiner,
+    /// The step lane's port (None: not offered).
+    lane_port: Option<u16>,
     stop: Option<oneshot::Sender<()>>,
 }
 
@@ -298,10 +309,21 @@ impl Cluster {
         workers: usize,
         opts: RemoteOptions,
     ) -> Result<Self, MasterError> {
-        let rt = tokio::runtime::Builder::new_current_thread()
-            .enable_all()
-            .build()
-            .map_err(|e| MasterError::Network(format!("tokio runtime: {e}")))?;
+        let lane_on = opts.step_lane && opts.tls.is_none();
+        // With the lane the time-loop thread blocks on sockets and no longer drives the
+        // runtime: it gets a thread of its own (heartbeats, lane admissions, gRPC).
+        let rt = if lane_on {
+            tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(1)
+                .thread_name("crash-master-net")
+                .enable_all()
+                .build()
+        } else {
+            tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()
+        }
+        .map_err(|e| MasterError::Network(format!("tokio runtime: {e}")))?;
         let listener = rt
             .block_on(tokio::net::TcpListener::bind(listen))
             .map_err(|e| MasterError::Network(format!("cannot listen on {listen}: {e}")))?;
@@ -309,9 +331,21 @@ impl Cluster {
             .local_addr()
             .map_err(|e| MasterError::Network(format!("listening address: {e}")))?;
         let (tx, rx) = mpsc::unbounded_channel();
+        let beats = Arc::new(Beats::default());
+        let desk = if lane_on {
+            Some(crate::lane::start(
+                &rt,
+                addr.ip(),
+                opts.step_lane_port,
+                beats.clone(),
+                opts.handshake_timeout,
+            )?)
+        } else {
+            None
+        };
         let service = Arc::new(Service {
             attach: Arc::new(Mutex::new(Some(tx))),
-            beats: Arc::new(Beats::default()),
+            beats,
             secret: opts.secret.clone().map(Arc::new),
             handshake: opts.handshake_timeout,
         });
@@ -363,8 +397,10 @@ impl Cluster {
             }
         });
         let rt = Arc::new(rt);
+        let lane_port = desk.as_ref().map(|d| d.port());
         Ok(Self {
-            joiner: Joiner::new(rt.clone(), rx, service.beats.clone(), opts.clone()),
+            joiner: Joiner::new(rt.clone(), rx, service.beats.clone(), opts.clone(), desk),
+            lane_port,
             rt,
             addr,
             workers,
@@ -382,6 +418,11 @@ impl Cluster {
 
     pub fn local_addr(&self) -> SocketAddr {
         self.addr
+    }
+
+    /// The step lane's address (None: not offered: TLS or `step_lane` off).
+    pub fn lane_addr(&self) -> Option<SocketAddr> {
+        self.lane_port.map(|p| SocketAddr::new(self.addr.ip(), p))
     }
 
     /// Wait until all workers have attached, then welcome them (indices in order of

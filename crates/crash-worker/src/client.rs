@@ -106,7 +106,8 @@ pub fn run(opts: &WorkerOptions) -> Result<String, WorkerError> {
     let (tx, inbound, welcome) = rt.block_on(attach(opts))?;
     let alive = Arc::new(AtomicBool::new(true));
     heartbeat(opts, &welcome, alive.clone())?;
-    let result = serve(opts, &rt, &pool, tx, inbound);
+    let lane = crate::lane::open(opts, &welcome)?;
+    let result = serve(opts, &rt, &pool, tx, inbound, lane);
     alive.store(false, Ordering::Relaxed);
     result
 }
@@ -399,17 +400,19 @@ async fn attach(
     Ok((tx, inbound, welcome))
 }
 
-/// Answer commands until Shutdown. The runtime is driven only while waiting for the
-/// next command (and while flushing the reply, which happens in that same wait):
-/// compute never runs inside it. The protocol is strictly one reply per command, so
-/// nothing needs the connection to progress during compute; TCP keepalive is answered
-/// by the kernel.
+/// Answer commands until Shutdown, from the step lane when it is open (blocking reads
+/// and writes on this thread), else from the gRPC stream. The runtime is driven only
+/// while waiting for the next command on the stream (and while flushing the reply,
+/// which happens in that same wait): compute never runs inside it. The protocol is
+/// strictly one reply per command, so nothing needs the connection to progress during
+/// compute; TCP keepalive is answered by the kernel.
 fn serve(
     opts: &WorkerOptions,
     rt: &tokio::runtime::Runtime,
     pool: &rayon::ThreadPool,
     tx: mpsc::UnboundedSender<pb::WorkerMessage>,
     mut inbound: Streaming<pb::MasterMessage>,
+    mut lane: Option<crate::lane::WorkerLane>,
 ) -> Result<String, WorkerError> {
     let url = opts.master.as_str();
     let lost = |reason: String| WorkerError::Lost {
@@ -420,18 +423,21 @@ fn serve(
     // encoding time of the previous reply, reported with the next one
     let mut last_encode_ns = 0u64;
     loop {
-        let msg = match rt.block_on(inbound.message()) {
-            Ok(Some(m)) => m,
-            Ok(None) => {
-                return Err(lost(
-                    "the master ended the session without a shutdown".into(),
-                ))
-            }
-            Err(s) => return Err(refused_or_lost(url, &s)),
+        let (msg, wire_ns) = match lane.as_mut() {
+            Some(l) => l.next().map_err(lost)?,
+            None => match rt.block_on(inbound.message()) {
+                Ok(Some(m)) => (m, 0),
+                Ok(None) => {
+                    return Err(lost(
+                        "the master ended the session without a shutdown".into(),
+                    ))
+                }
+                Err(s) => return Err(refused_or_lost(url, &s)),
+            },
         };
         let t0 = Instant::now();
         let decoded = command_from_pb(&msg);
-        let decode_ns = t0.elapsed().as_nanos() as u64;
+        let decode_ns = wire_ns + t0.elapsed().as_nanos() as u64;
         let (mut reply, shutdown) = match decoded {
             Ok(cmd) => {
                 let shutdown = match &cmd {
@@ -454,7 +460,24 @@ fn serve(
         let t1 = Instant::now();
         let reply = reply_to_pb(&reply);
         last_encode_ns = t1.elapsed().as_nanos() as u64;
-        if tx.send(reply).is_err() {
+        if let Some(l) = lane.as_mut() {
+            match l.send(&reply) {
+                Ok(ns) => last_encode_ns += ns,
+                // the master may close the lane right after a Shutdown
+                Err(_) if shutdown.is_some() => {}
+                Err(e) => {
+                    if let Some(Ok(Command::Shutdown(r))) =
+                        l.last_word().map(|m| command_from_pb(&m))
+                    {
+                        return Err(lost(format!(
+                            "the master dropped this worker: {}",
+                            escape_peer(&r)
+                        )));
+                    }
+                    return Err(lost(e));
+                }
+            }
+        } else if tx.send(reply).is_err() {
             // the master ended the session: say why if it did (a worker it dropped)
             let why = rt.block_on(async {
                 tokio::time::timeout(Duration::from_secs(1), inbound.message()).await
@@ -471,6 +494,7 @@ fn serve(
         }
         if let Some(reason) = shutdown {
             // Close our side and let the master close its own, so the Ack is flushed.
+            drop(lane);
             drop(tx);
             rt.block_on(async {
                 let _ = tokio::time::timeout(Duration::from_secs(5), async {

@@ -9,6 +9,7 @@
 pub mod client;
 pub mod engine;
 pub mod error;
+mod lane;
 pub mod local;
 pub mod probe;
 
