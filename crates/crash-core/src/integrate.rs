@@ -212,12 +212,17 @@ impl NodeSums {
 
 /// `f(chunk index, x, v, w)` over the nodes' chunks of `CHUNK` on the pool, the sums in
 /// chunk order; single chunks, for an even end of the loop on every thread (forces.rs).
+/// The last `halo` nodes (a part's halo nodes, which take their state from their
+/// owner) are left out.
 pub(crate) fn node_chunks(
     x: &mut [Vec3],
     v: &mut [Vec3],
     w: &mut [Vec3],
+    halo: usize,
     f: impl Fn(usize, &mut [Vec3], &mut [Vec3], &mut [Vec3]) -> NodeSums + Sync + Send,
 ) -> Vec<NodeSums> {
+    let n = x.len().saturating_sub(halo);
+    let (x, v, w) = (&mut x[..n], &mut v[..n], &mut w[..n]);
     x.par_chunks_mut(CHUNK)
         .zip(v.par_chunks_mut(CHUNK))
         .zip(w.par_chunks_mut(CHUNK))
@@ -269,15 +274,8 @@ impl Body {
             &self.def.program,
         );
         let t = clock.t;
-        // a part's halo nodes (the last ones) take their state from their owner
-        let n = self.state.x.len().saturating_sub(self.def.halo_nodes);
-
-        let (x, v, w) = (
-            &mut self.state.x[..n],
-            &mut self.state.v[..n],
-            &mut self.state.w[..n],
-        );
-        let parts = node_chunks(x, v, w, |ci, xs, vs, ws| {
+        let (x, v, w) = (&mut self.state.x, &mut self.state.v, &mut self.state.w);
+        let parts = node_chunks(x, v, w, self.def.halo_nodes, |ci, xs, vs, ws| {
             let mut s = NodeSums::default();
             for k in 0..xs.len() {
                 let i = ci * CHUNK + k;

@@ -70,15 +70,9 @@ impl Body {
         let kelvin =
             d.slot_count() > d.gather_slot.len() && self.state.slots.len() >= d.slot_count();
         let t = clock.t;
-        let n = self.state.x.len().saturating_sub(d.halo_nodes);
-
         // the chunks and their merge of `Body::integrate` (the sums' bits)
-        let (x, v, w) = (
-            &mut self.state.x[..n],
-            &mut self.state.v[..n],
-            &mut self.state.w[..n],
-        );
-        let parts = node_chunks(x, v, w, |ci, xs, vs, ws| {
+        let (x, v, w) = (&mut self.state.x, &mut self.state.v, &mut self.state.w);
+        let parts = node_chunks(x, v, w, d.halo_nodes, |ci, xs, vs, ws| {
             let mut s = NodeSums::default();
             for k in 0..xs.len() {
                 let i = ci * CHUNK + k;
