@@ -136,7 +136,7 @@ fn echo(c: &mut Criterion) {
                 dt: 1e-9,
                 kin_nodes: false,
                 due: crash_core::Due::ALL,
-                contact: Vec::new(),
+                contact: Default::default(),
             })
             .unwrap();
             let Reply::Report(_) = l.recv().unwrap() else {
@@ -163,7 +163,7 @@ fn barrier(c: &mut Criterion) {
                             dt: 1e-9,
                             kin_nodes: false,
                             due: crash_core::Due::ALL,
-                            contact: Vec::new(),
+                            contact: Default::default(),
                         })
                         .unwrap();
                     }
@@ -199,7 +199,7 @@ fn loaded(c: &mut Criterion) {
                 dt: 1e-8,
                 kin_nodes: false,
                 due: crash_core::Due::ALL,
-                contact: Vec::new(),
+                contact: Default::default(),
             })
             .unwrap();
             let Reply::Report(r) = l.recv().unwrap() else {

@@ -78,7 +78,7 @@ impl InstantWorker {
             codec_ns: 0,
             probes: Vec::new(),
             parts: Vec::new(),
-            part_dts: Vec::new(),
+            part_dts: Default::default(),
         }
     }
 

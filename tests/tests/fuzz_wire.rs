@@ -78,7 +78,7 @@ fn valid_commands() -> Vec<Vec<u8>> {
             dt: 1e-7,
             kin_nodes: true,
             due: crash_core::Due::ALL,
-            contact: Vec::new(),
+            contact: Default::default(),
         },
         Command::Frame(vec![0, 1]),
         Command::States(vec![1]),
@@ -97,7 +97,7 @@ fn valid_replies() -> Vec<Vec<u8>> {
         dt: 1e-7,
         kin_nodes: true,
         due: crash_core::Due::ALL,
-        contact: Vec::new(),
+        contact: Default::default(),
     })];
     out.push(e.handle(Command::Frame(vec![0])));
     let at = e.clock().unwrap();
@@ -108,7 +108,7 @@ fn valid_replies() -> Vec<Vec<u8>> {
         dt: 1.0,
         kin_nodes: false,
         due: crash_core::Due::ALL,
-        contact: Vec::new(),
+        contact: Default::default(),
     }));
     out.iter()
         .map(|r| reply_to_pb(r).encode_to_vec())
@@ -254,7 +254,7 @@ fn command(e: &Engine, op: Op) -> Option<Command> {
             dt,
             kin_nodes,
             due: crash_core::Due::ALL,
-            contact: Vec::new(),
+            contact: Default::default(),
         },
         Op::Frame(ids) => Command::Frame(ids),
         Op::States(ids) => Command::States(ids),

@@ -3,7 +3,8 @@
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_core::body::NodalLoad;
-use crash_core::partition::{PartDt, PartState};
+use crash_core::contact::sweep::Momentum;
+use crash_core::partition::{PairSpeed, PartDt, PartState, SplitFigures};
 use crash_core::shapes::{icosphere, plate, ElementKind};
 use crash_core::{
     dof, hash::state_hash, Body, BodyReport, Clock, Fault, Group, Material, Section, Stabilization,
@@ -233,11 +234,19 @@ fn step_report_round_trips_bit_exact() {
         probes,
         bodies,
         parts: vec![part_state()],
-        part_dts: vec![PartDt {
-            id: 3,
-            dt: 2.5e-7,
-            element: 41,
-        }],
+        part_dts: SplitFigures {
+            dts: vec![PartDt {
+                id: 3,
+                dt: 2.5e-7,
+                element: 41,
+            }],
+            pairs: vec![PairSpeed {
+                a: 3,
+                b: 7,
+                c: 1.5e-3,
+                max: [0.0, 1.0 / 3.0, 2.5e300, f64::MIN_POSITIVE],
+            }],
+        },
         groups: vec![GroupTime {
             first: 0,
             nanos: 12345,
@@ -319,7 +328,7 @@ fn commands_round_trip() {
                 reactions: true,
                 probes: false,
             },
-            contact: Vec::new(),
+            contact: Default::default(),
         },
         Command::Unload {
             ids: vec![5, 2],
@@ -431,6 +440,7 @@ fn part_state() -> PartState {
         far: 3.0e-4,
         max_move: 1.0 / 7.0,
         max_move_node: 41,
+        momentum: Momentum([i64::MIN, -1, i64::MAX]),
     }
 }
 
@@ -444,18 +454,26 @@ fn split_group_commands_and_replies_round_trip_bit_exact() {
         slot: 1,
     };
     let bodies = evolved_bodies();
-    let dts = vec![
-        PartDt {
-            id: 2,
-            dt: 1.0 / 3.0 * 1e-7,
-            element: 17,
-        },
-        PartDt {
-            id: 9,
-            dt: f64::INFINITY,
-            element: 0,
-        },
-    ];
+    let dts = SplitFigures {
+        dts: vec![
+            PartDt {
+                id: 2,
+                dt: 1.0 / 3.0 * 1e-7,
+                element: 17,
+            },
+            PartDt {
+                id: 9,
+                dt: f64::INFINITY,
+                element: 0,
+            },
+        ],
+        pairs: vec![PairSpeed {
+            a: 2,
+            b: 9,
+            c: 1e-3,
+            max: [4.0, 0.5, 1e-9, 3.25],
+        }],
+    };
     let states: Vec<(u32, u32, crash_core::BodyState)> = bodies
         .iter()
         .enumerate()

@@ -9,9 +9,9 @@
 mod contact_util;
 
 use contact_util::*;
-use crash_core::contact::ContactConfig;
+use crash_core::contact::{ContactConfig, PenaltyKind};
 use crash_core::hash::state_hash;
-use crash_core::partition::{merge_report, PartDt, SharedGroup};
+use crash_core::partition::{merge_report, SharedGroup, SplitFigures};
 use crash_core::shapes::{plate, ElementKind};
 use crash_core::{dof, Body, BodyReport, Clock, Group, Vec3};
 
@@ -66,7 +66,7 @@ fn whole_step(g: &mut Group, clock: &mut Clock, dt: f64) -> f64 {
 
 /// The contact pass a step left pending, with the merged element steps (the master
 /// sends them with the next step, or before an assembly).
-fn flush(holders: &mut [SharedGroup], pending: &mut Option<Vec<PartDt>>) {
+fn flush(holders: &mut [SharedGroup], pending: &mut Option<SplitFigures>) {
     if let Some(dts) = pending.take() {
         for s in holders.iter_mut() {
             s.contact(&dts).expect("contact");
@@ -78,7 +78,7 @@ fn flush(holders: &mut [SharedGroup], pending: &mut Option<Vec<PartDt>>) {
 /// contact pass and the integration, then the element forces); the merged reports.
 fn shared_step(
     holders: &mut [SharedGroup],
-    pending: &mut Option<Vec<PartDt>>,
+    pending: &mut Option<SplitFigures>,
     clock: &Clock,
     h: f64,
 ) -> Vec<BodyReport> {
@@ -98,7 +98,7 @@ fn shared_step(
         }
     }
     let n = holders[0].ids.len();
-    let mut dts: Vec<Option<PartDt>> = vec![None; n];
+    let mut figures = SplitFigures::default();
     let mut merged: Vec<Option<BodyReport>> = vec![None; n];
     for (k, s) in holders.iter_mut().enumerate() {
         let imports: Vec<_> = states
@@ -108,10 +108,7 @@ fn shared_step(
             .flat_map(|(_, v)| v.iter().cloned())
             .collect();
         let (shares, mine) = s.forces(&imports, clock, h, false).expect("forces");
-        for d in mine {
-            let i = s.ids.iter().position(|&id| id == d.id).expect("id");
-            dts[i] = Some(dts[i].map_or(d, |a| a.min(d)));
-        }
+        figures.merge(mine);
         for r in shares {
             let i = s.ids.iter().position(|&id| id == r.id).expect("id");
             merged[i] = Some(match merged[i].take() {
@@ -120,8 +117,23 @@ fn shared_step(
             });
         }
     }
-    *pending = Some(dts.into_iter().map(|d| d.expect("every body")).collect());
-    merged.into_iter().map(|r| r.expect("a report")).collect()
+    // the master's part: element steps in body order, closing steps on the merged
+    // stable steps
+    let ids = &holders[0].ids;
+    figures
+        .dts
+        .sort_by_key(|d| ids.iter().position(|&id| id == d.id));
+    assert_eq!(figures.dts.len(), n, "every body's element step");
+    let mut merged: Vec<BodyReport> = merged.into_iter().map(|r| r.expect("a report")).collect();
+    for (id, limit) in figures.limits(config().penalty == PenaltyKind::Soft) {
+        let r = merged
+            .iter_mut()
+            .find(|r| r.id == id)
+            .expect("a pair's body");
+        r.stable_dt = r.stable_dt.min(limit);
+    }
+    *pending = Some(figures);
+    merged
 }
 
 thread_local! {
@@ -259,7 +271,7 @@ fn a_split_step_refuses_to_skip_or_repeat_its_pending_contact_pass() {
     assert!(holders[0].contact(&dts).is_err());
     // element steps of other bodies than the group's: refused
     let mut wrong = dts.clone();
-    wrong.reverse();
+    wrong.dts.reverse();
     assert!(holders[1].contact(&wrong).is_err());
     assert!(holders[1].contact_pending());
 }

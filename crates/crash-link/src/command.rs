@@ -1,7 +1,7 @@
 //! The commands a master sends and the replies a worker gives (exactly one per command).
 
 use crash_core::contact::{ContactConfig, PairStats};
-use crash_core::partition::{PartDt, PartState};
+use crash_core::partition::{PartState, SplitFigures};
 use crash_core::{
     Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Due, Fault, NodeProbe, Vec3,
 };
@@ -102,15 +102,15 @@ pub enum Command {
     /// pass's per-node forces on kinematic bodies (`KinLoad::nodes`): a frame follows.
     /// `due`: report reactions and history nodes (when Setup turned them on): their
     /// result rows follow this step. `contact`: every split body's element step over
-    /// all its parts in the last step (the minimum of the `StepReport::part_dts`), for
-    /// the contact pass that step left pending (empty when none is: no split group, or
-    /// a `Contact` ran it).
+    /// all its parts in the last step and every pair's closing-speed figures (the
+    /// `StepReport::part_dts` merged), for the contact pass that step left pending
+    /// (empty when none is: no split group, or a `Contact` ran it).
     Step {
         at: Clock,
         dt: f64,
         kin_nodes: bool,
         due: Due,
-        contact: Vec<PartDt>,
+        contact: SplitFigures,
     },
     /// What an output frame shows of these bodies (held by the worker).
     Frame(Vec<u32>),
@@ -139,7 +139,7 @@ pub enum Command {
     /// Run the pending contact pass of the split groups now, with each split body's
     /// element step over all its parts (as the next Step would carry them): before
     /// the whole bodies are assembled (frames, checkpoints, merging back). `Ack`.
-    Contact(Vec<PartDt>),
+    Contact(SplitFigures),
     /// The full states of the parts this worker computes (of every split group), for
     /// the assembly of whole bodies. Answered by `Parts`.
     Parts,
@@ -198,9 +198,10 @@ pub struct StepReport {
     /// Owned states of the parts of split groups this worker computes (a Step): the
     /// master relays them to the other holders (`Command::Halo`).
     pub parts: Vec<PartState>,
-    /// Each split body's smallest element step over the parts computed here (a
-    /// Halo): the master's minimum goes back with the next Step (`Step::contact`).
-    pub part_dts: Vec<PartDt>,
+    /// Each split body's smallest element step over the parts computed here and each
+    /// pair's closing-speed figures over them (a Halo): merged by the master, they go
+    /// back with the next Step (`Step::contact`).
+    pub part_dts: SplitFigures,
 }
 
 #[derive(Debug, Clone)]

@@ -27,7 +27,10 @@ use thiserror::Error;
 /// v13: a part state's x, v, w travel as one block of raw little-endian doubles.
 /// v14: the step lane (Welcome.lane_port; commands and replies as length-prefixed
 /// frames on a plain TCP connection of their own, `lane`).
-pub const PROTOCOL_VERSION: u32 = 14;
+/// v15: split groups send no velocities for the closing speed: parts send their
+/// momentum on a fixed quantum, holders their largest relative speeds per pair
+/// (PartDts.pair_*), which the master merges and sends back with the next step.
+pub const PROTOCOL_VERSION: u32 = 15;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -3,8 +3,9 @@
 //! conversions); the clock travels in Step and Load.
 
 use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, SplitSpec, StepReport};
+use crash_core::contact::sweep::Momentum;
 use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SpeedRule};
-use crash_core::partition::{PartDt, PartState};
+use crash_core::partition::{PairSpeed, PartDt, PartState, SplitFigures};
 use crash_core::BodyState;
 use crash_core::{Clock, Due, Vec3};
 use crash_io::FrameBody;
@@ -348,6 +349,7 @@ fn part_states_to_pb(parts: &[PartState]) -> pb::PartStates {
                 max_move_node: p.max_move_node,
                 bounds: vec![p.lo.x, p.lo.y, p.lo.z, p.hi.x, p.hi.y, p.hi.z],
                 far: p.far,
+                momentum: p.momentum.0.to_vec(),
             })
             .collect(),
     }
@@ -398,6 +400,12 @@ fn part_states_from_pb(p: Option<&pb::PartStates>) -> Result<Vec<PartState>, Pro
                     s.part, s.id
                 )));
             };
+            let [px, py, pz] = s.momentum[..] else {
+                return Err(ProtoError::Invalid(format!(
+                    "part {} of body {}: a momentum is 3 integers",
+                    s.part, s.id
+                )));
+            };
             Ok(PartState {
                 id: s.id,
                 part: s.part,
@@ -409,31 +417,54 @@ fn part_states_from_pb(p: Option<&pb::PartStates>) -> Result<Vec<PartState>, Pro
                 far: s.far,
                 max_move: s.max_move,
                 max_move_node: s.max_move_node,
+                momentum: Momentum([px, py, pz]),
             })
         })
         .collect()
 }
 
-fn part_dts_to_pb(d: &[PartDt]) -> pb::PartDts {
+fn part_dts_to_pb(f: &SplitFigures) -> pb::PartDts {
+    let (d, p) = (&f.dts, &f.pairs);
     pb::PartDts {
         id: d.iter().map(|d| d.id).collect(),
         dt: d.iter().map(|d| d.dt).collect(),
         element: d.iter().map(|d| d.element).collect(),
+        pair_a: p.iter().map(|p| p.a).collect(),
+        pair_b: p.iter().map(|p| p.b).collect(),
+        pair_c: p.iter().map(|p| p.c).collect(),
+        pair_max: p.iter().flat_map(|p| p.max).collect(),
     }
 }
 
-fn part_dts_from_pb(d: &pb::PartDts) -> Result<Vec<PartDt>, ProtoError> {
+fn part_dts_from_pb(d: &pb::PartDts) -> Result<SplitFigures, ProtoError> {
     if d.dt.len() != d.id.len() || d.element.len() != d.id.len() {
         return Err(ProtoError::Invalid(
             "part steps: columns differ in length".into(),
         ));
     }
-    Ok(d.id
-        .iter()
-        .zip(&d.dt)
-        .zip(&d.element)
-        .map(|((&id, &dt), &element)| PartDt { id, dt, element })
-        .collect())
+    let n = d.pair_a.len();
+    if d.pair_b.len() != n || d.pair_c.len() != n || d.pair_max.len() != 4 * n {
+        return Err(ProtoError::Invalid(
+            "closing-speed figures: columns differ in length (4 maxima a pair)".into(),
+        ));
+    }
+    Ok(SplitFigures {
+        dts: d
+            .id
+            .iter()
+            .zip(&d.dt)
+            .zip(&d.element)
+            .map(|((&id, &dt), &element)| PartDt { id, dt, element })
+            .collect(),
+        pairs: (0..n)
+            .map(|k| PairSpeed {
+                a: d.pair_a[k],
+                b: d.pair_b[k],
+                c: d.pair_c[k],
+                max: std::array::from_fn(|j| d.pair_max[4 * k + j]),
+            })
+            .collect(),
+    })
 }
 
 fn part_bodies_to_pb(parts: &[(u32, u32, BodyState)]) -> pb::PartBodyStates {
@@ -539,7 +570,7 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                 },
                 contact: match &s.contact {
                     Some(d) => part_dts_from_pb(d)?,
-                    None => Vec::new(),
+                    None => SplitFigures::default(),
                 },
             },
             PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
@@ -678,7 +709,7 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
         parts: part_states_from_pb(r.parts.as_ref())?,
         part_dts: match &r.part_dts {
             Some(d) => part_dts_from_pb(d)?,
-            None => Vec::new(),
+            None => SplitFigures::default(),
         },
     })
 }

@@ -484,7 +484,7 @@ impl Engine {
             codec_ns: 0,
             probes: Vec::new(),
             parts: Vec::new(),
-            part_dts: Vec::new(),
+            part_dts: Default::default(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.first();

@@ -82,7 +82,7 @@ fn steps_give_the_core_groups_bits() {
             dt: 1e-7,
             kin_nodes: false,
             due: crash_core::Due::ALL,
-            contact: Vec::new(),
+            contact: Default::default(),
         }) else {
             panic!("no report")
         };
@@ -115,7 +115,7 @@ fn a_step_for_another_moment_is_refused() {
         dt: 1e-7,
         kin_nodes: false,
         due: crash_core::Due::ALL,
-        contact: Vec::new(),
+        contact: Default::default(),
     }));
     assert!(msg.contains("step 3") && msg.contains("step 0"), "{msg}");
     let msg = error(e.handle(Command::Step {
@@ -123,7 +123,7 @@ fn a_step_for_another_moment_is_refused() {
         dt: f64::NAN,
         kin_nodes: false,
         due: crash_core::Due::ALL,
-        contact: Vec::new(),
+        contact: Default::default(),
     }));
     assert!(msg.contains("invalid time step"), "{msg}");
 }
@@ -285,7 +285,7 @@ fn kinematic_copies_stay_bit_identical_to_the_owner() {
                 dt,
                 kin_nodes: true,
                 due: crash_core::Due::ALL,
-                contact: Vec::new(),
+                contact: Default::default(),
             }) else {
                 panic!("no step report")
             };
@@ -355,7 +355,7 @@ fn reactions_and_history_nodes_are_reported_only_on_due_steps() {
             dt: 1e-7,
             kin_nodes: false,
             due,
-            contact: Vec::new(),
+            contact: Default::default(),
         }) else {
             panic!("no report")
         };

@@ -266,7 +266,12 @@ pub fn contact_forces(
 /// close. `sa`, `sb`: the bodies' `BodySpeed`.
 pub(crate) fn closing_dt(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> Option<f64> {
     let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let v = closing_speed(a, b, sa, sb);
+    closing_dt_of(c, closing_speed(a, b, sa, sb))
+}
+
+/// The closing-speed step of a pair of mean thickness `c` closing at `v` (None: they do
+/// not close).
+pub fn closing_dt_of(c: f64, v: f64) -> Option<f64> {
     (v > 0.0).then(|| CLOSING_FRACTION * c / v)
 }
 
@@ -362,8 +367,11 @@ pub(crate) fn contact_forces_given(
         let usable = |d: f64| d.is_finite() && d > 0.0;
         let mut find = !soft || usable(pair_dt);
         if find && cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
-            let given = closing.map(|m| m.get(&(a.def.id, b.def.id)).copied().flatten());
-            let d = given.unwrap_or_else(|| closing_dt(a, b, &speeds[ia], &speeds[ib]));
+            // given (a split group's views): absent or None, the pair does not close
+            let d = match closing {
+                Some(m) => m.get(&(a.def.id, b.def.id)).copied().flatten(),
+                None => closing_dt(a, b, &speeds[ia], &speeds[ib]),
+            };
             if let Some(d) = d {
                 limit = limit.min(d);
                 pair_dt = pair_dt.min(d);

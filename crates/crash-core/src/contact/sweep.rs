@@ -27,19 +27,71 @@ use rayon::prelude::*;
 /// mid-surface is at 0 (up to the rotation of the facet within the step).
 pub const CROSSING_TOLERANCE: f64 = 0.25;
 
-/// Centre-of-mass velocity of a body (mass-weighted mean of v).
+/// A body's momentum on a fixed quantum: each node's m v, its components clamped to
+/// `SPEED_CAP` and scaled by `Momentum::scale` of the whole body's mass, truncated to
+/// an integer. Integer addition is associative, so sums over parts merged in any order
+/// (a body split over workers) give the bits of the sum over the whole body: the mean
+/// velocity the closing speed reads is then the same in every mode without a gather of
+/// every node's velocity (docs/architecture-cluster.md, "The closing speed").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Momentum(pub [i64; 3]);
+
+/// Largest speed component a node's momentum term keeps [m/s] (2^20, about 1e6: far
+/// beyond any impact a shell survives); with the scale below no sum can overflow.
+pub const SPEED_CAP: f64 = 1_048_576.0;
+
+/// Bits of headroom between a body's largest momentum sum and i64's range.
+const SCALE_BITS: i32 = 41;
+
+impl Momentum {
+    /// The scale of a body of total mass `mass`: 2^(41 - E) with mass < 2^E, a power of
+    /// two (so scaling is exact). Every term is at most m_i 2^20 2^(41-E), and their
+    /// sum at most mass 2^(61-E) < 2^61. The quantum of the mean velocity is then
+    /// 2^(E-41) / mass <= 2^-40 m/s per node: the bound below holds for any common
+    /// velocity, so only its determinism matters.
+    pub fn scale(mass: f64) -> f64 {
+        if !(mass.is_finite() && mass > 0.0) {
+            return 0.0;
+        }
+        let e = ((mass.to_bits() >> 52) & 0x7ff) as i32 - 1022;
+        2f64.powi(SCALE_BITS - e)
+    }
+
+    /// The sum over nodes (`v[k]`, `m[k]`) with the body's scale.
+    pub fn of(v: &[Vec3], m: &[f64], scale: f64) -> Self {
+        let mut p = [0i64; 3];
+        for (v, &mi) in v.iter().zip(m) {
+            for d in 0..3 {
+                // NaN clamps to NaN and truncates to 0: a NaN state faults elsewhere
+                let t = mi * v[d].clamp(-SPEED_CAP, SPEED_CAP) * scale;
+                p[d] = p[d].wrapping_add(t as i64);
+            }
+        }
+        Self(p)
+    }
+
+    /// The sum of two (any order, any grouping: the same bits).
+    pub fn add(self, o: Self) -> Self {
+        Self(std::array::from_fn(|d| self.0[d].wrapping_add(o.0[d])))
+    }
+
+    /// The mean velocity of a body of total mass `mass` and scale `scale` whose
+    /// momentum this is.
+    pub fn mean(self, mass: f64, scale: f64) -> Vec3 {
+        if scale > 0.0 {
+            Vec3::new(self.0[0] as f64, self.0[1] as f64, self.0[2] as f64) / (scale * mass)
+        } else {
+            Vec3::zeros()
+        }
+    }
+}
+
+/// Centre-of-mass velocity of a body (mass-weighted mean of v, summed on the fixed
+/// quantum of `Momentum`).
 pub fn mean_velocity(b: &Body) -> Vec3 {
-    let mut p = Vec3::zeros();
-    let mut m = 0.0;
-    for (v, mi) in b.state.v.iter().zip(&b.def.mass) {
-        p += v * *mi;
-        m += mi;
-    }
-    if m > 0.0 {
-        p / m
-    } else {
-        Vec3::zeros()
-    }
+    let mass = b.def.total_mass();
+    let scale = Momentum::scale(mass);
+    Momentum::of(&b.state.v, &b.def.mass, scale).mean(mass, scale)
 }
 
 /// What the closing speed needs of one body, taken once per contact pass however many
@@ -97,9 +149,12 @@ fn max_speeds_rel(b: &Body, speed: &BodySpeed, u1: &Vec3, u2: &Vec3) -> (f64, f6
             (m1.max((v - u1).norm()), m2.max((v - u2).norm()))
         });
     }
-    b.state
-        .v
-        .par_chunks(super::stage::PAR_CHUNK)
+    max_speeds_of(&b.state.v, u1, u2)
+}
+
+/// Largest |v - u1| and |v - u2| over `v` (some nodes of a body: maxima, on the pool).
+pub fn max_speeds_of(v: &[Vec3], u1: &Vec3, u2: &Vec3) -> (f64, f64) {
+    v.par_chunks(super::stage::PAR_CHUNK)
         .map(|vs| {
             vs.iter().fold((0.0, 0.0), |(m1, m2): (f64, f64), v| {
                 (m1.max((v - u1).norm()), m2.max((v - u2).norm()))
@@ -108,15 +163,28 @@ fn max_speeds_rel(b: &Body, speed: &BodySpeed, u1: &Vec3, u2: &Vec3) -> (f64, f6
         .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)))
 }
 
-/// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
-/// `sa`, `sb`: their `BodySpeed` (a body in many pairs takes it once per pass).
-pub fn closing_speed(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> f64 {
+/// The four maxima a pair's closing speed reads: the largest |v - u_a| and |v - u_b|
+/// over the nodes of `a`, then over those of `b` (u: the bodies' mean velocities).
+/// Maxima of maxima over any split of the nodes give the same bits.
+pub fn speed_maxima(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> [f64; 4] {
     let (ua, ub) = (sa.mean, sb.mean);
     let (a_ua, a_ub) = max_speeds_rel(a, sa, &ua, &ub);
     let (b_ua, b_ub) = max_speeds_rel(b, sb, &ua, &ub);
-    let with_a = a_ua + b_ua;
-    let with_b = a_ub + b_ub;
+    [a_ua, a_ub, b_ua, b_ub]
+}
+
+/// The closing speed from the four maxima of `speed_maxima`: the smaller of the bounds
+/// with u = u_a and u = u_b.
+pub fn closing_of(m: [f64; 4]) -> f64 {
+    let with_a = m[0] + m[2];
+    let with_b = m[1] + m[3];
     with_a.min(with_b)
+}
+
+/// Upper bound of the speed of any node of `a` relative to any point of `b` [m/s].
+/// `sa`, `sb`: their `BodySpeed` (a body in many pairs takes it once per pass).
+pub fn closing_speed(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> f64 {
+    closing_of(speed_maxima(a, b, sa, sb))
 }
 
 /// A node that crossed a segment's mid-surface in the step.

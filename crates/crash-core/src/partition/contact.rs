@@ -259,19 +259,6 @@ impl GroupSplit {
         }
     }
 
-    /// Write every part's owned v into the whole bodies (the closing-speed step reads
-    /// the whole bodies' velocities only).
-    pub(super) fn gather_velocities(&mut self) {
-        for (s, b) in self.splits.iter().zip(&mut self.whole) {
-            for p in &s.parts {
-                let v = &p.body.state.v;
-                for (k, &n) in p.node[..p.owned].iter().enumerate() {
-                    b.state.v[n as usize] = v[k];
-                }
-            }
-        }
-    }
-
     /// `figures` with each body's node box given (`bounds[i]`: min/max over its parts'
     /// owned nodes) and the whole bodies' velocities current (their positions need not
     /// be: the closing speed reads velocities and masses only).
@@ -280,9 +267,44 @@ impl GroupSplit {
         element_dt: &[f64],
         bounds: &[(Vec3, Vec3)],
     ) -> (Vec<f64>, Closing) {
+        let (mut dt, pairs) = self.pair_limits(element_dt, bounds);
+        let mut closing = BTreeMap::new();
+        let mut speeds: BTreeMap<usize, BodySpeed> = BTreeMap::new();
+        for (ia, ib) in pairs {
+            let (a, b) = (&self.whole[ia], &self.whole[ib]);
+            if !self.reference_usable(element_dt, ia, ib) {
+                continue;
+            }
+            speeds.entry(ia).or_insert_with(|| BodySpeed::of(a));
+            speeds.entry(ib).or_insert_with(|| BodySpeed::of(b));
+            let d = closing_dt(a, b, &speeds[&ia], &speeds[&ib]);
+            if let Some(d) = d {
+                dt[ia] = dt[ia].min(d);
+                dt[ib] = dt[ib].min(d);
+            }
+            closing.insert((a.def.id, b.def.id), d);
+        }
+        (dt, closing)
+    }
+
+    /// The soft penalty has a reference step for the pair (ia, ib) (none: the stage
+    /// skips the pair); any other penalty always has one.
+    pub(super) fn reference_usable(&self, element_dt: &[f64], ia: usize, ib: usize) -> bool {
+        let pair_dt = element_dt[ia].min(element_dt[ib]);
+        self.contact.penalty != PenaltyKind::Soft || (pair_dt.is_finite() && pair_dt > 0.0)
+    }
+
+    /// Each body's element step limited by the element-form steps of its pairs, and the
+    /// pairs whose closing-speed step the rule asks for (`SpeedRule::LimitDt`, two
+    /// bodies), from the body boxes `bounds`.
+    pub(super) fn pair_limits(
+        &self,
+        element_dt: &[f64],
+        bounds: &[(Vec3, Vec3)],
+    ) -> (Vec<f64>, Vec<(usize, usize)>) {
         let cfg = self.contact;
         let mut dt = element_dt.to_vec();
-        let mut closing = BTreeMap::new();
+        let mut closing = Vec::new();
         if !cfg.enabled {
             return (dt, closing);
         }
@@ -297,10 +319,7 @@ impl GroupSplit {
                 }
             })
             .collect();
-        let pairs = pairs_of(&self.whole, &cfg, &bounds);
-        let mut speeds: BTreeMap<usize, BodySpeed> = BTreeMap::new();
-        for &(ia, ib) in &pairs {
-            let (a, b) = (&self.whole[ia], &self.whole[ib]);
+        for (ia, ib) in pairs_of(&self.whole, &cfg, &bounds) {
             if cfg.penalty == PenaltyKind::Element {
                 if let (Some(sa), Some(sb)) = (&self.surfaces[ia], &self.surfaces[ib]) {
                     let d = element_form_dt(&cfg, sa, sb).min(element_form_dt(&cfg, sb, sa));
@@ -308,19 +327,8 @@ impl GroupSplit {
                     dt[ib] = dt[ib].min(d);
                 }
             }
-            let pair_dt = element_dt[ia].min(element_dt[ib]);
-            if cfg.penalty == PenaltyKind::Soft && !(pair_dt.is_finite() && pair_dt > 0.0) {
-                continue;
-            }
             if cfg.speed_rule == SpeedRule::LimitDt && ia != ib {
-                speeds.entry(ia).or_insert_with(|| BodySpeed::of(a));
-                speeds.entry(ib).or_insert_with(|| BodySpeed::of(b));
-                let d = closing_dt(a, b, &speeds[&ia], &speeds[&ib]);
-                if let Some(d) = d {
-                    dt[ia] = dt[ia].min(d);
-                    dt[ib] = dt[ib].min(d);
-                }
-                closing.insert((a.def.id, b.def.id), d);
+                closing.push((ia, ib));
             }
         }
         (dt, closing)

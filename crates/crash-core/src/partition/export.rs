@@ -25,6 +25,9 @@ pub struct PartState {
     /// Largest move of an owned node in the step and that node (whole-body index).
     pub max_move: f64,
     pub max_move_node: u32,
+    /// Momentum of the owned nodes on the body's fixed quantum (the closing speed's
+    /// mean velocity: `contact::sweep::Momentum`).
+    pub momentum: crate::contact::sweep::Momentum,
 }
 
 /// Per body and part: the owned nodes (local indices) that another part reads, as a

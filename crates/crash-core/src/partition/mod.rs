@@ -6,12 +6,14 @@
 //! computing the hits on its owned nodes from a contact view of the whole group;
 //! `shared` (the wiring) steps such a group with its parts spread over workers.
 
+mod closing;
 mod contact;
 mod export;
 mod parts;
 mod report;
 mod shared;
 
+pub use closing::{PairSpeed, SplitFigures};
 pub use contact::{GroupSplit, SplitError, View, ViewRule};
 pub use parts::{Part, Split};
 pub use shared::{merge_report, PartDt, PartState, SharedGroup};

@@ -25,21 +25,21 @@
 //! all parts (node lists only for the parts held elsewhere) at each view build. The
 //! global figures need no whole body: the body boxes are the min/max of the parts'
 //! boxes, the view rebuild rule the max of the parts' distances, and the closing-speed
-//! step reads the whole bodies' velocities (each body's mass-weighted mean velocity,
-//! summed in node order, and the largest speed relative to it), so under
-//! `SpeedRule::LimitDt` every owned node's v is sent each step: the same numbers in
-//! the same order on every holder, so no order-free reduction and no change of bits.
+//! step (`SpeedRule::LimitDt`) the parts' momenta on a fixed quantum (integer sums:
+//! the whole body's bits in any order) and each holder's largest speeds relative to
+//! the means, merged by the master (`closing`).
 //! A view build needs the whole bodies: once some node has moved farther than the
 //! skin less one step's tunnelling budget, the next integration sends every owned
 //! node, and the contact pass after it rebuilds the views (on every holder alike).
 
-use super::contact::Closing;
+use super::closing::{PairSpeed, SplitFigures};
 use super::export::exports;
 use super::report::{add_energy, add_reaction, element_in_whole, node_in_whole};
 use super::GroupSplit;
 use crate::body::{Body, BodyEnergy, BodyState};
 use crate::clock::Clock;
-use crate::contact::{check_moves, ContactConfig, SpeedRule};
+use crate::contact::sweep::{max_speeds_of, Momentum};
+use crate::contact::{check_moves, ContactConfig};
 use crate::error::{CoreError, Fault};
 use crate::forces::ForceSums;
 use crate::group::{BodyReport, Reaction};
@@ -59,6 +59,7 @@ struct PartFigures {
     max_move: f64,
     /// Whole-body index.
     max_move_node: u32,
+    momentum: Momentum,
 }
 
 /// The smallest element critical step of body `id` over some of its parts, and its
@@ -112,18 +113,16 @@ pub struct SharedGroup {
     /// were built: one more step (at most the tunnelling guard's budget per node)
     /// keeps it within the skin, and the build needs a step to gather the bodies.
     trigger: f64,
-    /// Every node's velocity is sent each step (the closing-speed step reads the whole
-    /// bodies' velocities).
-    all_v: bool,
+    /// Per body: the whole body's mass and its momentum scale (`Momentum::scale`).
+    mass: Vec<(f64, f64)>,
 }
 
-/// A contact pass left for later: the step's length and number, and the closing-speed
-/// steps of its global figures.
+/// A contact pass left for later: the step's length and number (its closing-speed
+/// steps come merged over the holders with the element steps).
 #[derive(Debug, Clone)]
 struct Pending {
     h: f64,
     step: u64,
-    closing: Closing,
 }
 
 impl SharedGroup {
@@ -176,7 +175,13 @@ impl SharedGroup {
             sent_full: false,
             rebuild: false,
             trigger,
-            all_v: contact.enabled && contact.speed_rule == SpeedRule::LimitDt,
+            mass: bodies
+                .iter()
+                .map(|b| {
+                    let m = b.def.total_mass();
+                    (m, Momentum::scale(m))
+                })
+                .collect(),
         })
     }
 
@@ -201,6 +206,7 @@ impl SharedGroup {
         for (i, s) in self.split.splits.iter_mut().enumerate() {
             let contact = self.split.whole[i].def.contact;
             let reference = self.split.reference.get(i);
+            let scale = self.mass[i].1;
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
                 self.figures[i][q] = None;
@@ -236,18 +242,20 @@ impl SharedGroup {
                     far,
                     max_move: n.max_move,
                     max_move_node: p.node[n.max_move_node],
+                    momentum: Momentum::of(&st.v[..o], &p.body.def.mass[..o], scale),
                 };
                 out.push(PartState {
                     id: self.ids[i],
                     part: q as u32,
                     x: pick(&st.x, full),
-                    v: pick(&st.v, full || self.all_v),
+                    v: pick(&st.v, full),
                     w: pick(&st.w, full),
                     lo,
                     hi,
                     far,
                     max_move: fig.max_move,
                     max_move_node: fig.max_move_node,
+                    momentum: fig.momentum,
                 });
                 self.figures[i][q] = Some(fig);
                 self.sums[i][q] = Some(n);
@@ -271,7 +279,7 @@ impl SharedGroup {
         clock: &Clock,
         h: f64,
         reactions: bool,
-    ) -> Result<(Vec<BodyReport>, Vec<PartDt>), SplitError> {
+    ) -> Result<(Vec<BodyReport>, SplitFigures), SplitError> {
         if self.pending.is_some() {
             return Err(CoreError::Other {
                 body: "split group".into(),
@@ -318,6 +326,7 @@ impl SharedGroup {
                 far: p.far,
                 max_move: p.max_move,
                 max_move_node: p.max_move_node,
+                momentum: p.momentum,
             });
         }
         let got: Vec<Vec<PartFigures>> = got
@@ -362,9 +371,6 @@ impl SharedGroup {
                 .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a });
             // NaN: a fault is found elsewhere; build anyway
             self.due = far > self.trigger || far.is_nan();
-            if self.all_v {
-                self.split.gather_velocities();
-            }
         }
         let mut out = vec![None; self.ids.len()];
         for (i, s) in self.split.splits.iter_mut().enumerate() {
@@ -403,7 +409,16 @@ impl SharedGroup {
                 })
             })
             .collect();
-        let (limit, closing) = self.split.figures_given(&local, &bounds);
+        let (limit, pairs) = self.split.pair_limits(&local, &bounds);
+        let means: Vec<Vec3> = got
+            .iter()
+            .zip(&self.mass)
+            .map(|(g, &(m, scale))| {
+                let p = g.iter().fold(Momentum::default(), |a, f| a.add(f.momentum));
+                p.mean(m, scale)
+            })
+            .collect();
+        let speeds = self.pair_speeds(&pairs, &means);
         let mut shares = Vec::new();
         for (i, s) in self.split.splits.iter().enumerate() {
             let mut r: Option<BodyReport> = None;
@@ -445,13 +460,18 @@ impl SharedGroup {
                 shares.push(r);
             }
         }
-        self.pending = Some(Pending { h, step, closing });
-        Ok((shares, out.into_iter().flatten().collect()))
+        self.pending = Some(Pending { h, step });
+        let figures = SplitFigures {
+            dts: out.into_iter().flatten().collect(),
+            pairs: speeds,
+        };
+        Ok((shares, figures))
     }
 
     /// The pending contact pass (left by `forces`) on the views of the parts here, with
     /// each body's element step over all holders (`dt`, in the group's body order).
-    pub fn contact(&mut self, dt: &[PartDt]) -> Result<(), SplitError> {
+    pub fn contact(&mut self, figures: &SplitFigures) -> Result<(), SplitError> {
+        let dt = &figures.dts;
         if dt.len() != self.ids.len() || dt.iter().zip(&self.ids).any(|(d, &id)| d.id != id) {
             return Err(CoreError::Other {
                 body: "split group".into(),
@@ -477,11 +497,42 @@ impl SharedGroup {
         }
         if self
             .split
-            .views_pass(&edt, &p.closing, p.h, p.step, rebuild)?
+            .views_pass(&edt, &figures.closing(), p.h, p.step, rebuild)?
         {
             self.export = exports(&self.split);
         }
         Ok(())
+    }
+
+    /// Each pair's closing-speed figures over the owned nodes of the parts here (pairs
+    /// with no part here: none), relative to the bodies' mean velocities `means`.
+    fn pair_speeds(&self, pairs: &[(usize, usize)], means: &[Vec3]) -> Vec<PairSpeed> {
+        let mut out = Vec::new();
+        for &(ia, ib) in pairs {
+            let here = |i: usize| self.split.mine[i].iter().any(|&m| m);
+            if !here(ia) && !here(ib) {
+                continue;
+            }
+            let (ua, ub) = (means[ia], means[ib]);
+            let over = |i: usize| {
+                let s = &self.split.splits[i];
+                s.parts
+                    .iter()
+                    .zip(&self.split.mine[i])
+                    .filter(|(_, &m)| m)
+                    .map(|(p, _)| max_speeds_of(&p.body.state.v[..p.owned], &ua, &ub))
+                    .fold((0.0, 0.0), |a: (f64, f64), b| (a.0.max(b.0), a.1.max(b.1)))
+            };
+            let ((a_ua, a_ub), (b_ua, b_ub)) = (over(ia), over(ib));
+            let (a, b) = (&self.split.whole[ia].def, &self.split.whole[ib].def);
+            out.push(PairSpeed {
+                a: a.id,
+                b: b.id,
+                c: 0.5 * (a.section.thickness + b.section.thickness),
+                max: [a_ua, a_ub, b_ua, b_ub],
+            });
+        }
+        out
     }
 
     /// The full states of the parts computed here (for the assembly of whole bodies).

@@ -158,9 +158,10 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     hashed_step: Option<u64>,
     /// Groups split over workers (`split`).
     splits: Vec<split::SplitGroup>,
-    /// Every split body's element step over all its parts in the last step, for the
-    /// contact pass it left pending (empty when none is): the next Step carries it.
-    split_contact: Vec<crash_core::partition::PartDt>,
+    /// Every split body's element step over all its parts in the last step and every
+    /// pair's closing-speed figures, for the contact pass it left pending (empty when
+    /// none is): the next Step carries them.
+    split_contact: crash_core::partition::SplitFigures,
     pub(crate) stats: RunStats,
 }
 
@@ -269,7 +270,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             last_frame_step: None,
             hashed_step: None,
             splits: Vec::new(),
-            split_contact: Vec::new(),
+            split_contact: Default::default(),
             stats: RunStats::default(),
         })
     }

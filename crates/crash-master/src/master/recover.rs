@@ -63,7 +63,7 @@ impl<L: WorkerLink> Master<'_, L> {
         self.expect_acks((0..nw).map(|_| vec![Command::Reset]).collect(), "Reset")?;
         // a Reset forgets the split groups too; the rule splits again at the next regroup
         self.splits.clear();
-        self.split_contact.clear();
+        self.split_contact = Default::default();
         self.restore_loop(ck);
         let placement = self.place_all();
         // per body: does its new worker lack the definition?

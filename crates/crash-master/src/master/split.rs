@@ -20,7 +20,8 @@ use super::Master;
 use crate::error::MasterError;
 use crate::input::SplitMode;
 use crash_core::contact::ContactPass;
-use crash_core::partition::{merge_report, partition_body, PartDt, PartState};
+use crash_core::contact::PenaltyKind;
+use crash_core::partition::{merge_report, partition_body, PartState, SplitFigures};
 use crash_core::BodyReport;
 use crash_io::PartCells;
 use crash_link::{BodyLoad, Command, Reply, SplitSpec, StepReport, WorkerLink};
@@ -277,21 +278,29 @@ impl<L: WorkerLink> Master<'_, L> {
             c.push(Command::Halo(imports));
         }
         let replies = self.exchange(cmds)?;
-        let mut dt: BTreeMap<u32, PartDt> = BTreeMap::new();
+        let mut figures = SplitFigures::default();
         let mut merged: BTreeMap<u32, BodyReport> = BTreeMap::new();
         for (w, r) in replies.into_iter().enumerate() {
             for reply in r {
                 let Reply::Report(rep) = reply else {
                     return Err(self.bad_reply(w, "Halo"));
                 };
-                for d in rep.part_dts {
+                for d in &rep.part_dts.dts {
                     if !group_of.contains_key(&d.id) || d.dt.is_nan() {
                         return Err(
                             self.implausible(w, &format!("an element step of body {}", d.id))
                         );
                     }
-                    dt.entry(d.id).and_modify(|a| *a = a.min(d)).or_insert(d);
                 }
+                for p in &rep.part_dts.pairs {
+                    let same = |k: Option<&usize>| k.is_some() && k == group_of.get(&p.b);
+                    let sane = p.c.is_finite() && p.c > 0.0 && p.max.iter().all(|m| *m >= 0.0);
+                    if !same(group_of.get(&p.a)) || !sane {
+                        let what = format!("closing-speed figures of bodies {} and {}", p.a, p.b);
+                        return Err(self.implausible(w, &what));
+                    }
+                }
+                figures.merge(rep.part_dts);
                 for b in rep.bodies {
                     if !group_of.contains_key(&b.id) {
                         return Err(self.implausible(w, &format!("a share of body {}", b.id)));
@@ -317,18 +326,37 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
-        let mut pending = Vec::with_capacity(dt.len());
+        // the element steps in the groups' body order (the holders check it)
+        let mut pending = SplitFigures {
+            dts: Vec::with_capacity(figures.dts.len()),
+            pairs: figures.pairs,
+        };
         for s in &self.splits {
             let home = s.home();
             for id in &s.ids {
-                let Some(d) = dt.get(id).copied() else {
+                let Some(d) = figures.dts.iter().find(|d| d.id == *id).copied() else {
                     return Err(self.implausible(home, &format!("no element step of body {id}")));
                 };
-                pending.push(d);
+                pending.dts.push(d);
+            }
+        }
+        // the closing-speed steps over all holders limit the merged stable steps (min:
+        // the bits of one process's stage)
+        let soft = self.contact.penalty == PenaltyKind::Soft;
+        for (id, limit) in pending.limits(soft) {
+            if let Some(b) = merged.get_mut(&id) {
+                b.stable_dt = b.stable_dt.min(limit);
+            }
+        }
+        for s in &self.splits {
+            let home = s.home();
+            for id in &s.ids {
                 if let (Some(mut b), Some(r)) = (merged.remove(id), reps.get_mut(home)) {
-                    // the shares' steps are limited alike by the contact; the element
-                    // that sets the element step is the minimum's over all holders
-                    b.dt_element = d.element as usize;
+                    // the shares' steps are limited alike by the element-form rule; the
+                    // element that sets the element step is the minimum's over all holders
+                    if let Some(d) = pending.dts.iter().find(|d| d.id == *id) {
+                        b.dt_element = d.element as usize;
+                    }
                     r.bodies.push(b);
                 }
             }

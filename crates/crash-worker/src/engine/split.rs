@@ -13,7 +13,7 @@
 
 use super::Engine;
 use crate::error::EngineError;
-use crash_core::partition::{PartDt, PartState, SharedGroup};
+use crash_core::partition::{PartState, SharedGroup, SplitFigures};
 use crash_core::{Body, BodyState, Clock, Due};
 use crash_link::{BodyLoad, Reply, SplitSpec, StepReport};
 use std::time::Instant;
@@ -37,18 +37,31 @@ impl Shared {
     }
 }
 
-/// The element steps of the bodies of `g`, in its order, from the master's list.
-fn dts_of(g: &SharedGroup, all: &[PartDt]) -> Result<Vec<PartDt>, EngineError> {
-    g.ids
+/// The element steps of the bodies of `g`, in its order, and the closing-speed
+/// figures of its pairs, from the master's lists.
+fn dts_of(g: &SharedGroup, all: &SplitFigures) -> Result<SplitFigures, EngineError> {
+    let dts = g
+        .ids
         .iter()
         .map(|id| {
-            all.iter().find(|d| d.id == *id).copied().ok_or_else(|| {
-                EngineError::Shared(format!(
-                    "no element step of split body {id} for its pending contact pass"
-                ))
-            })
+            all.dts
+                .iter()
+                .find(|d| d.id == *id)
+                .copied()
+                .ok_or_else(|| {
+                    EngineError::Shared(format!(
+                        "no element step of split body {id} for its pending contact pass"
+                    ))
+                })
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    let pairs = all
+        .pairs
+        .iter()
+        .filter(|p| g.ids.contains(&p.a) && g.ids.contains(&p.b))
+        .copied()
+        .collect();
+    Ok(SplitFigures { dts, pairs })
 }
 
 fn mine(spec: &SplitSpec) -> Result<(Vec<usize>, Vec<Vec<bool>>), EngineError> {
@@ -174,7 +187,7 @@ impl Engine {
         at: &Clock,
         dt: f64,
         due: Due,
-        contact: &[PartDt],
+        contact: &SplitFigures,
         rep: &mut StepReport,
     ) -> Option<Reply> {
         self.pending = Some((*at, dt, due));
@@ -258,7 +271,8 @@ impl Engine {
             match s.g.forces(&mine, &at, dt, reactions) {
                 Ok((shares, d)) => {
                     rep.bodies.extend(shares);
-                    rep.part_dts.extend(d);
+                    rep.part_dts.dts.extend(d.dts);
+                    rep.part_dts.pairs.extend(d.pairs);
                 }
                 Err(e) => {
                     let first = s.first();
@@ -280,7 +294,7 @@ impl Engine {
 
     /// The pending contact pass of every split group held here, before an assembly
     /// (the master sends the element steps the next Step would carry).
-    pub(super) fn contact(&mut self, dts: Vec<PartDt>) -> Reply {
+    pub(super) fn contact(&mut self, dts: SplitFigures) -> Reply {
         if self.broken {
             return Reply::Error(EngineError::Broken.to_string());
         }

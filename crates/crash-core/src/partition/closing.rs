@@ -1,0 +1,163 @@
+//! The closing-speed step (`SpeedRule::LimitDt`) of a group split over workers, from
+//! figures each holder computes on its own parts and the master merges, without any
+//! node's velocity crossing the wire.
+//!
+//! A pair's closing speed is the smaller over u in {u_a, u_b} of max_a |v - u| +
+//! max_b |v - u| (contact/sweep.rs), u_a and u_b the bodies' mean velocities. The means come
+//! from momenta on a fixed quantum (`Momentum`: integer sums, so the parts' sums added
+//! in any order are the whole body's bits): every part sends its momentum with its
+//! state, and every holder forms the same means. The maxima over a holder's own nodes
+//! travel to the master in the reply to the halo (`PairSpeed`), which takes the maximum
+//! of each over the holders (order-free), turns them into each pair's step
+//! (`PairSpeed::dt`, the one-process formula), limits the bodies' stable steps with
+//! them, and sends the merged figures with the next step, whose contact pass reads
+//! them. The figures are those one process computes, so the bits are the same in every
+//! mode.
+
+use super::contact::Closing;
+use super::shared::PartDt;
+use crate::contact::stage::closing_dt_of;
+use crate::contact::sweep::closing_of;
+
+/// A pair's closing-speed figures over some nodes of its bodies: the body ids (in the
+/// group's pair order), the pair's mean thickness c = (t_a + t_b)/2, and the four maxima
+/// of `contact::sweep::speed_maxima` over those nodes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairSpeed {
+    pub a: u32,
+    pub b: u32,
+    pub c: f64,
+    pub max: [f64; 4],
+}
+
+impl PairSpeed {
+    /// Over the nodes of both (maxima: the same bits in any order).
+    pub fn merge(self, o: PairSpeed) -> PairSpeed {
+        PairSpeed {
+            max: std::array::from_fn(|k| self.max[k].max(o.max[k])),
+            ..self
+        }
+    }
+
+    /// The pair's closing-speed step (None: the bodies do not close).
+    pub fn dt(&self) -> Option<f64> {
+        closing_dt_of(self.c, closing_of(self.max))
+    }
+}
+
+/// What a split group's contact figures are between holders and master: each body's
+/// smallest element step over some parts (its element), and each pair's closing-speed
+/// figures. A holder reports those of its parts; the master sends the merged ones
+/// (every part) with the next step, for the contact pass left pending.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SplitFigures {
+    pub dts: Vec<PartDt>,
+    pub pairs: Vec<PairSpeed>,
+}
+
+impl SplitFigures {
+    pub fn is_empty(&self) -> bool {
+        self.dts.is_empty() && self.pairs.is_empty()
+    }
+
+    /// Add another holder's figures: each body's element step the smaller (ties: the
+    /// lower element), each pair's maxima the larger; bodies and pairs not yet here
+    /// are appended. Min and max: the same result in any order.
+    pub fn merge(&mut self, o: SplitFigures) {
+        for d in o.dts {
+            match self.dts.iter_mut().find(|a| a.id == d.id) {
+                Some(a) => *a = a.min(d),
+                None => self.dts.push(d),
+            }
+        }
+        for p in o.pairs {
+            match self.pairs.iter_mut().find(|a| (a.a, a.b) == (p.a, p.b)) {
+                Some(a) => *a = a.merge(p),
+                None => self.pairs.push(p),
+            }
+        }
+    }
+
+    /// The closing-speed step of every pair, by body ids (the contact pass's `Closing`).
+    pub(super) fn closing(&self) -> Closing {
+        self.pairs.iter().map(|p| ((p.a, p.b), p.dt())).collect()
+    }
+
+    /// The closing-speed steps that limit the bodies' stable steps, as (body id, step):
+    /// those of pairs whose soft penalty has a reference step (`soft`: the penalty is
+    /// the soft one, which skips a pair without one, as the one-process stage does),
+    /// with the merged element steps `dts`.
+    pub fn limits(&self, soft: bool) -> Vec<(u32, f64)> {
+        let dt_of = |id: u32| {
+            self.dts
+                .iter()
+                .find(|d| d.id == id)
+                .map_or(f64::INFINITY, |d| d.dt)
+        };
+        let mut out = Vec::new();
+        for p in &self.pairs {
+            let pair_dt = dt_of(p.a).min(dt_of(p.b));
+            if soft && !(pair_dt.is_finite() && pair_dt > 0.0) {
+                continue;
+            }
+            if let Some(d) = p.dt() {
+                out.push((p.a, d));
+                out.push((p.b, d));
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merged_maxima_give_the_pairs_step_in_any_order() {
+        let p = |max| PairSpeed {
+            a: 1,
+            b: 2,
+            c: 2e-3,
+            max,
+        };
+        let (x, y, z) = (
+            p([1.0, 4.0, 0.5, 0.0]),
+            p([3.0, 1.0, 0.0, 2.0]),
+            p([0.0; 4]),
+        );
+        let m = x.merge(y).merge(z);
+        assert_eq!(m, z.merge(y.merge(x)));
+        assert_eq!(m.max, [3.0, 4.0, 0.5, 2.0]);
+        // min(3 + 0.5, 4 + 2) = 3.5
+        assert_eq!(m.dt(), closing_dt_of(2e-3, 3.5));
+        assert_eq!(z.dt(), None);
+    }
+
+    #[test]
+    fn a_pair_without_a_reference_step_limits_nothing_under_the_soft_penalty() {
+        let figs = SplitFigures {
+            dts: vec![
+                PartDt {
+                    id: 1,
+                    dt: f64::INFINITY,
+                    element: 0,
+                },
+                PartDt {
+                    id: 2,
+                    dt: f64::INFINITY,
+                    element: 0,
+                },
+            ],
+            pairs: vec![PairSpeed {
+                a: 1,
+                b: 2,
+                c: 1e-3,
+                max: [1.0; 4],
+            }],
+        };
+        assert!(figs.limits(true).is_empty());
+        let d = closing_dt_of(1e-3, 2.0).unwrap_or(0.0);
+        assert_eq!(figs.limits(false), vec![(1, d), (2, d)]);
+    }
+}
