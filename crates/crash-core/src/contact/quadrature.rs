@@ -20,7 +20,7 @@ use super::curved::{
 };
 use super::narrow::TIE;
 use super::reach::{
-    box_gap, box_gap2, gap_at_least, nearest, CurvedAt, Master, MasterCurved, Slab,
+    box_gap, box_gap2, gap_at_least, nearest, CurvedAt, Master, MasterCurved, Reach, Slab,
 };
 use super::segment::{Corners, Segment};
 use super::stiffening;
@@ -118,6 +118,10 @@ pub fn point_pushes(
     // a point is in contact only within c plus the master's bulge of its flat segments;
     // the slave's own points stand off its flat boxes by up to its bulge
     let reach = c + (BULGE_REACH * c).max(hm_max);
+    // no master presses on a point farther than c + its bulge bound (gap d - s h_m - c
+    // >= 0; the margin covers the bulge's round-off): `reach::nearest` projects only the
+    // masters within that and gives the rule's answer wherever the gap is negative
+    let touch = ((c + hm_max) * (1.0 + 1e-9)).min(reach);
     let box_reach = reach + hs_max;
     let box_reach2 = box_reach * box_reach;
     let (mlo, mhi) = master_near;
@@ -214,7 +218,11 @@ pub fn point_pushes(
                         msurf,
                         (&masters, &mc),
                         c,
-                        reach,
+                        Reach {
+                            reach,
+                            touch,
+                            tie: TIE * c,
+                        },
                         kappa,
                         mu,
                         cfg,
@@ -238,7 +246,7 @@ fn slave_segment(
     msurf: &Surface,
     masters: (&[Master], &MasterCurved),
     c: f64,
-    reach: f64,
+    r: Reach,
     kappa: f64,
     mu: f64,
     cfg: &ContactConfig,
@@ -249,9 +257,8 @@ fn slave_segment(
     let (masters, mcurv) = masters;
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
-    let tie = TIE * c;
-    let reach2 = reach * reach;
-    let mut near: Vec<usize> = Vec::with_capacity(masters.len());
+    let (reach, touch) = (r.reach, r.touch);
+    let touch2 = touch * touch;
     let mut keep: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
     for sub in 0..subs {
@@ -271,9 +278,11 @@ fn slave_segment(
         let base = corner_a_weights(seg);
         let flat_at = |u: f64, v: f64| st.a + (st.b - st.a) * u + (st.c - st.a) * v;
         for i in 0..n {
-            // the masters that can reach some point of this strip: the strip's corners'
-            // box grown by the slave's bulge bound holds its points; a master farther than
-            // `reach` from it would be skipped at every point
+            // the masters that can press on some point of this strip: the strip's
+            // corners' box grown by the slave's bulge bound holds its points, and their
+            // hull within the bulge bound too; a master whose box or slab lies at `touch`
+            // or beyond from them would be skipped at every point (if none is left, the
+            // strip's points are dropped either way: `reach::nearest`)
             let (u0, u1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
             let corners = [
                 flat_at(u0, 0.0),
@@ -287,20 +296,12 @@ fn slave_segment(
                 hi = hi.sup(p);
             }
             let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
-            near.clear();
-            near.extend(
-                (0..masters.len())
-                    .filter(|&mi| !gap_at_least(box_gap2(&strip, &masters[mi].bx), reach, reach2)),
-            );
-            // less the masters whose slab puts every point of the strip (within the
-            // slave's bulge bound of the strip's flat corners' hull) at or beyond reach:
-            // if none is left, every point's candidates lie beyond reach
-            // (`reach::nearest`)
             keep.clear();
-            keep.extend(near.iter().copied().filter(|&mi| {
-                masters[mi]
-                    .slab
-                    .is_none_or(|sl| sl.gap_hull(&corners, hs_bound) < reach)
+            keep.extend((0..masters.len()).filter(|&mi| {
+                let m = &masters[mi];
+                !gap_at_least(box_gap2(&strip, &m.bx), touch, touch2)
+                    && m.slab
+                        .is_none_or(|sl| sl.gap_hull(&corners, hs_bound) < touch)
             }));
             if keep.is_empty() {
                 continue;
@@ -314,7 +315,7 @@ fn slave_segment(
                 let (hs, _) = bulge(&sb_coef, &w);
                 let xa = flat + nsub * hs;
                 // closest master segment (ties within TIE c: lowest index; `masters` sorted)
-                let Some((pr, mi)) = nearest(&xa, masters, &near, &keep, reach, tie) else {
+                let Some((pr, mi)) = nearest(&xa, masters, &strip, &keep, r) else {
                     continue;
                 };
                 if pr.dist >= reach || pr.dist <= 1e-9 * c {

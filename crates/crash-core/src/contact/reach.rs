@@ -278,45 +278,58 @@ fn by_rule(
     best
 }
 
-/// The point's master by the rule (`by_rule` over `near`), when it lies within `reach`
-/// (None otherwise, where the pass drops the point either way). `keep` is `near` less
-/// masters whose slab puts every point of the strip at or beyond `reach`; the point
-/// skips those and the ones its own slab puts there too (the set F), and projects the
-/// rest (K) by the rule. That gives the rule's answer:
-/// - a candidate of F (distance >= reach) changes the rule's best only by becoming it;
-///   once a point of K is closer than every earlier candidate and reach by more than
-///   `tie` ("caught up"), it is the best in both runs, the best stays below reach and no
+/// How far the pass looks for a point's master: `reach`, the rule's (a master whose
+/// node box lies within it of the point is a candidate), and `touch` <= reach, beyond
+/// which no candidate can press on the point (its gap d - s h_m - c is >= 0 when d >=
+/// c + the master's bulge bound, `quadrature::point_pushes`); `tie`, the rule's tie.
+#[derive(Clone, Copy)]
+pub(crate) struct Reach {
+    pub reach: f64,
+    pub touch: f64,
+    pub tie: f64,
+}
+
+/// The point's master by the rule (`by_rule` over the masters whose node box lies within
+/// `reach` of the strip's box `strip`, which holds the point), when it lies within
+/// `touch` (None otherwise, where the pass drops the point either way: its gap is >= 0).
+/// `keep` is the masters less those whose box or slab puts every point of the strip at
+/// or beyond `touch`; the point skips those and the ones its own slab or box puts there
+/// too (the set F), and projects the rest (K) by the rule. That gives the rule's answer
+/// wherever the pass uses it:
+/// - a candidate of F (distance >= touch) changes the rule's best only by becoming it;
+///   once a point of K is closer than every earlier candidate and touch by more than
+///   `tie` ("caught up"), it is the best in both runs, the best stays below touch and no
 ///   candidate of F can replace it, so both runs end alike;
-/// - if no candidate of K comes within reach, none of near does: the point is dropped
-///   either way;
-/// - otherwise (a candidate within reach but within `tie` of an earlier one or of
-///   reach, never seen on the showcase) the rule runs over `near` again.
+/// - if no candidate of K comes within touch, none does: the rule's best lies at touch
+///   or beyond and the pass drops the point either way;
+/// - otherwise (a candidate within touch but within `tie` of an earlier one or of
+///   touch, never seen on the showcase) the rule runs over every candidate again.
 ///
 /// A candidate skipped for its box or slab lying beyond the closest distance so far plus
 /// `tie` is one the rule would not take either.
 pub(crate) fn nearest(
     xa: &Vec3,
     masters: &[Master],
-    near: &[usize],
+    strip: &(Vec3, Vec3),
     keep: &[usize],
-    reach: f64,
-    tie: f64,
+    r: Reach,
 ) -> Option<(Closest, usize)> {
+    let Reach { reach, touch, tie } = r;
     let mut best: Option<(Closest, usize)> = None;
     let mut dmin = f64::INFINITY;
     let mut caught_up = false;
-    let reach2 = reach * reach;
+    let touch2 = touch * touch;
     for &mi in keep {
         let m = &masters[mi];
         let sg = m.slab_gap(xa);
-        if sg >= reach {
+        if sg >= touch {
             continue;
         }
         // the rule's tests on the box gap, squared where that decides them (the second
         // one only skips a candidate the rule could not take, so erring towards
         // projecting costs time, not bits)
         let s = point_gap2(xa, &m.bx);
-        if gap_at_least(s, reach, reach2) || sg > dmin + tie {
+        if gap_at_least(s, touch, touch2) || sg > dmin + tie {
             continue;
         }
         let dt = dmin + tie;
@@ -327,7 +340,7 @@ pub(crate) fn nearest(
         if pr.dist.is_nan() {
             continue;
         }
-        if !caught_up && pr.dist < dmin.min(reach) - tie {
+        if !caught_up && pr.dist < dmin.min(touch) - tie {
             caught_up = true;
         }
         let better = match &best {
@@ -341,10 +354,14 @@ pub(crate) fn nearest(
     }
     if caught_up {
         best
-    } else if dmin >= reach {
+    } else if dmin >= touch {
         // dmin is never NaN: it starts infinite and takes only distances that are not
         None
     } else {
-        by_rule(xa, masters, near, reach, tie).filter(|(pr, _)| pr.dist < reach)
+        let reach2 = reach * reach;
+        let near: Vec<usize> = (0..masters.len())
+            .filter(|&mi| !gap_at_least(box_gap2(strip, &masters[mi].bx), reach, reach2))
+            .collect();
+        by_rule(xa, masters, &near, reach, tie).filter(|(pr, _)| pr.dist < reach)
     }
 }
