@@ -20,7 +20,8 @@ use super::curved::{
 };
 use super::narrow::TIE;
 use super::reach::{
-    box_gap, box_gap2, gap_at_least, nearest, CurvedAt, Master, MasterCurved, Reach, Slab,
+    box_gap, box_gap2, gap_at_least, nearest, rule_again, CurvedAt, Master, MasterCurved, Pick,
+    Reach, Slab, Wide,
 };
 use super::segment::{Corners, Segment};
 use super::stiffening;
@@ -123,9 +124,12 @@ pub fn point_pushes(
     // masters within that and gives the rule's answer wherever the gap is negative
     let touch = ((c + hm_max) * (1.0 + 1e-9)).min(reach);
     let box_reach = reach + hs_max;
-    let box_reach2 = box_reach * box_reach;
+    // a master can press on a point of a slave segment only if their node boxes lie
+    // within touch plus the slave's bulge bound
+    let press = touch + hs_max;
+    let press2 = press * press;
     let (mlo, mhi) = master_near;
-    let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
+    let mbox = (mlo.add_scalar(-press), mhi.add_scalar(press));
     let xm = &mb.state.x;
     let (live, sboxes) = (scurv.segs(), scurv.boxes());
     live.par_chunks(SEG_CHUNK)
@@ -136,11 +140,15 @@ pub fn point_pushes(
             let mut group_cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
             let mut extra: Vec<Curved> = Vec::new();
-            // master segments whose stored box meets the slave's box grown by the
-            // slave's half-thickness and the bulge reach
+            // the rule's candidates: master segments whose stored box meets the slave's
+            // box grown by the slave's half-thickness and the bulge reach (`g`); of
+            // those, the ones that can press: within `press` (their stored box holds their
+            // node box grown by the master's half-thickness, so the query grown by `gp`
+            // finds them; never more than `g` finds)
             let g = 0.5 * sb.def.section.thickness + (BULGE_REACH * c).max(hm_max + hs_max);
+            let gp = g.min(0.5 * sb.def.section.thickness + (touch - c) + hs_max + 1e-6 * c);
             let query_box = |sbx: &(Vec3, Vec3)| {
-                let (lo, hi) = (sbx.0.add_scalar(-g), sbx.1.add_scalar(g));
+                let (lo, hi) = (sbx.0.add_scalar(-gp), sbx.1.add_scalar(gp));
                 ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
             };
             let passing: Vec<(u32, (Vec3, Vec3))> = segs
@@ -181,7 +189,7 @@ pub fn point_pushes(
                     for &j in &cand {
                         let ms = &msurf.segments[j as usize];
                         let bx = node_box(ms, xm);
-                        if gap_at_least(box_gap2(&sbx, &bx), box_reach, box_reach2) {
+                        if gap_at_least(box_gap2(&sbx, &bx), press, press2) {
                             continue;
                         }
                         let at = Corners::of(ms, xm);
@@ -208,6 +216,16 @@ pub fn point_pushes(
                         near: mcurv,
                         extra: &extra,
                     };
+                    let wide = Wide {
+                        msurf,
+                        xm,
+                        mcurv,
+                        sbx,
+                        grow: g,
+                        box_reach,
+                        scale,
+                        c,
+                    };
                     slave_segment(
                         sb,
                         ssurf,
@@ -216,7 +234,7 @@ pub fn point_pushes(
                         &scv,
                         mb,
                         msurf,
-                        (&masters, &mc),
+                        (&masters, &mc, &wide),
                         c,
                         Reach {
                             reach,
@@ -244,7 +262,7 @@ fn slave_segment(
     scv: &Curved,
     mb: &Body,
     msurf: &Surface,
-    masters: (&[Master], &MasterCurved),
+    masters: (&[Master], &MasterCurved, &Wide),
     c: f64,
     r: Reach,
     kappa: f64,
@@ -254,7 +272,7 @@ fn slave_segment(
 ) {
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
-    let (masters, mcurv) = masters;
+    let (masters, mcurv, wide) = masters;
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
     let (reach, touch) = (r.reach, r.touch);
@@ -315,14 +333,21 @@ fn slave_segment(
                 let (hs, _) = bulge(&sb_coef, &w);
                 let xa = flat + nsub * hs;
                 // closest master segment (ties within TIE c: lowest index; `masters` sorted)
-                let Some((pr, mi)) = nearest(&xa, masters, &strip, &keep, r) else {
-                    continue;
+                let again;
+                let (pr, m, mcv) = match nearest(&xa, masters, &keep, r) {
+                    Pick::Found(pr, mi) => (pr, &masters[mi], mcurv.of(&masters[mi])),
+                    Pick::Drop => continue,
+                    Pick::Rerun => {
+                        let Some(found) = rule_again(&xa, &strip, wide, r) else {
+                            continue;
+                        };
+                        again = found;
+                        (again.0, &again.1, &again.2)
+                    }
                 };
                 if pr.dist >= reach || pr.dist <= 1e-9 * c {
                     continue;
                 }
-                let m = &masters[mi];
-                let mcv = mcurv.of(m);
                 let ms = &msurf.segments[m.j as usize];
                 let mt = sub_triangle_at(&m.at, pr.sub as usize);
                 let dir = (xa - pr.point) / pr.dist;
