@@ -20,7 +20,8 @@ use super::curved::{
 };
 use super::narrow::TIE;
 use super::reach::{
-    box_gap, box_gap2, gap_at_least, nearest, CurvedAt, Master, MasterCurved, Slab,
+    box_gap, box_gap2, gap_at_least, nearest, rule_again, CurvedAt, Master, MasterCurved, Pick,
+    Reach, Slab, Wide,
 };
 use super::segment::{Corners, Segment};
 use super::stiffening;
@@ -118,10 +119,17 @@ pub fn point_pushes(
     // a point is in contact only within c plus the master's bulge of its flat segments;
     // the slave's own points stand off its flat boxes by up to its bulge
     let reach = c + (BULGE_REACH * c).max(hm_max);
+    // no master presses on a point farther than c + its bulge bound (gap d - s h_m - c
+    // >= 0; the margin covers the bulge's round-off): `reach::nearest` projects only the
+    // masters within that and gives the rule's answer wherever the gap is negative
+    let touch = ((c + hm_max) * (1.0 + 1e-9)).min(reach);
     let box_reach = reach + hs_max;
-    let box_reach2 = box_reach * box_reach;
+    // a master can press on a point of a slave segment only if their node boxes lie
+    // within touch plus the slave's bulge bound
+    let press = touch + hs_max;
+    let press2 = press * press;
     let (mlo, mhi) = master_near;
-    let mbox = (mlo.add_scalar(-box_reach), mhi.add_scalar(box_reach));
+    let mbox = (mlo.add_scalar(-press), mhi.add_scalar(press));
     let xm = &mb.state.x;
     let (live, sboxes) = (scurv.segs(), scurv.boxes());
     live.par_chunks(SEG_CHUNK)
@@ -132,11 +140,15 @@ pub fn point_pushes(
             let mut group_cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
             let mut extra: Vec<Curved> = Vec::new();
-            // master segments whose stored box meets the slave's box grown by the
-            // slave's half-thickness and the bulge reach
+            // the rule's candidates: master segments whose stored box meets the slave's
+            // box grown by the slave's half-thickness and the bulge reach (`g`); of
+            // those, the ones that can press: within `press` (their stored box holds their
+            // node box grown by the master's half-thickness, so the query grown by `gp`
+            // finds them; never more than `g` finds)
             let g = 0.5 * sb.def.section.thickness + (BULGE_REACH * c).max(hm_max + hs_max);
+            let gp = g.min(0.5 * sb.def.section.thickness + (touch - c) + hs_max + 1e-6 * c);
             let query_box = |sbx: &(Vec3, Vec3)| {
-                let (lo, hi) = (sbx.0.add_scalar(-g), sbx.1.add_scalar(g));
+                let (lo, hi) = (sbx.0.add_scalar(-gp), sbx.1.add_scalar(gp));
                 ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
             };
             let passing: Vec<(u32, (Vec3, Vec3))> = segs
@@ -177,7 +189,7 @@ pub fn point_pushes(
                     for &j in &cand {
                         let ms = &msurf.segments[j as usize];
                         let bx = node_box(ms, xm);
-                        if gap_at_least(box_gap2(&sbx, &bx), box_reach, box_reach2) {
+                        if gap_at_least(box_gap2(&sbx, &bx), press, press2) {
                             continue;
                         }
                         let at = Corners::of(ms, xm);
@@ -204,6 +216,16 @@ pub fn point_pushes(
                         near: mcurv,
                         extra: &extra,
                     };
+                    let wide = Wide {
+                        msurf,
+                        xm,
+                        mcurv,
+                        sbx,
+                        grow: g,
+                        box_reach,
+                        scale,
+                        c,
+                    };
                     slave_segment(
                         sb,
                         ssurf,
@@ -212,9 +234,13 @@ pub fn point_pushes(
                         &scv,
                         mb,
                         msurf,
-                        (&masters, &mc),
+                        (&masters, &mc, &wide),
                         c,
-                        reach,
+                        Reach {
+                            reach,
+                            touch,
+                            tie: TIE * c,
+                        },
                         kappa,
                         mu,
                         cfg,
@@ -236,9 +262,9 @@ fn slave_segment(
     scv: &Curved,
     mb: &Body,
     msurf: &Surface,
-    masters: (&[Master], &MasterCurved),
+    masters: (&[Master], &MasterCurved, &Wide),
     c: f64,
-    reach: f64,
+    r: Reach,
     kappa: f64,
     mu: f64,
     cfg: &ContactConfig,
@@ -246,12 +272,11 @@ fn slave_segment(
 ) {
     let xs_ = &sb.state.x;
     let xm = &mb.state.x;
-    let (masters, mcurv) = masters;
+    let (masters, mcurv, wide) = masters;
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
-    let tie = TIE * c;
-    let reach2 = reach * reach;
-    let mut near: Vec<usize> = Vec::with_capacity(masters.len());
+    let (reach, touch) = (r.reach, r.touch);
+    let touch2 = touch * touch;
     let mut keep: Vec<usize> = Vec::with_capacity(masters.len());
     let subs = if seg.count == 3 { 1 } else { 4 };
     for sub in 0..subs {
@@ -271,9 +296,11 @@ fn slave_segment(
         let base = corner_a_weights(seg);
         let flat_at = |u: f64, v: f64| st.a + (st.b - st.a) * u + (st.c - st.a) * v;
         for i in 0..n {
-            // the masters that can reach some point of this strip: the strip's corners'
-            // box grown by the slave's bulge bound holds its points; a master farther than
-            // `reach` from it would be skipped at every point
+            // the masters that can press on some point of this strip: the strip's
+            // corners' box grown by the slave's bulge bound holds its points, and their
+            // hull within the bulge bound too; a master whose box or slab lies at `touch`
+            // or beyond from them would be skipped at every point (if none is left, the
+            // strip's points are dropped either way: `reach::nearest`)
             let (u0, u1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
             let corners = [
                 flat_at(u0, 0.0),
@@ -287,20 +314,12 @@ fn slave_segment(
                 hi = hi.sup(p);
             }
             let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
-            near.clear();
-            near.extend(
-                (0..masters.len())
-                    .filter(|&mi| !gap_at_least(box_gap2(&strip, &masters[mi].bx), reach, reach2)),
-            );
-            // less the masters whose slab puts every point of the strip (within the
-            // slave's bulge bound of the strip's flat corners' hull) at or beyond reach:
-            // if none is left, every point's candidates lie beyond reach
-            // (`reach::nearest`)
             keep.clear();
-            keep.extend(near.iter().copied().filter(|&mi| {
-                masters[mi]
-                    .slab
-                    .is_none_or(|sl| sl.gap_hull(&corners, hs_bound) < reach)
+            keep.extend((0..masters.len()).filter(|&mi| {
+                let m = &masters[mi];
+                !gap_at_least(box_gap2(&strip, &m.bx), touch, touch2)
+                    && m.slab
+                        .is_none_or(|sl| sl.gap_hull(&corners, hs_bound) < touch)
             }));
             if keep.is_empty() {
                 continue;
@@ -314,14 +333,21 @@ fn slave_segment(
                 let (hs, _) = bulge(&sb_coef, &w);
                 let xa = flat + nsub * hs;
                 // closest master segment (ties within TIE c: lowest index; `masters` sorted)
-                let Some((pr, mi)) = nearest(&xa, masters, &near, &keep, reach, tie) else {
-                    continue;
+                let again;
+                let (pr, m, mcv) = match nearest(&xa, masters, &keep, r) {
+                    Pick::Found(pr, mi) => (pr, &masters[mi], mcurv.of(&masters[mi])),
+                    Pick::Drop => continue,
+                    Pick::Rerun => {
+                        let Some(found) = rule_again(&xa, &strip, wide, r) else {
+                            continue;
+                        };
+                        again = found;
+                        (again.0, &again.1, &again.2)
+                    }
                 };
                 if pr.dist >= reach || pr.dist <= 1e-9 * c {
                     continue;
                 }
-                let m = &masters[mi];
-                let mcv = mcurv.of(m);
                 let ms = &msurf.segments[m.j as usize];
                 let mt = sub_triangle_at(&m.at, pr.sub as usize);
                 let dir = (xa - pr.point) / pr.dist;

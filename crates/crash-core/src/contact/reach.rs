@@ -5,7 +5,7 @@
 //! pass", "*Cost.*".
 
 use super::curved::{loose_bulge_bound, near_curved, node_box, Curved, NearCurved};
-use super::segment::{closest, Closest, Corners};
+use super::segment::{closest, Closest, Corners, Segment};
 use super::surface::Surface;
 use crate::Vec3;
 
@@ -204,6 +204,7 @@ impl Slab {
 
 /// The master data of one candidate segment: its index, node box, corners, slab and
 /// where its curved data are (an index, not a copy: the data are 232 bytes).
+#[derive(Clone, Copy)]
 pub(crate) struct Master {
     pub j: u32,
     pub bx: (Vec3, Vec3),
@@ -278,45 +279,65 @@ fn by_rule(
     best
 }
 
-/// The point's master by the rule (`by_rule` over `near`), when it lies within `reach`
-/// (None otherwise, where the pass drops the point either way). `keep` is `near` less
-/// masters whose slab puts every point of the strip at or beyond `reach`; the point
-/// skips those and the ones its own slab puts there too (the set F), and projects the
-/// rest (K) by the rule. That gives the rule's answer:
-/// - a candidate of F (distance >= reach) changes the rule's best only by becoming it;
-///   once a point of K is closer than every earlier candidate and reach by more than
-///   `tie` ("caught up"), it is the best in both runs, the best stays below reach and no
+/// How far the pass looks for a point's master: `reach`, the rule's (a master whose
+/// node box lies within it of the point is a candidate), and `touch` <= reach, beyond
+/// which no candidate can press on the point (its gap d - s h_m - c is >= 0 when d >=
+/// c + the master's bulge bound, `quadrature::point_pushes`); `tie`, the rule's tie.
+#[derive(Clone, Copy)]
+pub(crate) struct Reach {
+    pub reach: f64,
+    pub touch: f64,
+    pub tie: f64,
+}
+
+/// What `nearest` found for a point.
+pub(crate) enum Pick {
+    /// The rule's master (its projection, its position in the masters).
+    Found(Closest, usize),
+    /// No master can press on the point.
+    Drop,
+    /// Undecided by the masters within touch: run the rule again (`rule_again`).
+    Rerun,
+}
+
+/// The point's master by the rule, when it lies within `touch` (`Pick::Drop` otherwise,
+/// where the pass drops the point either way: its gap is >= 0). `masters` holds every
+/// candidate of the rule whose node box lies within touch plus the slave's bulge bound
+/// of the slave segment's node box (a point lies within that bound of it), so the
+/// rule's other candidates lie at touch or beyond. `keep` is the masters less those
+/// whose box or slab puts every point of the strip at or beyond `touch`; the point
+/// skips those and the ones its own slab or box puts there too (with the rule's others,
+/// the set F), and projects the rest (K) by the rule. That gives the rule's answer
+/// wherever the pass uses it:
+/// - a candidate of F (distance >= touch) changes the rule's best only by becoming it;
+///   once a point of K is closer than every earlier candidate and touch by more than
+///   `tie` ("caught up"), it is the best in both runs, the best stays below touch and no
 ///   candidate of F can replace it, so both runs end alike;
-/// - if no candidate of K comes within reach, none of near does: the point is dropped
-///   either way;
-/// - otherwise (a candidate within reach but within `tie` of an earlier one or of
-///   reach, never seen on the showcase) the rule runs over `near` again.
+/// - if no candidate of K comes within touch, none does: the rule's best lies at touch
+///   or beyond and the pass drops the point either way;
+/// - otherwise (a candidate within touch but within `tie` of an earlier one or of
+///   touch, never seen on the showcase) the rule runs over every candidate again
+///   (`Pick::Rerun`; forcing it at every point gives the showcase's hash too).
 ///
 /// A candidate skipped for its box or slab lying beyond the closest distance so far plus
 /// `tie` is one the rule would not take either.
-pub(crate) fn nearest(
-    xa: &Vec3,
-    masters: &[Master],
-    near: &[usize],
-    keep: &[usize],
-    reach: f64,
-    tie: f64,
-) -> Option<(Closest, usize)> {
+pub(crate) fn nearest(xa: &Vec3, masters: &[Master], keep: &[usize], r: Reach) -> Pick {
+    let Reach { touch, tie, .. } = r;
     let mut best: Option<(Closest, usize)> = None;
     let mut dmin = f64::INFINITY;
     let mut caught_up = false;
-    let reach2 = reach * reach;
+    let touch2 = touch * touch;
     for &mi in keep {
         let m = &masters[mi];
         let sg = m.slab_gap(xa);
-        if sg >= reach {
+        if sg >= touch {
             continue;
         }
         // the rule's tests on the box gap, squared where that decides them (the second
         // one only skips a candidate the rule could not take, so erring towards
         // projecting costs time, not bits)
         let s = point_gap2(xa, &m.bx);
-        if gap_at_least(s, reach, reach2) || sg > dmin + tie {
+        if gap_at_least(s, touch, touch2) || sg > dmin + tie {
             continue;
         }
         let dt = dmin + tie;
@@ -327,7 +348,7 @@ pub(crate) fn nearest(
         if pr.dist.is_nan() {
             continue;
         }
-        if !caught_up && pr.dist < dmin.min(reach) - tie {
+        if !caught_up && pr.dist < dmin.min(touch) - tie {
             caught_up = true;
         }
         let better = match &best {
@@ -339,12 +360,72 @@ pub(crate) fn nearest(
             best = Some((pr, mi));
         }
     }
-    if caught_up {
-        best
-    } else if dmin >= reach {
+    match best {
+        Some((pr, mi)) if caught_up => Pick::Found(pr, mi),
         // dmin is never NaN: it starts infinite and takes only distances that are not
-        None
-    } else {
-        by_rule(xa, masters, near, reach, tie).filter(|(pr, _)| pr.dist < reach)
+        _ if dmin >= touch => Pick::Drop,
+        _ => Pick::Rerun,
     }
+}
+
+/// What the rule's candidate list for a slave segment is made from: the master body,
+/// its near set's curved data, the slave segment's node box, the tree query's growth of
+/// it, the node-box reach beyond which a master is no candidate, and the coordinates'
+/// size for the slabs.
+pub(crate) struct Wide<'a> {
+    pub msurf: &'a crate::contact::surface::Surface,
+    pub xm: &'a [Vec3],
+    pub mcurv: &'a NearCurved,
+    pub sbx: (Vec3, Vec3),
+    pub grow: f64,
+    pub box_reach: f64,
+    pub scale: f64,
+    pub c: f64,
+}
+
+/// The rule over every candidate of the point `xa` (strip box `strip`) as the pass
+/// always made them (the tree's segments whose stored box meets the slave's node box
+/// grown by `grow`, in index order, less those whose node box lies at `box_reach` or
+/// beyond, then those within `reach` of the strip's box): the master, its data and its
+/// curved data, when it lies within reach.
+pub(crate) fn rule_again(
+    xa: &Vec3,
+    strip: &(Vec3, Vec3),
+    w: &Wide,
+    r: Reach,
+) -> Option<(Closest, Master, Curved)> {
+    let (lo, hi) = (w.sbx.0.add_scalar(-w.grow), w.sbx.1.add_scalar(w.grow));
+    let mut cand = Vec::new();
+    w.msurf
+        .query([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z], &mut cand);
+    cand.sort_unstable();
+    let br2 = w.box_reach * w.box_reach;
+    let mut masters = Vec::new();
+    let mut curved = Vec::new();
+    for &j in &cand {
+        let ms: &Segment = &w.msurf.segments[j as usize];
+        let bx = node_box(ms, w.xm);
+        if gap_at_least(box_gap2(&w.sbx, &bx), w.box_reach, br2) {
+            continue;
+        }
+        let at = Corners::of(ms, w.xm);
+        curved.push(match w.mcurv.index(j) {
+            Some(k) => *w.mcurv.at(k),
+            None => Curved::of(ms, w.msurf, w.xm),
+        });
+        masters.push(Master {
+            j,
+            bx,
+            at,
+            cv: CurvedAt::Extra(curved.len() - 1),
+            slab: Slab::of(&at, w.scale, w.c),
+        });
+    }
+    let reach2 = r.reach * r.reach;
+    let near: Vec<usize> = (0..masters.len())
+        .filter(|&mi| !gap_at_least(box_gap2(strip, &masters[mi].bx), r.reach, reach2))
+        .collect();
+    by_rule(xa, &masters, &near, r.reach, r.tie)
+        .filter(|(pr, _)| pr.dist < r.reach)
+        .map(|(pr, mi)| (pr, masters[mi], curved[mi]))
 }
