@@ -70,11 +70,6 @@ impl Momentum {
         Self(p)
     }
 
-    /// The sum of two (any order, any grouping: the same bits).
-    pub fn add(self, o: Self) -> Self {
-        Self(std::array::from_fn(|d| self.0[d].wrapping_add(o.0[d])))
-    }
-
     /// The mean velocity of a body of total mass `mass` and scale `scale` whose
     /// momentum this is.
     pub fn mean(self, mass: f64, scale: f64) -> Vec3 {
@@ -83,6 +78,14 @@ impl Momentum {
         } else {
             Vec3::zeros()
         }
+    }
+}
+
+/// The sum of two (any order, any grouping: the same bits).
+impl std::ops::Add for Momentum {
+    type Output = Momentum;
+    fn add(self, o: Self) -> Self {
+        Self(std::array::from_fn(|d| self.0[d].wrapping_add(o.0[d])))
     }
 }
 

@@ -414,7 +414,7 @@ impl SharedGroup {
             .iter()
             .zip(&self.mass)
             .map(|(g, &(m, scale))| {
-                let p = g.iter().fold(Momentum::default(), |a, f| a.add(f.momentum));
+                let p = g.iter().fold(Momentum::default(), |a, f| a + f.momentum);
                 p.mean(m, scale)
             })
             .collect();
