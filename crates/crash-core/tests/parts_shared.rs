@@ -9,7 +9,7 @@
 mod contact_util;
 
 use contact_util::*;
-use crash_core::contact::{ContactConfig, PenaltyKind};
+use crash_core::contact::ContactConfig;
 use crash_core::hash::state_hash;
 use crash_core::partition::{merge_report, SharedGroup, SplitFigures};
 use crash_core::shapes::{plate, ElementKind};
@@ -125,7 +125,7 @@ fn shared_step(
         .sort_by_key(|d| ids.iter().position(|&id| id == d.id));
     assert_eq!(figures.dts.len(), n, "every body's element step");
     let mut merged: Vec<BodyReport> = merged.into_iter().map(|r| r.expect("a report")).collect();
-    for (id, limit) in figures.limits(config().penalty == PenaltyKind::Soft) {
+    for (id, limit) in figures.limits(config().penalty) {
         let r = merged
             .iter_mut()
             .find(|r| r.id == id)

@@ -269,6 +269,13 @@ pub(crate) fn closing_dt(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> 
     closing_dt_of(c, closing_speed(a, b, sa, sb))
 }
 
+/// The penalty has a usable reference step `dt` for a pair: the soft penalty needs a
+/// finite positive one (none: two kinematic bodies, which contact cannot move) and
+/// skips the pair without it; the other penalties need none.
+pub fn has_reference(penalty: PenaltyKind, dt: f64) -> bool {
+    penalty != PenaltyKind::Soft || (dt.is_finite() && dt > 0.0)
+}
+
 /// The closing-speed step of a pair of mean thickness `c` closing at `v` (None: they do
 /// not close).
 pub fn closing_dt_of(c: f64, v: f64) -> Option<f64> {
@@ -361,11 +368,7 @@ pub(crate) fn contact_forces_given(
         }
         let self_pair = ia == ib;
         let mut pair_dt = element_dt[ia].min(element_dt[ib]);
-        // the soft penalty needs a reference step (none: two kinematic bodies, which
-        // contact cannot move)
-        let soft = cfg.penalty == PenaltyKind::Soft;
-        let usable = |d: f64| d.is_finite() && d > 0.0;
-        let mut find = !soft || usable(pair_dt);
+        let mut find = has_reference(cfg.penalty, pair_dt);
         if find && cfg.speed_rule == SpeedRule::LimitDt && !self_pair {
             // given (a split group's views): absent or None, the pair does not close
             let d = match closing {
@@ -378,7 +381,7 @@ pub(crate) fn contact_forces_given(
             }
         }
         let dt_ref = REFERENCE_SAFETY * pair_dt;
-        find = find && (!soft || usable(dt_ref));
+        find = find && has_reference(cfg.penalty, dt_ref);
         let segment_pass = cfg.pass == ContactPass::Segments && !self_pair;
         plans.push((
             limit,

@@ -16,8 +16,11 @@
 
 use super::contact::Closing;
 use super::shared::PartDt;
-use crate::contact::stage::closing_dt_of;
-use crate::contact::sweep::closing_of;
+use super::GroupSplit;
+use crate::contact::stage::{closing_dt_of, has_reference};
+use crate::contact::sweep::{closing_of, max_speeds_of};
+use crate::contact::PenaltyKind;
+use crate::Vec3;
 
 /// A pair's closing-speed figures over some nodes of its bodies: the body ids (in the
 /// group's pair order), the pair's mean thickness c = (t_a + t_b)/2, and the four maxima
@@ -84,10 +87,10 @@ impl SplitFigures {
     }
 
     /// The closing-speed steps that limit the bodies' stable steps, as (body id, step):
-    /// those of pairs whose soft penalty has a reference step (`soft`: the penalty is
-    /// the soft one, which skips a pair without one, as the one-process stage does),
-    /// with the merged element steps `dts`.
-    pub fn limits(&self, soft: bool) -> Vec<(u32, f64)> {
+    /// those of pairs whose `penalty` has a reference step from the merged element
+    /// steps `dts` (the soft penalty skips a pair without one, as the one-process
+    /// stage does).
+    pub fn limits(&self, penalty: PenaltyKind) -> Vec<(u32, f64)> {
         let dt_of = |id: u32| {
             self.dts
                 .iter()
@@ -96,8 +99,7 @@ impl SplitFigures {
         };
         let mut out = Vec::new();
         for p in &self.pairs {
-            let pair_dt = dt_of(p.a).min(dt_of(p.b));
-            if soft && !(pair_dt.is_finite() && pair_dt > 0.0) {
+            if !has_reference(penalty, dt_of(p.a).min(dt_of(p.b))) {
                 continue;
             }
             if let Some(d) = p.dt() {
@@ -107,6 +109,42 @@ impl SplitFigures {
         }
         out
     }
+}
+
+/// Each pair's closing-speed figures over the owned nodes of the parts computed here
+/// (`split.mine`; pairs with no part here: none), relative to the bodies' mean
+/// velocities `means`.
+pub(super) fn pair_speeds(
+    split: &GroupSplit,
+    pairs: &[(usize, usize)],
+    means: &[Vec3],
+) -> Vec<PairSpeed> {
+    let mut out = Vec::new();
+    for &(ia, ib) in pairs {
+        let here = |i: usize| split.mine[i].iter().any(|&m| m);
+        if !here(ia) && !here(ib) {
+            continue;
+        }
+        let (ua, ub) = (means[ia], means[ib]);
+        let over = |i: usize| {
+            split.splits[i]
+                .parts
+                .iter()
+                .zip(&split.mine[i])
+                .filter(|(_, &m)| m)
+                .map(|(p, _)| max_speeds_of(&p.body.state.v[..p.owned], &ua, &ub))
+                .fold((0.0, 0.0), |a: (f64, f64), b| (a.0.max(b.0), a.1.max(b.1)))
+        };
+        let ((a_ua, a_ub), (b_ua, b_ub)) = (over(ia), over(ib));
+        let (a, b) = (&split.whole[ia].def, &split.whole[ib].def);
+        out.push(PairSpeed {
+            a: a.id,
+            b: b.id,
+            c: 0.5 * (a.section.thickness + b.section.thickness),
+            max: [a_ua, a_ub, b_ua, b_ub],
+        });
+    }
+    out
 }
 
 #[cfg(test)]
@@ -156,8 +194,8 @@ mod tests {
                 max: [1.0; 4],
             }],
         };
-        assert!(figs.limits(true).is_empty());
+        assert!(figs.limits(PenaltyKind::Soft).is_empty());
         let d = closing_dt_of(1e-3, 2.0).unwrap_or(0.0);
-        assert_eq!(figs.limits(false), vec![(1, d), (2, d)]);
+        assert_eq!(figs.limits(PenaltyKind::Element), vec![(1, d), (2, d)]);
     }
 }

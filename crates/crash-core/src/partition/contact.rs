@@ -31,7 +31,8 @@
 use super::{partition_body, Split};
 use crate::body::Body;
 use crate::clock::Clock;
-use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, pairs_of};
+use crate::contact::stage::pairs_of;
+use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, has_reference};
 use crate::contact::surface::Surface;
 use crate::contact::sweep::BodySpeed;
 use crate::contact::{body_bounds, check_moves, ContactConfig, ContactState, PenaltyKind};
@@ -272,7 +273,7 @@ impl GroupSplit {
         let mut speeds: BTreeMap<usize, BodySpeed> = BTreeMap::new();
         for (ia, ib) in pairs {
             let (a, b) = (&self.whole[ia], &self.whole[ib]);
-            if !self.reference_usable(element_dt, ia, ib) {
+            if !has_reference(self.contact.penalty, element_dt[ia].min(element_dt[ib])) {
                 continue;
             }
             speeds.entry(ia).or_insert_with(|| BodySpeed::of(a));
@@ -285,13 +286,6 @@ impl GroupSplit {
             closing.insert((a.def.id, b.def.id), d);
         }
         (dt, closing)
-    }
-
-    /// The soft penalty has a reference step for the pair (ia, ib) (none: the stage
-    /// skips the pair); any other penalty always has one.
-    pub(super) fn reference_usable(&self, element_dt: &[f64], ia: usize, ib: usize) -> bool {
-        let pair_dt = element_dt[ia].min(element_dt[ib]);
-        self.contact.penalty != PenaltyKind::Soft || (pair_dt.is_finite() && pair_dt > 0.0)
     }
 
     /// Each body's element step limited by the element-form steps of its pairs, and the

@@ -32,13 +32,13 @@
 //! skin less one step's tunnelling budget, the next integration sends every owned
 //! node, and the contact pass after it rebuilds the views (on every holder alike).
 
-use super::closing::{PairSpeed, SplitFigures};
+use super::closing::{pair_speeds, SplitFigures};
 use super::export::exports;
 use super::report::{add_energy, add_reaction, element_in_whole, node_in_whole};
 use super::GroupSplit;
 use crate::body::{Body, BodyEnergy, BodyState};
 use crate::clock::Clock;
-use crate::contact::sweep::{max_speeds_of, Momentum};
+use crate::contact::sweep::Momentum;
 use crate::contact::{check_moves, ContactConfig};
 use crate::error::{CoreError, Fault};
 use crate::forces::ForceSums;
@@ -206,7 +206,11 @@ impl SharedGroup {
         for (i, s) in self.split.splits.iter_mut().enumerate() {
             let contact = self.split.whole[i].def.contact;
             let reference = self.split.reference.get(i);
+            // the momentum only where the closing speed reads it
             let scale = self.mass[i].1;
+            let closing = contact
+                && self.split.contact.enabled
+                && self.split.contact.speed_rule == crate::contact::SpeedRule::LimitDt;
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
                 self.figures[i][q] = None;
@@ -242,7 +246,11 @@ impl SharedGroup {
                     far,
                     max_move: n.max_move,
                     max_move_node: p.node[n.max_move_node],
-                    momentum: Momentum::of(&st.v[..o], &p.body.def.mass[..o], scale),
+                    momentum: if closing {
+                        Momentum::of(&st.v[..o], &p.body.def.mass[..o], scale)
+                    } else {
+                        Momentum::default()
+                    },
                 };
                 out.push(PartState {
                     id: self.ids[i],
@@ -418,7 +426,7 @@ impl SharedGroup {
                 p.mean(m, scale)
             })
             .collect();
-        let speeds = self.pair_speeds(&pairs, &means);
+        let speeds = pair_speeds(&self.split, &pairs, &means);
         let mut shares = Vec::new();
         for (i, s) in self.split.splits.iter().enumerate() {
             let mut r: Option<BodyReport> = None;
@@ -502,37 +510,6 @@ impl SharedGroup {
             self.export = exports(&self.split);
         }
         Ok(())
-    }
-
-    /// Each pair's closing-speed figures over the owned nodes of the parts here (pairs
-    /// with no part here: none), relative to the bodies' mean velocities `means`.
-    fn pair_speeds(&self, pairs: &[(usize, usize)], means: &[Vec3]) -> Vec<PairSpeed> {
-        let mut out = Vec::new();
-        for &(ia, ib) in pairs {
-            let here = |i: usize| self.split.mine[i].iter().any(|&m| m);
-            if !here(ia) && !here(ib) {
-                continue;
-            }
-            let (ua, ub) = (means[ia], means[ib]);
-            let over = |i: usize| {
-                let s = &self.split.splits[i];
-                s.parts
-                    .iter()
-                    .zip(&self.split.mine[i])
-                    .filter(|(_, &m)| m)
-                    .map(|(p, _)| max_speeds_of(&p.body.state.v[..p.owned], &ua, &ub))
-                    .fold((0.0, 0.0), |a: (f64, f64), b| (a.0.max(b.0), a.1.max(b.1)))
-            };
-            let ((a_ua, a_ub), (b_ua, b_ub)) = (over(ia), over(ib));
-            let (a, b) = (&self.split.whole[ia].def, &self.split.whole[ib].def);
-            out.push(PairSpeed {
-                a: a.id,
-                b: b.id,
-                c: 0.5 * (a.section.thickness + b.section.thickness),
-                max: [a_ua, a_ub, b_ua, b_ub],
-            });
-        }
-        out
     }
 
     /// The full states of the parts computed here (for the assembly of whole bodies).

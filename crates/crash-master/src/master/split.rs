@@ -20,7 +20,6 @@ use super::Master;
 use crate::error::MasterError;
 use crate::input::SplitMode;
 use crash_core::contact::ContactPass;
-use crash_core::contact::PenaltyKind;
 use crash_core::partition::{merge_report, partition_body, PartState, SplitFigures};
 use crash_core::BodyReport;
 use crash_io::PartCells;
@@ -326,10 +325,17 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
+        // the closing-speed steps over all holders limit the merged stable steps (min:
+        // the bits of one process's stage)
+        for (id, limit) in figures.limits(self.contact.penalty) {
+            if let Some(b) = merged.get_mut(&id) {
+                b.stable_dt = b.stable_dt.min(limit);
+            }
+        }
         // the element steps in the groups' body order (the holders check it)
         let mut pending = SplitFigures {
             dts: Vec::with_capacity(figures.dts.len()),
-            pairs: figures.pairs,
+            pairs: std::mem::take(&mut figures.pairs),
         };
         for s in &self.splits {
             let home = s.home();
@@ -338,25 +344,10 @@ impl<L: WorkerLink> Master<'_, L> {
                     return Err(self.implausible(home, &format!("no element step of body {id}")));
                 };
                 pending.dts.push(d);
-            }
-        }
-        // the closing-speed steps over all holders limit the merged stable steps (min:
-        // the bits of one process's stage)
-        let soft = self.contact.penalty == PenaltyKind::Soft;
-        for (id, limit) in pending.limits(soft) {
-            if let Some(b) = merged.get_mut(&id) {
-                b.stable_dt = b.stable_dt.min(limit);
-            }
-        }
-        for s in &self.splits {
-            let home = s.home();
-            for id in &s.ids {
                 if let (Some(mut b), Some(r)) = (merged.remove(id), reps.get_mut(home)) {
                     // the shares' steps are limited alike by the element-form rule; the
                     // element that sets the element step is the minimum's over all holders
-                    if let Some(d) = pending.dts.iter().find(|d| d.id == *id) {
-                        b.dt_element = d.element as usize;
-                    }
+                    b.dt_element = d.element as usize;
                     r.bodies.push(b);
                 }
             }
