@@ -13,6 +13,7 @@ pub(crate) mod reach;
 pub mod segment;
 pub(crate) mod segpair;
 pub mod smooth;
+pub mod speeds;
 pub mod stage;
 pub mod stiffening;
 pub mod surface;

@@ -15,6 +15,7 @@
 //! a function of the state after the step only.
 
 use super::segment::{triangle_weights, Segment};
+use super::speeds::SpeedBoxes;
 use super::surface::{NodeChunk, Surface, NODE_CHUNK};
 use super::verlet::{candidates, NodeLists};
 use crate::body::Body;
@@ -107,17 +108,26 @@ pub struct BodySpeed {
     pub mean: Vec3,
     /// The distinct velocities of the nodes (one per program, and rest), if known.
     uniform: Option<Vec<Vec3>>,
+    /// Otherwise the velocity boxes of the node chunks (a body in many pairs).
+    boxes: SpeedBoxes,
 }
 
 impl BodySpeed {
     pub fn of(b: &Body) -> Self {
+        let uniform = if b.def.kinematic {
+            program_velocities(b)
+        } else {
+            None
+        };
+        let boxes = if uniform.is_none() {
+            SpeedBoxes::of(&b.state.v)
+        } else {
+            SpeedBoxes::default()
+        };
         Self {
             mean: mean_velocity(b),
-            uniform: if b.def.kinematic {
-                program_velocities(b)
-            } else {
-                None
-            },
+            uniform,
+            boxes,
         }
     }
 }
@@ -143,27 +153,16 @@ fn program_velocities(b: &Body) -> Option<Vec<Vec3>> {
     Some(seen.into_iter().flatten().collect())
 }
 
-/// Largest |v - u1| and |v - u2| over the nodes, in one pass (maxima: the same bits in
-/// any order, so on the pool); over the distinct velocities when they are known (the
-/// same maxima: equal velocities give equal norms, +0 and -0 alike).
+/// Largest |v - u1| and |v - u2| over the nodes (maxima: the same bits in any order);
+/// over the distinct velocities when they are known (the same maxima: equal velocities
+/// give equal norms, +0 and -0 alike), else through the chunks' velocity boxes.
 fn max_speeds_rel(b: &Body, speed: &BodySpeed, u1: &Vec3, u2: &Vec3) -> (f64, f64) {
     if let Some(vs) = &speed.uniform {
         return vs.iter().fold((0.0, 0.0), |(m1, m2): (f64, f64), v| {
             (m1.max((v - u1).norm()), m2.max((v - u2).norm()))
         });
     }
-    max_speeds_of(&b.state.v, u1, u2)
-}
-
-/// Largest |v - u1| and |v - u2| over `v` (some nodes of a body: maxima, on the pool).
-pub fn max_speeds_of(v: &[Vec3], u1: &Vec3, u2: &Vec3) -> (f64, f64) {
-    v.par_chunks(super::stage::PAR_CHUNK)
-        .map(|vs| {
-            vs.iter().fold((0.0, 0.0), |(m1, m2): (f64, f64), v| {
-                (m1.max((v - u1).norm()), m2.max((v - u2).norm()))
-            })
-        })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)))
+    speed.boxes.max_speeds(&b.state.v, u1, u2)
 }
 
 /// The four maxima a pair's closing speed reads: the largest |v - u_a| and |v - u_b|

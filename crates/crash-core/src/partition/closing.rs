@@ -17,10 +17,12 @@
 use super::contact::Closing;
 use super::shared::PartDt;
 use super::GroupSplit;
+use crate::contact::speeds::SpeedBoxes;
 use crate::contact::stage::{closing_dt_of, has_reference};
-use crate::contact::sweep::{closing_of, max_speeds_of};
+use crate::contact::sweep::closing_of;
 use crate::contact::PenaltyKind;
 use crate::Vec3;
+use std::collections::BTreeMap;
 
 /// A pair's closing-speed figures over some nodes of its bodies: the body ids (in the
 /// group's pair order), the pair's mean thickness c = (t_a + t_b)/2, and the four maxima
@@ -119,20 +121,34 @@ pub(super) fn pair_speeds(
     pairs: &[(usize, usize)],
     means: &[Vec3],
 ) -> Vec<PairSpeed> {
+    // the velocity boxes of each owned part here, once per pass (a floor's parts are in
+    // a pair with every body on it)
+    let mut boxes: BTreeMap<usize, Vec<(&[Vec3], SpeedBoxes)>> = BTreeMap::new();
     let mut out = Vec::new();
     for &(ia, ib) in pairs {
         let here = |i: usize| split.mine[i].iter().any(|&m| m);
         if !here(ia) && !here(ib) {
             continue;
         }
+        for i in [ia, ib] {
+            boxes.entry(i).or_insert_with(|| {
+                split.splits[i]
+                    .parts
+                    .iter()
+                    .zip(&split.mine[i])
+                    .filter(|(_, &m)| m)
+                    .map(|(p, _)| {
+                        let v = &p.body.state.v[..p.owned];
+                        (v, SpeedBoxes::of(v))
+                    })
+                    .collect()
+            });
+        }
         let (ua, ub) = (means[ia], means[ib]);
         let over = |i: usize| {
-            split.splits[i]
-                .parts
+            boxes[&i]
                 .iter()
-                .zip(&split.mine[i])
-                .filter(|(_, &m)| m)
-                .map(|(p, _)| max_speeds_of(&p.body.state.v[..p.owned], &ua, &ub))
+                .map(|(v, b)| b.max_speeds(v, &ua, &ub))
                 .fold((0.0, 0.0), |a: (f64, f64), b| (a.0.max(b.0), a.1.max(b.1)))
         };
         let ((a_ua, a_ub), (b_ua, b_ub)) = (over(ia), over(ib));

@@ -120,6 +120,9 @@ pub struct GroupSplit {
     /// Select the node lists of the other parts' views too (no sub-bodies): a shared
     /// group derives from them what each part sends the other holders.
     pub(super) all_lists: bool,
+    /// The holder of each part (`holder[i][q]`; empty: every part its own), so that
+    /// only what another holder reads crosses the wire (`export::exports`).
+    pub holder: Vec<Vec<u32>>,
 }
 
 impl GroupSplit {
@@ -166,6 +169,7 @@ impl GroupSplit {
             builds: 0,
             mine: parts.iter().map(|&k| vec![true; k]).collect(),
             all_lists: false,
+            holder: Vec::new(),
         })
     }
 

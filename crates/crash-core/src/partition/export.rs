@@ -30,9 +30,17 @@ pub struct PartState {
     pub momentum: crate::contact::sweep::Momentum,
 }
 
-/// Per body and part: the owned nodes (local indices) that another part reads, as a
-/// halo node or a node of its contact view (the views of every part, built or not).
+/// Per body and part: the owned nodes (local indices) that a part on another holder
+/// reads, as a halo node or a node of its contact view (the views of every part, built
+/// or not). A part on the same holder reads them in place (a floor's part under the
+/// spheres that holder computes).
 pub(super) fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
+    // without a holder table every part is its own holder
+    let holder = |i: usize, q: usize| split.holder.get(i).and_then(|h| h.get(q));
+    let apart = |i: usize, q: usize, j: usize, r: usize| match (holder(i, q), holder(j, r)) {
+        (Some(a), Some(b)) => a != b,
+        _ => true,
+    };
     let mut needed: Vec<Vec<bool>> = split
         .whole
         .iter()
@@ -41,14 +49,17 @@ pub(super) fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
     for (i, s) in split.splits.iter().enumerate() {
         for (q, p) in s.parts.iter().enumerate() {
             for &n in &p.node[p.owned..] {
-                needed[i][n as usize] = true;
+                if apart(i, q, i, s.owner[n as usize].0 as usize) {
+                    needed[i][n as usize] = true;
+                }
             }
             let Some(view) = split.views.get(i).and_then(|v| v.get(q)) else {
                 continue;
             };
             for (&j, nodes) in view.index.iter().zip(&view.node) {
                 for &n in nodes {
-                    if j != i || split.splits[j].owner[n as usize].0 as usize != q {
+                    let r = split.splits[j].owner[n as usize].0 as usize;
+                    if (j != i || r != q) && apart(i, q, j, r) {
                         needed[j][n as usize] = true;
                     }
                 }

@@ -195,6 +195,14 @@ impl SharedGroup {
         self.pending.is_some()
     }
 
+    /// The holder of every part (`holder[i][q]`, as the split's spec gives it): only
+    /// what a part on another holder reads is exported.
+    pub fn with_holders(mut self, holder: Vec<Vec<u32>>) -> Self {
+        self.split.holder = holder;
+        self.export = exports(&self.split);
+        self
+    }
+
     /// Phase 1: integrate the owned nodes of the parts computed here over the step of
     /// length h from `clock`; their states for the other holders. The pending contact
     /// pass, if any, must have run (`contact`).

@@ -21,7 +21,7 @@ use crate::error::MasterError;
 use crate::input::SplitMode;
 use crash_core::contact::ContactPass;
 use crash_core::partition::{merge_report, partition_body, PartState, SplitFigures};
-use crash_core::BodyReport;
+use crash_core::{BodyReport, Vec3};
 use crash_io::PartCells;
 use crash_link::{BodyLoad, Command, Reply, SplitSpec, StepReport, WorkerLink};
 use std::collections::BTreeMap;
@@ -30,6 +30,41 @@ use std::collections::BTreeMap;
 /// whole before that body is cut too (cutting costs a halo and contact views: a few
 /// per cent of the body's work).
 const CUT_TOLERANCE: f64 = 0.05;
+
+/// A group's largest body is cut (placing the others by region) when no body exceeds
+/// the share and it carries at least this fraction of it: a floor under many bodies.
+const FLOOR_SHARE: f64 = 0.5;
+
+/// The box `lo`..`hi` cut into `k` regions as `partition::bisect` cuts a body of
+/// uniform density: each cut normal to the longest side, k / 2 parts' share below it.
+/// Region q approximates part q of a body with that box (the placement only needs
+/// which part a body lies on, not the exact cut: any placement gives the same bits).
+fn regions(lo: Vec3, hi: Vec3, k: usize) -> Vec<(Vec3, Vec3)> {
+    if k <= 1 {
+        return vec![(lo, hi)];
+    }
+    let ext = hi - lo;
+    let axis = (1..3).fold(0, |a, d| if ext[d] > ext[a] { d } else { a });
+    let kl = k / 2;
+    let (mut mid_hi, mut mid_lo) = (hi, lo);
+    mid_hi[axis] = lo[axis] + ext[axis] * kl as f64 / k as f64;
+    mid_lo[axis] = mid_hi[axis];
+    let mut out = regions(lo, mid_hi, kl);
+    out.extend(regions(mid_lo, hi, k - kl));
+    out
+}
+
+/// The region nearest to `p` (distance to its box; the first on ties).
+fn nearest(regions: &[(Vec3, Vec3)], p: &Vec3) -> usize {
+    let d = |(lo, hi): &(Vec3, Vec3)| (p - p.sup(lo).inf(hi)).norm();
+    (0..regions.len()).fold(0, |a, b| {
+        if d(&regions[b]) < d(&regions[a]) {
+            b
+        } else {
+            a
+        }
+    })
+}
 
 /// A group split over workers.
 #[derive(Debug, Clone)]
@@ -116,6 +151,13 @@ impl SplitGroup {
 }
 
 impl<L: WorkerLink> Master<'_, L> {
+    /// Body `id`'s node box of the last report (None before any).
+    fn box_of_id(&self, id: u32) -> Option<(Vec3, Vec3)> {
+        let r = self.reports.get(self.index(id)?)?;
+        (r.id == id && r.lo.iter().chain(r.hi.iter()).all(|x| x.is_finite()))
+            .then_some((r.lo, r.hi))
+    }
+
     /// The split of the group `ids` over the live workers (home first), or None when
     /// the rule leaves it whole.
     fn plan(&self, ids: &[u32], copies: &[u32], total: f64, live: &[usize]) -> Option<SplitGroup> {
@@ -159,13 +201,47 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
+        // a floor under many bodies (no body above the share, the largest at least half
+        // of it): cut the floor, so that each slot holds a region with what lies on it
+        let largest = (0..idx.len()).fold(0, |a, b| {
+            if self.cost[idx[b]] > self.cost[idx[a]] {
+                b
+            } else {
+                a
+            }
+        });
+        let li = idx[largest];
+        if parts.iter().all(|&p| p == 1)
+            && idx.len() > k
+            && self.cost[li] >= FLOOR_SHARE * share
+            && self.info[li].elements >= k
+        {
+            parts[largest] = k as u32;
+            holder[largest] = (0..k as u32).collect();
+            for l in &mut load {
+                *l += self.cost[li] / k as f64;
+            }
+        }
+        // the regions of the largest cut body's parts (its box cut as the parts are),
+        // for placing the whole bodies near the part they lie on
+        let regions = (parts[largest] > 1)
+            .then(|| self.box_of_id(ids[largest]))
+            .flatten()
+            .map(|(lo, hi)| regions(lo, hi, k));
         for (b, &i) in idx.iter().enumerate() {
             let c = self.cost[i];
             if parts[b] > 1 {
                 continue;
             }
-            let s = (0..k).fold(0, |a, b| if load[b] < load[a] { b } else { a });
-            if load[s] + c > share * (1.0 + CUT_TOLERANCE) && self.info[i].elements >= k {
+            let least = (0..k).fold(0, |a, b| if load[b] < load[a] { b } else { a });
+            let fits = |s: usize| load[s] + c <= share * (1.0 + CUT_TOLERANCE);
+            let near = regions
+                .as_ref()
+                .zip(self.box_of_id(ids[b]))
+                .map(|(r, (lo, hi))| nearest(r, &(0.5 * (lo + hi))))
+                .filter(|&s| fits(s));
+            let s = near.unwrap_or(least);
+            if !fits(s) && self.info[i].elements >= k {
                 parts[b] = k as u32;
                 holder[b] = (0..k as u32).collect();
                 for l in &mut load {
@@ -444,5 +520,24 @@ impl<L: WorkerLink> Master<'_, L> {
         tracing::info!("step {}: split groups merged back", self.clock.step);
         self.splits.clear();
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regions_cut_the_longest_side_as_the_bisection_shares_it() {
+        let (lo, hi) = (Vec3::new(-3.0, -1.0, 0.0), Vec3::new(3.0, 1.0, 0.1));
+        let r = regions(lo, hi, 3);
+        // 3 parts: one third below the first cut (normal to x), then the rest in 2
+        assert_eq!(r.len(), 3);
+        assert_eq!((r[0].0.x, r[0].1.x), (-3.0, -1.0));
+        assert_eq!((r[1].0.x, r[1].1.x, r[2].1.x), (-1.0, 1.0, 3.0));
+        assert_eq!(nearest(&r, &Vec3::new(-2.5, 0.0, 0.5)), 0);
+        assert_eq!(nearest(&r, &Vec3::new(0.5, 5.0, 0.0)), 1);
+        assert_eq!(nearest(&r, &Vec3::new(9.0, 0.0, 0.0)), 2);
+        assert_eq!(regions(lo, hi, 1), vec![(lo, hi)]);
     }
 }

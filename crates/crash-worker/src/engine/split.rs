@@ -131,7 +131,8 @@ impl Engine {
         let setup = self.setup_of()?;
         let (contact, gravity) = (setup.contact, setup.gravity);
         let bodies = self.groups[at].bodies.clone();
-        let g = SharedGroup::new(&bodies, &parts, mine, contact, gravity)?;
+        let g = SharedGroup::new(&bodies, &parts, mine, contact, gravity)?
+            .with_holders(spec.holder.clone());
         self.groups.remove(at);
         let out = bodies.iter().cloned().map(BodyLoad::whole).collect();
         self.shared.push(Shared {
@@ -166,7 +167,8 @@ impl Engine {
             whole.push(body);
         }
         let setup = self.setup_of()?;
-        let g = SharedGroup::new(&whole, &parts, mine, setup.contact, setup.gravity)?;
+        let g = SharedGroup::new(&whole, &parts, mine, setup.contact, setup.gravity)?
+            .with_holders(spec.holder.clone());
         self.shared.push(Shared {
             g,
             home: false,
