@@ -11,10 +11,13 @@
 //! or copy, no history node is asked for (their figures are not merged yet) and the
 //! contact pass is the node pass (the segment pass does not run on parts). Each
 //! body whose cost exceeds the group's cost over the workers is cut into one part per
-//! live worker (part q on slot q); the smaller bodies stay whole, each on the least
-//! loaded slot so far, unless that would load the slot more than 5 % above the share:
-//! then they are cut too. Slot 0 is the group's worker (its *home*): it answers for the
-//! bodies (frames, states) from the whole bodies it assembles.
+//! live worker (part q on slot q); when none is, a group's largest body carrying at
+//! least half the share (a floor under many bodies) is cut so. The smaller bodies stay
+//! whole, each on the slot of the cut largest body's region it lies on (else the least
+//! loaded slot so far), unless that would load the slot more than 5 % above the share:
+//! then the least loaded slot, or they are cut too. Slot 0 is the group's worker (its
+//! *home*): it answers for the bodies (frames, states) from the whole bodies it
+//! assembles.
 
 use super::Master;
 use crate::error::MasterError;
