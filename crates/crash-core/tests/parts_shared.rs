@@ -211,7 +211,8 @@ fn run_on(slot_of: &[u32]) {
     );
     // between view builds a part sends its export nodes only (halo and view nodes):
     // here, with elements of 12-17 mm against a view reach of 7 mm, most of them
-    // (printed: 66 % for 2 holders, 86 % for 3, 70 % for 3 parts on 2 holders); the showcase's sphere parts send ~10 %
+    // (printed: 66 % for 2 holders, 86 % for 3, 70 % for 3 parts on 2 holders); the
+    // showcase's sphere parts send ~10 %
     let (sent, owned) = SENT.with(|c| c.get());
     let builds = holders[0].split.builds;
     println!(

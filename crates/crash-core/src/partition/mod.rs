@@ -104,6 +104,12 @@ pub fn bisect(points: &[Vec3], weight: &[f64], k: usize) -> Result<Partition, St
     Ok(Partition { parts: k, part_of })
 }
 
+/// The axis of the longest side of a box of extent `ext`, ties to the lower axis (the
+/// axis each cut of `bisect` is normal to).
+pub fn longest_axis(ext: &Vec3) -> usize {
+    (1..3).fold(0, |a, d| if ext[d] > ext[a] { d } else { a })
+}
+
 /// Assign `ids` to parts `first..first + k`.
 fn cut(points: &[Vec3], weight: &[f64], ids: &mut [usize], first: u32, k: usize, out: &mut [u32]) {
     if k == 1 {
@@ -117,9 +123,7 @@ fn cut(points: &[Vec3], weight: &[f64], ids: &mut [usize], first: u32, k: usize,
         lo = lo.inf(&points[e]);
         hi = hi.sup(&points[e]);
     }
-    // longest side; ties go to the lower axis
-    let ext = hi - lo;
-    let axis = (1..3).fold(0, |a, d| if ext[d] > ext[a] { d } else { a });
+    let axis = longest_axis(&(hi - lo));
     ids.sort_unstable_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
     let kl = k / 2;
     let total: f64 = ids.iter().map(|&e| weight[e]).sum();

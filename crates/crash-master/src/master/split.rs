@@ -23,7 +23,7 @@ use super::Master;
 use crate::error::MasterError;
 use crate::input::SplitMode;
 use crash_core::contact::ContactPass;
-use crash_core::partition::{merge_report, partition_body, PartState, SplitFigures};
+use crash_core::partition::{longest_axis, merge_report, partition_body, PartState, SplitFigures};
 use crash_core::{BodyReport, Vec3};
 use crash_io::PartCells;
 use crash_link::{BodyLoad, Command, Reply, SplitSpec, StepReport, WorkerLink};
@@ -47,7 +47,7 @@ fn regions(lo: Vec3, hi: Vec3, k: usize) -> Vec<(Vec3, Vec3)> {
         return vec![(lo, hi)];
     }
     let ext = hi - lo;
-    let axis = (1..3).fold(0, |a, d| if ext[d] > ext[a] { d } else { a });
+    let axis = longest_axis(&ext);
     let kl = k / 2;
     let (mut mid_hi, mut mid_lo) = (hi, lo);
     mid_hi[axis] = lo[axis] + ext[axis] * kl as f64 / k as f64;
