@@ -2,20 +2,23 @@
 //! bodies, each split into parts (`Split`), steps bit-identically to the whole group,
 //! contact included.
 //!
-//! Each part evaluates every hit that touches one of its owned nodes, as the slave or as
-//! a segment corner, on a *contact view*: a sub-body of every contact body of the group
-//! (its own included) holding the nodes and segments within reach of the part, plus
-//! one ring of segments around them so that every nodal normal a hit reads sums all of
-//! its segments. The view keeps the whole bodies' node and element order and masses, so
+//! The parts of one holder (a worker; each part alone without a holder table) evaluate
+//! every hit that touches one of their owned nodes, as the slave or as a segment
+//! corner, on one *contact view*: a sub-body of every contact body of the group holding
+//! the nodes and segments within reach of one of the holder's parts, plus one ring of
+//! segments around them so that every nodal normal a hit reads sums all of its
+//! segments. The view keeps the whole bodies' node and element order and masses, so
 //! the contact stage run on it (`contact_forces_given`) finds, for each node within
 //! reach, the same closest segment and force, and adds the pushes in the same order
-//! (sorted pairs, first pass then second, node order). The part keeps the sums of its
-//! owned nodes and ignores the rest: a hit on a cut is computed by both parts.
+//! (sorted pairs, first pass then second, node order). Each part keeps the sums of its
+//! owned nodes and ignores the rest: a hit on a cut between holders is computed by both.
+//! One view per holder rather than per part: a sphere whole on the holder of the floor
+//! part under it is one contact stage with it, not two that both compute their pair.
 //!
 //! Reach: a hit needs its slave within c = (t_a + t_b)/2 of its segment. With G = t_max
 //! plus twice the skin (c <= t_max; each of two nodes moves at most `skin` between view
 //! builds),
-//! the view's slaves are the nodes within G of the node box of one of the part's
+//! the view's slaves are the nodes within G of the node box of one of its parts'
 //! elements (every node that can hit a segment touching an owned node, and the owned
 //! nodes), its segments those whose node box comes within 2G of one (every segment
 //! within c of such a slave, so the closest-segment choice is the whole body's). Then the
@@ -28,6 +31,8 @@
 //! reduction, here over the gathered velocities) are computed once per step for all
 //! parts, as the whole group's stage computes them.
 
+use super::view::in_whole;
+pub use super::view::{View, ViewRule};
 use super::{partition_body, Split};
 use crate::body::Body;
 use crate::clock::Clock;
@@ -35,12 +40,10 @@ use crate::contact::stage::pairs_of;
 use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, has_reference};
 use crate::contact::surface::Surface;
 use crate::contact::sweep::BodySpeed;
-use crate::contact::{body_bounds, check_moves, ContactConfig, ContactState, PenaltyKind};
+use crate::contact::{body_bounds, check_moves, ContactConfig, PenaltyKind};
 use crate::contact::{ContactPass, SpeedRule};
 use crate::error::{CoreError, Fault};
 use crate::Vec3;
-use rstar::primitives::Rectangle;
-use rstar::{RTree, AABB};
 use std::collections::BTreeMap;
 
 /// The closing-speed step of each candidate pair of different bodies (by body ids;
@@ -57,44 +60,6 @@ pub enum SplitError {
     View(#[from] CoreError),
 }
 
-/// What a contact view holds, for the tests that show each piece is needed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ViewRule {
-    /// One ring of segments around the view's nodes (complete nodal normals).
-    pub ring: bool,
-    /// Node masses copied from the whole bodies (else the view's own lumped masses,
-    /// partial where a node's elements are not all in the view).
-    pub whole_masses: bool,
-}
-
-impl Default for ViewRule {
-    fn default() -> Self {
-        Self {
-            ring: true,
-            whole_masses: true,
-        }
-    }
-}
-
-/// The contact view of one part.
-#[derive(Debug, Clone)]
-pub struct View {
-    /// One sub-body per contact body with nodes here, in the group's order.
-    pub bodies: Vec<Body>,
-    /// The group body of each view body.
-    pub index: Vec<usize>,
-    /// View node -> node of the whole body, per view body.
-    pub node: Vec<Vec<u32>>,
-    /// View element -> element of the whole body, per view body.
-    pub element: Vec<Vec<u32>>,
-    /// View node -> (part owning it, its index there), per view body (the fill).
-    from: Vec<Vec<(u32, u32)>>,
-    /// The part's own body among `bodies`, and the view index of each owned node.
-    own: usize,
-    owned_at: Vec<u32>,
-    state: ContactState,
-}
-
 /// A group of bodies, each split into parts, with contact between all of them.
 #[derive(Debug, Clone)]
 pub struct GroupSplit {
@@ -107,8 +72,8 @@ pub struct GroupSplit {
     pub(super) whole: Vec<Body>,
     /// Whole-body surfaces (element-form stable step constants), per contact body.
     surfaces: Vec<Option<Surface>>,
-    /// Views per body per part, and the positions they were built at.
-    pub views: Vec<Vec<View>>,
+    /// One view per holder (`view_parts`), and the positions they were built at.
+    pub views: Vec<View>,
     pub(super) reference: Vec<Vec<Vec3>>,
     /// Node motion allowed between view builds [m].
     pub skin: f64,
@@ -121,7 +86,8 @@ pub struct GroupSplit {
     /// group derives from them what each part sends the other holders.
     pub(super) all_lists: bool,
     /// The holder of each part (`holder[i][q]`; empty: every part its own), so that
-    /// only what another holder reads crosses the wire (`export::exports`).
+    /// a holder's parts share one contact view and only what another holder reads
+    /// crosses the wire (`export::exports`). Set before the first view build.
     pub holder: Vec<Vec<u32>>,
 }
 
@@ -353,24 +319,26 @@ impl GroupSplit {
         if rebuild {
             self.build_views()?;
         }
-        for (i, views) in self.views.iter_mut().enumerate() {
-            for (q, view) in views.iter_mut().enumerate() {
-                if !self.mine[i][q] {
-                    continue;
+        for view in self.views.iter_mut() {
+            if !view.parts.iter().any(|&(i, q)| self.mine[i][q]) {
+                continue;
+            }
+            for (vb, (&j, fill)) in view
+                .bodies
+                .iter_mut()
+                .zip(view.index.iter().zip(&view.fill))
+            {
+                // x and v (all the contact stage reads of a node) from the parts
+                // owning the nodes (what a shared group imports)
+                let (s, parts) = (&mut vb.state, &self.splits[j].parts);
+                for r in fill {
+                    let w = &parts[r.part as usize].body.state;
+                    let (a, b, n) = (r.view as usize, r.local as usize, r.len as usize);
+                    s.x[a..a + n].copy_from_slice(&w.x[b..b + n]);
+                    s.v[a..a + n].copy_from_slice(&w.v[b..b + n]);
                 }
-                for (vb, (&j, from)) in view
-                    .bodies
-                    .iter_mut()
-                    .zip(view.index.iter().zip(&view.from))
-                {
-                    // x and v (all the contact stage reads of a node) from the parts
-                    // owning the nodes (what a shared group imports)
-                    let (s, parts) = (&mut vb.state, &self.splits[j].parts);
-                    for (k, &(oq, ok)) in from.iter().enumerate() {
-                        let (w, ok) = (&parts[oq as usize].body.state, ok as usize);
-                        (s.x[k], s.v[k]) = (w.x[ok], w.v[ok]);
-                    }
-                }
+            }
+            if !view.bodies.is_empty() {
                 let edt: Vec<f64> = view.index.iter().map(|&j| element_dt[j]).collect();
                 let vbounds = body_bounds(&view.bodies);
                 contact_forces_given(
@@ -384,15 +352,20 @@ impl GroupSplit {
                     Some(closing),
                 )
                 .map_err(|f| in_whole(f, view))?;
+            }
+            for (&(i, q), at) in view.parts.iter().zip(&view.owned_at) {
+                if !self.mine[i][q] {
+                    continue;
+                }
                 let part = &mut self.splits[i].parts[q];
                 let fc = &mut part.body.state.f_contact;
                 fc.clear();
-                if !part.body.def.contact {
+                let Some((own, owned_at)) = at else {
                     continue;
-                }
+                };
                 fc.resize(part.node.len(), Vec3::zeros());
-                let own = &view.bodies[view.own].state.f_contact;
-                for (k, &at) in view.owned_at.iter().enumerate() {
+                let own = &view.bodies[*own].state.f_contact;
+                for (k, &at) in owned_at.iter().enumerate() {
                     fc[k] = own[at as usize];
                 }
             }
@@ -411,99 +384,12 @@ impl GroupSplit {
         })
     }
 
-    /// Build the contact view of every part at the current (gathered) positions.
-    fn build_views(&mut self) -> Result<(), CoreError> {
-        let tmax = self
-            .whole
-            .iter()
-            .filter(|b| b.def.contact)
-            .map(|b| b.def.section.thickness)
-            .fold(0.0, f64::max);
-        let g = tmax + 2.0 * self.skin;
-        let mut views = Vec::with_capacity(self.splits.len());
-        for (i, s) in self.splits.iter().enumerate() {
-            let mut vs = Vec::with_capacity(s.parts.len());
-            for (q, p) in s.parts.iter().enumerate() {
-                let mut view = View {
-                    bodies: Vec::new(),
-                    index: Vec::new(),
-                    node: Vec::new(),
-                    element: Vec::new(),
-                    from: Vec::new(),
-                    own: 0,
-                    owned_at: Vec::new(),
-                    state: ContactState::default(),
-                };
-                let mine = self.mine[i][q];
-                if !mine && !self.all_lists {
-                    // another worker's part: its view is built there
-                    vs.push(view);
-                    continue;
-                }
-                let boxes = element_boxes(&self.whole[i], &p.element);
-                for (j, b) in self.whole.iter().enumerate() {
-                    if !b.def.contact {
-                        continue;
-                    }
-                    let (node, element) = select(b, &boxes, g, self.rule.ring);
-                    if node.is_empty() {
-                        continue;
-                    }
-                    if !mine {
-                        // its node lists only (what it imports)
-                        view.index.push(j);
-                        view.node.push(node);
-                        view.element.push(element);
-                        continue;
-                    }
-                    let mut vb = super::parts::sub_body(b, &node, &element, node.len())?;
-                    if !self.rule.whole_masses {
-                        let m = crate::mesh::Mesh {
-                            nodes: vb.def.x0.clone(),
-                            tris: vb.def.tris.iter().map(|e| e.nodes).collect(),
-                            quads: vb.def.quads.iter().map(|e| e.nodes).collect(),
-                        };
-                        let own = Body::new(b.def.id, &b.def.name, &m, b.def.section, b.def.stab)?;
-                        vb.def_mut().mass = own.def.mass.clone();
-                    }
-                    if j == i {
-                        view.own = view.bodies.len();
-                        view.owned_at = p.node[..p.owned]
-                            .iter()
-                            .map(|n| node.binary_search(n).map(|k| k as u32))
-                            .collect::<Result<_, _>>()
-                            .map_err(|_| CoreError::Other {
-                                body: b.def.name.clone(),
-                                what: "an owned node is not in its part's contact view".into(),
-                            })?;
-                    }
-                    view.bodies.push(vb);
-                    view.from.push(
-                        node.iter()
-                            .map(|&n| self.splits[j].owner[n as usize])
-                            .collect(),
-                    );
-                    view.index.push(j);
-                    view.node.push(node);
-                    view.element.push(element);
-                }
-                vs.push(view);
-            }
-            views.push(vs);
-        }
-        self.views = views;
-        self.reference = self.whole.iter().map(|b| b.state.x.clone()).collect();
-        self.builds += 1;
-        Ok(())
-    }
-
     /// Nodes in the contact views summed over the parts (every body's), and the parts'
     /// owned nodes.
     pub fn view_nodes(&self) -> (usize, usize) {
         let nodes = self
             .views
             .iter()
-            .flatten()
             .map(|v| v.node.iter().map(Vec::len).sum::<usize>())
             .sum();
         let owned = self.splits.iter().map(|s| s.node_counts().0).sum();
@@ -515,7 +401,6 @@ impl GroupSplit {
     pub fn pushes(&self) -> usize {
         self.views
             .iter()
-            .flatten()
             .map(|v| {
                 v.state
                     .stats()
@@ -525,113 +410,4 @@ impl GroupSplit {
             })
             .sum()
     }
-}
-
-/// Node boxes of the elements `element` of `b` at its current positions, in an R-tree.
-fn element_boxes(b: &Body, element: &[u32]) -> RTree<Rectangle<[f64; 3]>> {
-    let boxes = element
-        .iter()
-        .map(|&e| {
-            let (lo, hi) = node_box(b, e as usize);
-            Rectangle::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
-        })
-        .collect();
-    RTree::bulk_load(boxes)
-}
-
-/// Box of element e's nodes (triangles then quads) at the current positions.
-fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
-    let d = &b.def;
-    let nt = d.tris.len();
-    let ns: &[u32] = if e < nt {
-        &d.tris[e].nodes
-    } else {
-        &d.quads[e - nt].nodes
-    };
-    ns.iter().fold(crate::mesh::bounds(&[]), |(lo, hi), &n| {
-        let p = b.state.x[n as usize];
-        (lo.inf(&p), hi.sup(&p))
-    })
-}
-
-/// Does the box (lo, hi) grown by r meet one of the part's element boxes?
-fn near(part: &RTree<Rectangle<[f64; 3]>>, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
-    let q = AABB::from_corners(
-        [lo.x - r, lo.y - r, lo.z - r],
-        [hi.x + r, hi.y + r, hi.z + r],
-    );
-    part.locate_in_envelope_intersecting(&q).next().is_some()
-}
-
-/// The nodes and elements (whole-body indices, sorted) of body `b` in the contact view
-/// of a part whose element boxes are `part`: the slaves within g of an element box of
-/// the part, the segments whose node box comes within 2g of one, and (`ring`) every
-/// segment at one of their nodes.
-fn select(b: &Body, part: &RTree<Rectangle<[f64; 3]>>, g: f64, ring: bool) -> (Vec<u32>, Vec<u32>) {
-    let d = &b.def;
-    let x = &b.state.x;
-    let nt = d.tris.len();
-    let nodes_of = |e: usize| -> &[u32] {
-        if e < nt {
-            &d.tris[e].nodes
-        } else {
-            &d.quads[e - nt].nodes
-        }
-    };
-    let mut keep: Vec<bool> = x.iter().map(|p| near(part, (*p, *p), g)).collect();
-    let mut take: Vec<bool> = (0..d.element_count())
-        .map(|e| near(part, node_box(b, e), 2.0 * g))
-        .collect();
-    // every segment at a slave comes within 2g (it holds the slave): taken above
-    for e in 0..take.len() {
-        if take[e] {
-            for &n in nodes_of(e) {
-                keep[n as usize] = true;
-            }
-        }
-    }
-    // the ring: every segment at a node of the view, so that each normal read sums all
-    // of its node's segments (the slaves' segments are taken already: their boxes hold
-    // the slave, within g of the part's box)
-    if ring {
-        let core = keep.clone();
-        for (e, t) in take.iter_mut().enumerate() {
-            if nodes_of(e).iter().any(|&n| core[n as usize]) {
-                *t = true;
-            }
-        }
-        for e in 0..take.len() {
-            if take[e] {
-                for &n in nodes_of(e) {
-                    keep[n as usize] = true;
-                }
-            }
-        }
-    }
-    let node = (0..x.len() as u32).filter(|&n| keep[n as usize]).collect();
-    let element = (0..take.len() as u32)
-        .filter(|&e| take[e as usize])
-        .collect();
-    (node, element)
-}
-
-/// A fault found on a view, with the whole body's node and segment numbers.
-fn in_whole(mut f: Fault, view: &View) -> Fault {
-    if let Fault::PassThrough {
-        body,
-        node,
-        other,
-        segment,
-        ..
-    } = &mut f
-    {
-        let at = |id: u32| view.bodies.iter().position(|b| b.def.id == id);
-        if let Some(k) = at(*body) {
-            *node = view.node[k][*node] as usize;
-        }
-        if let Some(k) = at(*other) {
-            *segment = view.element[k][*segment] as usize;
-        }
-    }
-    f
 }

@@ -31,9 +31,9 @@ pub struct PartState {
 }
 
 /// Per body and part: the owned nodes (local indices) that a part on another holder
-/// reads, as a halo node or a node of its contact view (the views of every part, built
-/// or not). A part on the same holder reads them in place (a floor's part under the
-/// spheres that holder computes).
+/// reads, as a halo node or a node of that holder's contact view (the views of every
+/// holder, built or not). A part on the same holder reads them in place (a floor's
+/// part under the spheres that holder computes).
 pub(super) fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
     // without a holder table every part is its own holder
     let holder = |i: usize, q: usize| split.holder.get(i).and_then(|h| h.get(q));
@@ -53,15 +53,15 @@ pub(super) fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
                     needed[i][n as usize] = true;
                 }
             }
-            let Some(view) = split.views.get(i).and_then(|v| v.get(q)) else {
-                continue;
-            };
-            for (&j, nodes) in view.index.iter().zip(&view.node) {
-                for &n in nodes {
-                    let r = split.splits[j].owner[n as usize].0 as usize;
-                    if (j != i || r != q) && apart(i, q, j, r) {
-                        needed[j][n as usize] = true;
-                    }
+        }
+    }
+    // what a holder's view reads of the parts on other holders
+    for view in &split.views {
+        for (&j, nodes) in view.index.iter().zip(&view.node) {
+            for &n in nodes {
+                let r = split.splits[j].owner[n as usize].0 as usize;
+                if !view.gives(j, r) {
+                    needed[j][n as usize] = true;
                 }
             }
         }

@@ -12,11 +12,13 @@ mod export;
 mod parts;
 mod report;
 mod shared;
+mod view;
 
 pub use closing::{PairSpeed, SplitFigures};
-pub use contact::{GroupSplit, SplitError, View, ViewRule};
+pub use contact::{GroupSplit, SplitError};
 pub use parts::{Part, Split};
 pub use shared::{merge_report, PartDt, PartState, SharedGroup};
+pub use view::{View, ViewRule};
 
 use crate::body::BodyDef;
 use crate::error::CoreError;

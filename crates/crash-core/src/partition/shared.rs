@@ -115,6 +115,22 @@ pub struct SharedGroup {
     trigger: f64,
     /// Per body: the whole body's mass and its momentum scale (`Momentum::scale`).
     mass: Vec<(f64, f64)>,
+    /// Per body and part (own parts): a bound on the distance of an owned node from
+    /// where the views were built (the last exact distance plus the largest moves
+    /// since), and the view build it is for (`GroupSplit::builds`).
+    far_bound: Vec<Vec<f64>>,
+    bound_build: u64,
+}
+
+/// The fraction of the view-rebuild trigger below which a part sends its bound on
+/// the distance from the views' positions rather than the distance: the bound's
+/// rounding (a sum of a few hundred moves) is far below the margin left.
+const NEAR: f64 = 1.0 - 1e-6;
+
+/// The bound is not safely below the trigger (or is NaN): the distance is needed.
+fn near_trigger(bound: f64, trigger: f64) -> bool {
+    use std::cmp::Ordering::{Equal, Less};
+    !matches!(bound.partial_cmp(&(NEAR * trigger)), Some(Less | Equal))
 }
 
 /// A contact pass left for later: the step's length and number (its closing-speed
@@ -182,6 +198,8 @@ impl SharedGroup {
                     (m, Momentum::scale(m))
                 })
                 .collect(),
+            far_bound: parts.iter().map(|&k| vec![0.0; k]).collect(),
+            bound_build: 0,
         })
     }
 
@@ -210,6 +228,9 @@ impl SharedGroup {
         let sc = clock.step_of(h);
         let gravity = self.split.gravity;
         let full = self.due;
+        // the views were built since the last integration: the bounds start again
+        let fresh = self.bound_build != self.split.builds;
+        self.bound_build = self.split.builds;
         let mut out = Vec::new();
         for (i, s) in self.split.splits.iter_mut().enumerate() {
             let contact = self.split.whole[i].def.contact;
@@ -231,15 +252,29 @@ impl SharedGroup {
                     .map_err(|f| node_in_whole(f, &p.node))?;
                 let st = &p.body.state;
                 let o = p.owned;
-                let (lo, hi) = crate::mesh::bounds(&st.x[..o]);
+                // the integration's box is the owned nodes' (it skips the halo)
+                let (lo, hi) = (n.lo, n.hi);
+                // the largest distance from the views' positions only when the bound
+                // (the last one plus this step's largest move: the triangle
+                // inequality) comes near the trigger; below it, the bound is
+                // sent: the rule `far > trigger` reads the same either way
+                let bound = if fresh {
+                    n.max_move
+                } else {
+                    self.far_bound[i][q] + n.max_move
+                };
                 let far = match reference {
-                    Some(r) if contact => p.node[..o]
+                    Some(r) if contact && near_trigger(bound, self.trigger) => p.node[..o]
                         .iter()
                         .zip(&st.x[..o])
-                        .map(|(&g, x)| (x - r[g as usize]).norm())
-                        .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a }),
+                        .map(|(&g, x)| (x - r[g as usize]).norm_squared())
+                        .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a })
+                        // sqrt is monotone and correctly rounded: the largest distance
+                        .sqrt(),
+                    Some(_) if contact => bound,
                     _ => 0.0,
                 };
+                self.far_bound[i][q] = far;
                 let ex = &self.export[i][q];
                 let pick = |a: &[Vec3], all: bool| -> Vec<Vec3> {
                     if all {

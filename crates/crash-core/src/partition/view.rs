@@ -1,0 +1,377 @@
+//! Contact views of a split group (`GroupSplit`): what each holder's view holds,
+//! how it is selected and filled (the reach rule is in `contact`'s module text).
+
+use super::{GroupSplit, Split};
+use crate::body::Body;
+use crate::contact::ContactState;
+use crate::error::{CoreError, Fault};
+use crate::Vec3;
+use rstar::primitives::Rectangle;
+use rstar::{RTree, AABB};
+use std::collections::BTreeMap;
+
+/// What a contact view holds, for the tests that show each piece is needed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ViewRule {
+    /// One ring of segments around the view's nodes (complete nodal normals).
+    pub ring: bool,
+    /// Node masses copied from the whole bodies (else the view's own lumped masses,
+    /// partial where a node's elements are not all in the view).
+    pub whole_masses: bool,
+}
+
+impl Default for ViewRule {
+    fn default() -> Self {
+        Self {
+            ring: true,
+            whole_masses: true,
+        }
+    }
+}
+
+/// The contact view of one holder: of its parts, or of one part where every part is
+/// its own holder (no holder table).
+#[derive(Debug, Clone)]
+pub struct View {
+    /// One sub-body per contact body with nodes here, in the group's order.
+    pub bodies: Vec<Body>,
+    /// The group body of each view body.
+    pub index: Vec<usize>,
+    /// View node -> node of the whole body, per view body.
+    pub node: Vec<Vec<u32>>,
+    /// View element -> element of the whole body, per view body.
+    pub element: Vec<Vec<u32>>,
+    /// Where each view body's nodes come from (the fill), per view body: runs of view
+    /// nodes owned by one part at consecutive indices there.
+    pub(super) fill: Vec<Vec<Run>>,
+    /// The parts whose contact forces this view gives, as (body, part), in order.
+    pub parts: Vec<(usize, usize)>,
+    /// Per part of `parts` of a contact body: its body among `bodies` and the view
+    /// index of each owned node.
+    pub(super) owned_at: Vec<Option<OwnedAt>>,
+    pub(super) state: ContactState,
+}
+
+impl View {
+    fn empty(parts: Vec<(usize, usize)>) -> Self {
+        Self {
+            bodies: Vec::new(),
+            index: Vec::new(),
+            node: Vec::new(),
+            element: Vec::new(),
+            fill: Vec::new(),
+            parts,
+            owned_at: Vec::new(),
+            state: ContactState::default(),
+        }
+    }
+
+    /// Does this view give the forces of part q of body i (a part on its holder)?
+    pub fn gives(&self, i: usize, q: usize) -> bool {
+        self.parts.binary_search(&(i, q)).is_ok()
+    }
+}
+
+impl GroupSplit {
+    /// The parts of each contact view, in order: the parts of each holder (by holder
+    /// number), or each part alone without a holder table (or one that does not fit).
+    pub fn view_parts(&self) -> Vec<Vec<(usize, usize)>> {
+        let fits = self.holder.len() == self.splits.len()
+            && self
+                .holder
+                .iter()
+                .zip(&self.splits)
+                .all(|(h, s)| h.len() == s.parts.len());
+        let each = self
+            .splits
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| (0..s.parts.len()).map(move |q| (i, q)));
+        if !fits {
+            return each.map(|p| vec![p]).collect();
+        }
+        let mut by: BTreeMap<u32, Vec<(usize, usize)>> = BTreeMap::new();
+        for (i, q) in each {
+            by.entry(self.holder[i][q]).or_default().push((i, q));
+        }
+        by.into_values().collect()
+    }
+
+    /// Build the contact view of every holder at the current (gathered) positions.
+    /// A holder's view is the union of its parts' views (the nodes and segments within
+    /// reach of one of their elements, and the ring): every hit on one of its owned
+    /// nodes is computed once, on that view, with the whole group's bits.
+    pub(super) fn build_views(&mut self) -> Result<(), CoreError> {
+        let tmax = self
+            .whole
+            .iter()
+            .filter(|b| b.def.contact)
+            .map(|b| b.def.section.thickness)
+            .fold(0.0, f64::max);
+        let g = tmax + 2.0 * self.skin;
+        let mut views = Vec::new();
+        for parts in self.view_parts() {
+            let mine = parts.iter().any(|&(i, q)| self.mine[i][q]);
+            let mut view = View::empty(parts);
+            if !mine && !self.all_lists {
+                // another worker's parts: their view is built there
+                views.push(view);
+                continue;
+            }
+            // only the parts of contact bodies read contact forces
+            let boxes = element_boxes(view.parts.iter().filter_map(|&(i, q)| {
+                let b = &self.whole[i];
+                b.def
+                    .contact
+                    .then(|| (b, &self.splits[i].parts[q].element[..]))
+            }));
+            for (j, b) in self.whole.iter().enumerate() {
+                if !b.def.contact {
+                    continue;
+                }
+                let (node, element) = select(b, &boxes, g, self.rule.ring);
+                if node.is_empty() {
+                    continue;
+                }
+                if !mine {
+                    // its node lists only (what it imports)
+                    view.index.push(j);
+                    view.node.push(node);
+                    view.element.push(element);
+                    continue;
+                }
+                let mut vb = super::parts::sub_body(b, &node, &element, node.len())?;
+                if !self.rule.whole_masses {
+                    let m = crate::mesh::Mesh {
+                        nodes: vb.def.x0.clone(),
+                        tris: vb.def.tris.iter().map(|e| e.nodes).collect(),
+                        quads: vb.def.quads.iter().map(|e| e.nodes).collect(),
+                    };
+                    let own = Body::new(b.def.id, &b.def.name, &m, b.def.section, b.def.stab)?;
+                    vb.def_mut().mass = own.def.mass.clone();
+                }
+                view.bodies.push(vb);
+                view.fill
+                    .push(runs(node.iter().map(|&n| self.splits[j].owner[n as usize])));
+                view.index.push(j);
+                view.node.push(node);
+                view.element.push(element);
+            }
+            if mine {
+                view.owned_at = owned_at(&view, &self.splits, &self.whole)?;
+            }
+            views.push(view);
+        }
+        self.views = views;
+        self.reference = self.whole.iter().map(|b| b.state.x.clone()).collect();
+        self.builds += 1;
+        Ok(())
+    }
+}
+
+/// View nodes `view..view + len` owned by part `part`, at `local..local + len` there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Run {
+    pub(super) part: u32,
+    pub(super) view: u32,
+    pub(super) local: u32,
+    pub(super) len: u32,
+}
+
+/// The runs of a view body whose node k is owned by `owner[k]` = (part, local index).
+fn runs(owner: impl Iterator<Item = (u32, u32)>) -> Vec<Run> {
+    let mut out: Vec<Run> = Vec::new();
+    for (k, (part, local)) in owner.enumerate() {
+        let k = k as u32;
+        match out.last_mut() {
+            Some(r) if r.part == part && r.view + r.len == k && r.local + r.len == local => {
+                r.len += 1
+            }
+            _ => out.push(Run {
+                part,
+                view: k,
+                local,
+                len: 1,
+            }),
+        }
+    }
+    out
+}
+
+/// A part's body among its view's bodies, and the view index of each owned node.
+pub(super) type OwnedAt = (usize, Vec<u32>);
+
+/// Per part of a view (of a contact body): its body among the view's bodies and the
+/// view index of each of its owned nodes.
+fn owned_at(
+    view: &View,
+    splits: &[Split],
+    whole: &[Body],
+) -> Result<Vec<Option<OwnedAt>>, CoreError> {
+    view.parts
+        .iter()
+        .map(|&(i, q)| {
+            if !whole[i].def.contact {
+                return Ok(None);
+            }
+            let missing = || CoreError::Other {
+                body: whole[i].def.name.clone(),
+                what: "an owned node is not in its part's contact view".into(),
+            };
+            let k = view
+                .index
+                .iter()
+                .position(|&j| j == i)
+                .ok_or_else(missing)?;
+            let p = &splits[i].parts[q];
+            let at = p.node[..p.owned]
+                .iter()
+                .map(|n| view.node[k].binary_search(n).map(|k| k as u32))
+                .collect::<Result<_, _>>()
+                .map_err(|_| missing())?;
+            Ok(Some((k, at)))
+        })
+        .collect()
+}
+
+/// Node boxes of the elements of some bodies (each with its element list) at their
+/// current positions, in one R-tree.
+fn element_boxes<'a>(
+    parts: impl Iterator<Item = (&'a Body, &'a [u32])>,
+) -> RTree<Rectangle<[f64; 3]>> {
+    let boxes = parts
+        .flat_map(|(b, element)| {
+            element.iter().map(move |&e| {
+                let (lo, hi) = node_box(b, e as usize);
+                Rectangle::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
+            })
+        })
+        .collect();
+    RTree::bulk_load(boxes)
+}
+
+/// Box of element e's nodes (triangles then quads) at the current positions.
+fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
+    let d = &b.def;
+    let nt = d.tris.len();
+    let ns: &[u32] = if e < nt {
+        &d.tris[e].nodes
+    } else {
+        &d.quads[e - nt].nodes
+    };
+    ns.iter().fold(crate::mesh::bounds(&[]), |(lo, hi), &n| {
+        let p = b.state.x[n as usize];
+        (lo.inf(&p), hi.sup(&p))
+    })
+}
+
+/// Does the box (lo, hi) grown by r meet one of the part's element boxes?
+fn near(part: &RTree<Rectangle<[f64; 3]>>, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
+    let q = AABB::from_corners(
+        [lo.x - r, lo.y - r, lo.z - r],
+        [hi.x + r, hi.y + r, hi.z + r],
+    );
+    part.locate_in_envelope_intersecting(&q).next().is_some()
+}
+
+/// The nodes and elements (whole-body indices, sorted) of body `b` in the contact view
+/// of a part whose element boxes are `part`: the slaves within g of an element box of
+/// the part, the segments whose node box comes within 2g of one, and (`ring`) every
+/// segment at one of their nodes.
+fn select(b: &Body, part: &RTree<Rectangle<[f64; 3]>>, g: f64, ring: bool) -> (Vec<u32>, Vec<u32>) {
+    let d = &b.def;
+    let x = &b.state.x;
+    let nt = d.tris.len();
+    let nodes_of = |e: usize| -> &[u32] {
+        if e < nt {
+            &d.tris[e].nodes
+        } else {
+            &d.quads[e - nt].nodes
+        }
+    };
+    let mut keep: Vec<bool> = x.iter().map(|p| near(part, (*p, *p), g)).collect();
+    let mut take: Vec<bool> = (0..d.element_count())
+        .map(|e| near(part, node_box(b, e), 2.0 * g))
+        .collect();
+    // every segment at a slave comes within 2g (it holds the slave): taken above
+    for e in 0..take.len() {
+        if take[e] {
+            for &n in nodes_of(e) {
+                keep[n as usize] = true;
+            }
+        }
+    }
+    // the ring: every segment at a node of the view, so that each normal read sums all
+    // of its node's segments (the slaves' segments are taken already: their boxes hold
+    // the slave, within g of the part's box)
+    if ring {
+        let core = keep.clone();
+        for (e, t) in take.iter_mut().enumerate() {
+            if nodes_of(e).iter().any(|&n| core[n as usize]) {
+                *t = true;
+            }
+        }
+        for e in 0..take.len() {
+            if take[e] {
+                for &n in nodes_of(e) {
+                    keep[n as usize] = true;
+                }
+            }
+        }
+    }
+    let node = (0..x.len() as u32).filter(|&n| keep[n as usize]).collect();
+    let element = (0..take.len() as u32)
+        .filter(|&e| take[e as usize])
+        .collect();
+    (node, element)
+}
+
+/// A fault found on a view, with the whole body's node and segment numbers.
+pub(super) fn in_whole(mut f: Fault, view: &View) -> Fault {
+    if let Fault::PassThrough {
+        body,
+        node,
+        other,
+        segment,
+        ..
+    } = &mut f
+    {
+        let at = |id: u32| view.bodies.iter().position(|b| b.def.id == id);
+        if let Some(k) = at(*body) {
+            *node = view.node[k][*node] as usize;
+        }
+        if let Some(k) = at(*other) {
+            *segment = view.element[k][*segment] as usize;
+        }
+    }
+    f
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The runs cover every view node once, each from its owner at its local index.
+    #[test]
+    fn runs_map_every_view_node_to_its_owner() {
+        let owner = [
+            (0, 5),
+            (0, 6),
+            (0, 7),
+            (1, 0),
+            (1, 1),
+            (0, 9),
+            (0, 10),
+            (1, 3),
+        ];
+        let r = runs(owner.iter().copied());
+        assert_eq!(r.len(), 4, "{r:?}");
+        let mut back = Vec::new();
+        for run in &r {
+            assert_eq!(run.view as usize, back.len(), "runs in view order, no gap");
+            back.extend((0..run.len).map(|k| (run.part, run.local + k)));
+        }
+        assert_eq!(back, owner);
+        assert!(runs(std::iter::empty()).is_empty());
+    }
+}
