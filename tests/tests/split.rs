@@ -117,6 +117,23 @@ fn groups_split_merged_back_and_split_again_keep_the_single_process_state() {
     );
 }
 
+/// Bodies that leave a split group (spheres bouncing off the floor) leave the split as
+/// it is: no merge back and cut again while every MEIM group lies within the groups
+/// the workers hold; the state is still the single-process one.
+#[test]
+fn bodies_leaving_a_split_group_keep_the_split_and_the_single_process_state() {
+    let inp = scene("scenes/bench/spheres-on-deformable-plate.toml", 1e-3);
+    let (_, reference) = driver_reference(&inp);
+    let mut sink = RecordSink::default();
+    let stats = run_local(inp, 2, &mut sink, &opts(SplitMode::Auto)).unwrap();
+    assert!(stats.splits_kept >= 1, "no group change kept the split");
+    assert_eq!(stats.splits, 1, "the split was cut again");
+    assert_eq!(
+        format!("{:016x}", stats.final_hash),
+        format!("{reference:016x}")
+    );
+}
+
 /// A physical fault found by a part (tunnelling: the largest move over the parts, its
 /// node named in the whole body) stops the run with exactly the driver's fault.
 #[test]

@@ -275,6 +275,9 @@ pub struct ClusterSummary {
     pub migrations: usize,
     /// MEIM updates that changed the groups, and the most groups at once.
     pub group_changes: u64,
+    /// Group changes that kept the split groups as they were (bodies only left them).
+    #[serde(default)]
+    pub splits_kept: u64,
     pub max_groups: usize,
     /// The groups at the end: smallest body id, member ids, worker.
     pub final_groups: Vec<GroupSummary>,

@@ -515,6 +515,7 @@ impl Sink for FileSink {
             workers: stats.workers,
             migrations: stats.migrations.len(),
             group_changes: stats.group_changes,
+            splits_kept: stats.splits_kept,
             max_groups: stats.max_groups,
             final_groups: stats
                 .final_groups

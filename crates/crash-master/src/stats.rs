@@ -103,6 +103,8 @@ pub struct RunStats {
     pub migrations: Vec<Migration>,
     /// MEIM updates that changed the groups.
     pub group_changes: u64,
+    /// Group changes that kept the split groups (`time_loop`).
+    pub splits_kept: u64,
     /// Groups split over workers (each time a split is made).
     #[serde(default)]
     pub splits: u64,

@@ -11,11 +11,20 @@ use std::collections::BTreeMap;
 
 impl<L: WorkerLink> Master<'_, L> {
     /// Who computes group `g` (its ids in MEIM order): (worker, bodies, elements). One
-    /// entry for a whole group; for a group split over workers one per holder, with the
-    /// bodies that have elements there and the elements its parts own.
+    /// entry for a whole group; for a group within a split group (the split itself, or
+    /// bodies that left it while it is kept: `time_loop`) one per holder with elements
+    /// of it, with the bodies that have elements there and the elements its parts own.
     pub(super) fn group_shares(&self, g: &[u32]) -> Vec<(usize, Vec<u32>, usize)> {
-        if let Some(s) = self.splits.iter().find(|s| s.ids() == g) {
-            let shares = s.shares();
+        if let Some(s) = self
+            .splits
+            .iter()
+            .find(|s| g.iter().all(|id| s.ids().contains(id)))
+        {
+            let shares: Vec<_> = s
+                .shares(g)
+                .into_iter()
+                .filter(|(_, ids, _)| !ids.is_empty())
+                .collect();
             if !shares.is_empty() {
                 return shares;
             }
@@ -67,6 +76,34 @@ impl<L: WorkerLink> Master<'_, L> {
             worker: self.worker_of[i]? as u32,
             group: self.meim.group(k).first().copied()?,
         })
+    }
+
+    /// Log the bodies of each split group that are out of its first body's MEIM group
+    /// (they left it; the split is kept: `time_loop`).
+    pub(super) fn log_kept_splits(&self) {
+        const SHOWN: usize = 8;
+        for s in &self.splits {
+            let Some(k) = s.ids().first().and_then(|&id| self.meim.group_of(id)) else {
+                continue;
+            };
+            let core = self.meim.group(k);
+            let out: Vec<u32> = s
+                .ids()
+                .iter()
+                .copied()
+                .filter(|id| !core.contains(id))
+                .collect();
+            let more = match out.len().saturating_sub(SHOWN) {
+                0 => String::new(),
+                n => format!(" and {n} more"),
+            };
+            tracing::info!(
+                "step {}: {}{more} out of contact with the split group of {}; the split is kept (every contact is still within the groups the workers hold)",
+                self.clock.step,
+                self.names_of(&out[..out.len().min(SHOWN)]),
+                escape_peer(self.name(s.ids()[0])),
+            );
+        }
     }
 
     fn names_of(&self, ids: &[u32]) -> String {

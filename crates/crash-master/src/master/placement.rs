@@ -10,6 +10,7 @@ use crate::stats::Migration;
 use crash_core::contact::BodyBox;
 use crash_core::{BodyReport, Vec3};
 use crash_link::{BodyLoad, Command, Reply, WorkerLink};
+use std::collections::BTreeMap;
 
 impl<L: WorkerLink> Master<'_, L> {
     /// The MEIM box of a body: its contact search box grown by the extra margin.
@@ -57,6 +58,25 @@ impl<L: WorkerLink> Master<'_, L> {
         (0..self.meim.group_count())
             .map(|k| (self.meim.group(k).to_vec(), self.meim.copies(k).to_vec()))
             .collect()
+    }
+
+    /// Every MEIM group (bodies and read-only copies) lies within one group the
+    /// workers hold: a change that only breaks groups up needs no regroup.
+    pub(super) fn layout_holds_meim(&self) -> bool {
+        let held: Vec<&GroupLayout> = self.layout.iter().flatten().collect();
+        let at: BTreeMap<u32, usize> = held
+            .iter()
+            .enumerate()
+            .flat_map(|(k, g)| g.0.iter().map(move |&id| (id, k)))
+            .collect();
+        (0..self.meim.group_count()).all(|k| {
+            let (g, copies) = (self.meim.group(k), self.meim.copies(k));
+            let Some(&h) = g.first().and_then(|id| at.get(id)) else {
+                return false;
+            };
+            g.iter().all(|id| at.get(id) == Some(&h))
+                && copies.iter().all(|c| held[h].1.contains(c))
+        })
     }
 
     /// Cost per body index under the chosen model.

@@ -97,9 +97,9 @@ impl SplitGroup {
         &self.ids
     }
 
-    /// Per holder (slot order): its worker, the bodies with elements there and how
-    /// many (empty before the cells are known).
-    pub(super) fn shares(&self) -> Vec<(usize, Vec<u32>, usize)> {
+    /// Per holder (slot order): its worker, the bodies of `g` (bodies of this group)
+    /// with elements there and how many (empty before the cells are known).
+    pub(super) fn shares(&self, g: &[u32]) -> Vec<(usize, Vec<u32>, usize)> {
         if self.cells.is_empty() {
             return Vec::new();
         }
@@ -108,7 +108,7 @@ impl SplitGroup {
             .map(|&w| {
                 let mut ids = Vec::new();
                 let mut elements = 0;
-                for (&id, c) in &self.cells {
+                for (&id, c) in self.cells.iter().filter(|(id, _)| g.contains(id)) {
                     let k = c.worker.iter().filter(|&&x| x as usize == w).count();
                     if k > 0 {
                         ids.push(id);
