@@ -4,11 +4,13 @@
 //! of such a run.
 //!
 //! The nodes are taken in chunks of `CHUNK`, each with the box of its velocities
-//! (built once per contact pass). For a query u the bound of a chunk is the norm of
-//! the largest |corner - u| per axis; a chunk whose bounds cannot beat the maxima found
-//! so far is skipped. Rounding is monotone (a larger |x - u| rounds no smaller, and so
-//! do its square, the sums and the root), so a skipped node's computed |v - u| is at
-//! most its chunk's computed bound: the maxima are those of the full scan, bit for bit.
+//! (built once per contact pass). For a query u the bound of a chunk is the squared
+//! norm of the largest |corner - u| per axis; a chunk whose bounds cannot beat the
+//! largest squares found so far is skipped. Rounding is monotone (a larger |x - u|
+//! rounds no smaller, and so do its square and the sums), so a skipped node's computed
+//! |v - u|^2 is at most its chunk's computed bound; the root of the largest square is
+//! the largest root (sqrt is monotone and correctly rounded): the maxima are those of
+//! the full scan of norms, bit for bit.
 
 use crate::Vec3;
 
@@ -42,6 +44,8 @@ impl SpeedBoxes {
     /// from): the full scan's maxima, reading only the chunks that can set them.
     pub fn max_speeds(&self, v: &[Vec3], u1: &Vec3, u2: &Vec3) -> (f64, f64) {
         debug_assert_eq!(self.boxes.len(), v.len().div_ceil(CHUNK));
+        // squares throughout, one root at the end: sqrt is monotone and correctly
+        // rounded, so the root of the largest square is the largest norm, bit for bit
         let bound = |(lo, hi): &(Vec3, Vec3), u: &Vec3| {
             let far = |l: f64, h: f64, u: f64| (l - u).abs().max((h - u).abs());
             Vec3::new(
@@ -49,7 +53,7 @@ impl SpeedBoxes {
                 far(lo.y, hi.y, u.y),
                 far(lo.z, hi.z, u.z),
             )
-            .norm()
+            .norm_squared()
         };
         let bounds: Vec<(f64, f64)> = self
             .boxes
@@ -59,8 +63,8 @@ impl SpeedBoxes {
         let (mut m1, mut m2) = (0.0f64, 0.0f64);
         let scan = |k: usize, m1: &mut f64, m2: &mut f64| {
             for x in &v[k * CHUNK..((k + 1) * CHUNK).min(v.len())] {
-                *m1 = m1.max((x - u1).norm());
-                *m2 = m2.max((x - u2).norm());
+                *m1 = m1.max((x - u1).norm_squared());
+                *m2 = m2.max((x - u2).norm_squared());
             }
         };
         // the chunks most likely to hold the maxima first, so most others are skipped
@@ -80,7 +84,7 @@ impl SpeedBoxes {
                 scan(k, &mut m1, &mut m2);
             }
         }
-        (m1, m2)
+        (m1.sqrt(), m2.sqrt())
     }
 }
 
