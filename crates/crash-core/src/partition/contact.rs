@@ -40,7 +40,7 @@ use crate::contact::stage::pairs_of;
 use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, has_reference};
 use crate::contact::surface::Surface;
 use crate::contact::sweep::BodySpeed;
-use crate::contact::{body_bounds, check_moves, ContactConfig, PenaltyKind};
+use crate::contact::{check_moves, ContactConfig, PenaltyKind};
 use crate::contact::{ContactPass, SpeedRule};
 use crate::error::{CoreError, Fault};
 use crate::Vec3;
@@ -191,25 +191,20 @@ impl GroupSplit {
         h: f64,
         step: u64,
     ) -> Result<Vec<f64>, SplitError> {
-        let (dt, closing) = self.figures(&element_dt);
+        let bounds = self.whole_bounds();
+        let (dt, closing) = self.figures_given(&element_dt, &bounds);
         let rebuild = self.views.is_empty() || self.moved_beyond_skin();
-        self.views_pass(&element_dt, &closing, h, step, rebuild)?;
+        self.views_pass(&element_dt, &closing, &bounds, h, step, rebuild)?;
         Ok(dt)
     }
 
-    /// The global figures of a step, from the whole bodies gathered from the parts:
-    /// body boxes (min/max over the parts' owned nodes), candidate pairs, the
-    /// closing-speed step of each pair (by body ids, None where they do not close) and
-    /// each body's stable step: `element_dt` limited by the contact (element-form and
-    /// closing-speed steps). None of it reads a contact force, so it is known before
-    /// the contact pass (`partition::shared` sends it with the element pass's report).
-    /// A holder of some parts passes the element steps of its parts only (infinite for
-    /// a body with no part here): a pair is skipped here only if neither body has a
-    /// part here, so every pair's limits reach the shares of the bodies it holds.
-    pub(super) fn figures(&mut self, element_dt: &[f64]) -> (Vec<f64>, Closing) {
+    /// Gather the whole bodies from the parts and give each body's node box (min/max
+    /// over its parts' owned nodes), for `figures_given` and the views' pairs. None of
+    /// the figures reads a contact force, so they are known before the contact pass
+    /// (`partition::shared` sends them with the element pass's report).
+    pub(super) fn whole_bounds(&mut self) -> Vec<(Vec3, Vec3)> {
         self.gather_whole();
-        let bounds: Vec<(Vec3, Vec3)> = self
-            .splits
+        self.splits
             .iter()
             .map(|s| {
                 s.parts
@@ -219,8 +214,7 @@ impl GroupSplit {
                         (lo.inf(&l), hi.sup(&u))
                     })
             })
-            .collect();
-        self.figures_given(element_dt, &bounds)
+            .collect()
     }
 
     /// Write every part's owned x, v, w into the whole bodies.
@@ -230,9 +224,15 @@ impl GroupSplit {
         }
     }
 
-    /// `figures` with each body's node box given (`bounds[i]`: min/max over its parts'
-    /// owned nodes) and the whole bodies' velocities current (their positions need not
-    /// be: the closing speed reads velocities and masses only).
+    /// The global figures of a step (candidate pairs, the closing-speed step of each
+    /// pair by body ids, None where they do not close, and each body's stable step:
+    /// `element_dt` limited by the contact), with each body's node box given
+    /// (`bounds[i]`: min/max over its parts' owned nodes) and the whole bodies'
+    /// velocities current (their positions need not be: the closing speed reads
+    /// velocities and masses only). A holder of some parts passes the element steps of
+    /// its parts only (infinite for a body with no part here): a pair is skipped here
+    /// only if neither body has a part here, so every pair's limits reach the shares
+    /// of the bodies it holds.
     pub(super) fn figures_given(
         &self,
         element_dt: &[f64],
@@ -305,6 +305,7 @@ impl GroupSplit {
         &mut self,
         element_dt: &[f64],
         closing: &Closing,
+        bounds: &[(Vec3, Vec3)],
         h: f64,
         step: u64,
         rebuild: bool,
@@ -340,7 +341,10 @@ impl GroupSplit {
             }
             if !view.bodies.is_empty() {
                 let edt: Vec<f64> = view.index.iter().map(|&j| element_dt[j]).collect();
-                let vbounds = body_bounds(&view.bodies);
+                // the whole bodies' boxes: the pairs are the whole group's among the
+                // view's bodies, and a view node outside a view body's box grown by
+                // the margin is outside that body's reach anyway (no box to compute)
+                let vbounds: Vec<(Vec3, Vec3)> = view.index.iter().map(|&j| bounds[j]).collect();
                 contact_forces_given(
                     &mut view.bodies,
                     &cfg,

@@ -139,6 +139,8 @@ fn near_trigger(bound: f64, trigger: f64) -> bool {
 struct Pending {
     h: f64,
     step: u64,
+    /// Each body's node box at the step's positions (min/max over all its parts).
+    bounds: Vec<(Vec3, Vec3)>,
 }
 
 impl SharedGroup {
@@ -511,7 +513,7 @@ impl SharedGroup {
                 shares.push(r);
             }
         }
-        self.pending = Some(Pending { h, step });
+        self.pending = Some(Pending { h, step, bounds });
         let figures = SplitFigures {
             dts: out.into_iter().flatten().collect(),
             pairs: speeds,
@@ -548,7 +550,7 @@ impl SharedGroup {
         }
         if self
             .split
-            .views_pass(&edt, &figures.closing(), p.h, p.step, rebuild)?
+            .views_pass(&edt, &figures.closing(), &p.bounds, p.h, p.step, rebuild)?
         {
             self.export = exports(&self.split);
         }
