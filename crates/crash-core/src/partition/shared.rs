@@ -19,10 +19,12 @@
 //!    before the whole bodies are assembled).
 //!
 //! What crosses the wire is what another part reads: each part sends x, v, w of its
-//! *export nodes* only (`SharedGroup::export`: its owned nodes in another part's halo
-//! or contact view), plus its box and its largest distance from where the views were
-//! built. Every holder derives the same export lists from the split and the views of
-//! all parts (node lists only for the parts held elsewhere) at each view build. The
+//! *export nodes* only (`SharedGroup::export`: its owned nodes in another holder's
+//! halo or contact view), plus its box and its largest distance from where the views
+//! were built (or, while that is surely below the rebuild trigger, a bound on it: the
+//! last distance plus the largest moves since). Every holder derives the same export
+//! lists from the split and the views of all holders (node lists only for the views
+//! held elsewhere) at each view build. The
 //! global figures need no whole body: the body boxes are the min/max of the parts'
 //! boxes, the view rebuild rule the max of the parts' distances, and the closing-speed
 //! step (`SpeedRule::LimitDt`) the parts' momenta on a fixed quantum (integer sums:
