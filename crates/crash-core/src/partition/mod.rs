@@ -6,6 +6,7 @@
 //! computing the hits on its owned nodes from a contact view of the whole group;
 //! `shared` (the wiring) steps such a group with its parts spread over workers.
 
+mod assemble;
 mod closing;
 mod contact;
 mod export;
