@@ -40,9 +40,16 @@ impl SpeedBoxes {
         Self { boxes }
     }
 
-    /// Largest |v - u1| and |v - u2| over `v` (the velocities these boxes were built
-    /// from): the full scan's maxima, reading only the chunks that can set them.
-    pub fn max_speeds(&self, v: &[Vec3], u1: &Vec3, u2: &Vec3) -> (f64, f64) {
+    /// Largest |v - u| over `v` (the velocities these boxes were built from): the full
+    /// scan's maximum, reading only the chunks that can set it. A body's speed relative
+    /// to its own mean is one figure for all of its pairs; the other body's mean is a
+    /// query per pair.
+    pub fn max_speed(&self, v: &[Vec3], u: &Vec3) -> f64 {
+        self.maxima(v, [u])[0]
+    }
+
+    /// Largest |v - u| over `v` for each query u (several at once share the scans).
+    fn maxima<const N: usize>(&self, v: &[Vec3], us: [&Vec3; N]) -> [f64; N] {
         debug_assert_eq!(self.boxes.len(), v.len().div_ceil(CHUNK));
         // squares throughout, one root at the end: sqrt is monotone and correctly
         // rounded, so the root of the largest square is the largest norm, bit for bit
@@ -55,36 +62,37 @@ impl SpeedBoxes {
             )
             .norm_squared()
         };
-        let bounds: Vec<(f64, f64)> = self
-            .boxes
-            .iter()
-            .map(|b| (bound(b, u1), bound(b, u2)))
-            .collect();
-        let (mut m1, mut m2) = (0.0f64, 0.0f64);
-        let scan = |k: usize, m1: &mut f64, m2: &mut f64| {
+        let bounds: Vec<[f64; N]> = self.boxes.iter().map(|b| us.map(|u| bound(b, u))).collect();
+        let mut m = [0.0f64; N];
+        let scan = |k: usize, m: &mut [f64; N]| {
             for x in &v[k * CHUNK..((k + 1) * CHUNK).min(v.len())] {
-                *m1 = m1.max((x - u1).norm_squared());
-                *m2 = m2.max((x - u2).norm_squared());
+                for (m, u) in m.iter_mut().zip(us) {
+                    *m = m.max((x - u).norm_squared());
+                }
             }
         };
-        // the chunks most likely to hold the maxima first, so most others are skipped
-        let arg = |f: fn(&(f64, f64)) -> f64| {
+        // the chunk most likely to hold each maximum first, so most others are skipped
+        let first: [Option<usize>; N] = std::array::from_fn(|q| {
             (0..bounds.len()).fold(None, |a: Option<usize>, k| match a {
-                Some(j) if f(&bounds[j]) >= f(&bounds[k]) => Some(j),
+                Some(j) if bounds[j][q] >= bounds[k][q] => Some(j),
                 _ => Some(k),
             })
-        };
-        let first = arg(|b| b.0);
-        let second = arg(|b| b.1).filter(|&k| Some(k) != first);
-        for k in [first, second].into_iter().flatten() {
-            scan(k, &mut m1, &mut m2);
-        }
-        for (k, &(b1, b2)) in bounds.iter().enumerate() {
-            if Some(k) != first && Some(k) != second && (b1 > m1 || b2 > m2) {
-                scan(k, &mut m1, &mut m2);
+        });
+        let is_first = |k: usize| first.contains(&Some(k));
+        for (q, k) in first.iter().enumerate() {
+            if let Some(k) = *k {
+                // scanned once even if it is the first of several queries
+                if !first[..q].contains(&Some(k)) {
+                    scan(k, &mut m);
+                }
             }
         }
-        (m1.sqrt(), m2.sqrt())
+        for (k, b) in bounds.iter().enumerate() {
+            if !is_first(k) && b.iter().zip(&m).any(|(b, m)| b > m) {
+                scan(k, &mut m);
+            }
+        }
+        m.map(f64::sqrt)
     }
 }
 
@@ -129,9 +137,11 @@ mod tests {
             let boxes = SpeedBoxes::of(&v);
             for u in field(20, seed + 100).chunks(2) {
                 let (u1, u2) = (u[0] * 3.0, u[1]);
-                let (a, b) = boxes.max_speeds(&v, &u1, &u2);
+                let [a, b] = boxes.maxima(&v, [&u1, &u2]);
                 let (fa, fb) = full(&v, &u1, &u2);
                 assert_eq!((a.to_bits(), b.to_bits()), (fa.to_bits(), fb.to_bits()));
+                let one = boxes.max_speed(&v, &u2);
+                assert_eq!(one.to_bits(), fb.to_bits(), "one query: the full scan's");
             }
         }
     }
@@ -140,6 +150,7 @@ mod tests {
     fn no_nodes_give_zero() {
         let boxes = SpeedBoxes::of(&[]);
         let u = Vec3::new(1.0, 2.0, 3.0);
-        assert_eq!(boxes.max_speeds(&[], &u, &u), (0.0, 0.0));
+        assert_eq!(boxes.maxima(&[], [&u, &u]), [0.0, 0.0]);
+        assert_eq!(boxes.max_speed(&[], &u), 0.0);
     }
 }

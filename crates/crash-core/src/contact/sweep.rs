@@ -106,6 +106,8 @@ pub fn mean_velocity(b: &Body) -> Vec3 {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct BodySpeed {
     pub mean: Vec3,
+    /// The largest |v - mean| over the nodes: one figure for all of the body's pairs.
+    own: f64,
     /// The distinct velocities of the nodes (one per program, and rest), if known.
     uniform: Option<Vec<Vec3>>,
     /// Otherwise the velocity boxes of the node chunks (a body in many pairs).
@@ -124,11 +126,14 @@ impl BodySpeed {
         } else {
             SpeedBoxes::default()
         };
-        Self {
+        let mut speed = Self {
             mean: mean_velocity(b),
+            own: 0.0,
             uniform,
             boxes,
-        }
+        };
+        speed.own = max_speed_rel(b, &speed, &speed.mean);
+        speed
     }
 }
 
@@ -153,26 +158,28 @@ fn program_velocities(b: &Body) -> Option<Vec<Vec3>> {
     Some(seen.into_iter().flatten().collect())
 }
 
-/// Largest |v - u1| and |v - u2| over the nodes (maxima: the same bits in any order);
-/// over the distinct velocities when they are known (the same maxima: equal velocities
-/// give equal norms, +0 and -0 alike), else through the chunks' velocity boxes.
-fn max_speeds_rel(b: &Body, speed: &BodySpeed, u1: &Vec3, u2: &Vec3) -> (f64, f64) {
+/// Largest |v - u| over the nodes (a maximum: the same bits in any order); over the
+/// distinct velocities when they are known (the same maximum: equal velocities give
+/// equal norms, +0 and -0 alike), else through the chunks' velocity boxes.
+fn max_speed_rel(b: &Body, speed: &BodySpeed, u: &Vec3) -> f64 {
     if let Some(vs) = &speed.uniform {
-        return vs.iter().fold((0.0, 0.0), |(m1, m2): (f64, f64), v| {
-            (m1.max((v - u1).norm()), m2.max((v - u2).norm()))
-        });
+        return vs.iter().fold(0.0, |m: f64, v| m.max((v - u).norm()));
     }
-    speed.boxes.max_speeds(&b.state.v, u1, u2)
+    speed.boxes.max_speed(&b.state.v, u)
 }
 
 /// The four maxima a pair's closing speed reads: the largest |v - u_a| and |v - u_b|
-/// over the nodes of `a`, then over those of `b` (u: the bodies' mean velocities).
+/// over the nodes of `a`, then over those of `b` (u: the bodies' mean velocities; each
+/// body's speed relative to its own mean is computed once, in `BodySpeed::of`).
 /// Maxima of maxima over any split of the nodes give the same bits.
 pub fn speed_maxima(a: &Body, b: &Body, sa: &BodySpeed, sb: &BodySpeed) -> [f64; 4] {
     let (ua, ub) = (sa.mean, sb.mean);
-    let (a_ua, a_ub) = max_speeds_rel(a, sa, &ua, &ub);
-    let (b_ua, b_ub) = max_speeds_rel(b, sb, &ua, &ub);
-    [a_ua, a_ub, b_ua, b_ub]
+    [
+        sa.own,
+        max_speed_rel(a, sa, &ub),
+        max_speed_rel(b, sb, &ua),
+        sb.own,
+    ]
 }
 
 /// The closing speed from the four maxima of `speed_maxima`: the smaller of the bounds

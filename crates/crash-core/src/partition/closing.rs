@@ -121,9 +121,11 @@ pub(super) fn pair_speeds(
     pairs: &[(usize, usize)],
     means: &[Vec3],
 ) -> Vec<PairSpeed> {
-    // the velocity boxes of each owned part here, once per pass (a floor's parts are in
-    // a pair with every body on it)
-    let mut boxes: BTreeMap<usize, Vec<(&[Vec3], SpeedBoxes)>> = BTreeMap::new();
+    // the velocity boxes of each owned part here, and its largest speed relative to
+    // its body's mean, once per pass (a floor's parts are in a pair with every body on
+    // it)
+    type Boxes<'a> = Vec<(&'a [Vec3], SpeedBoxes)>;
+    let mut boxes: BTreeMap<usize, (Boxes, f64)> = BTreeMap::new();
     let mut out = Vec::new();
     for &(ia, ib) in pairs {
         let here = |i: usize| split.mine[i].iter().any(|&m| m);
@@ -132,7 +134,7 @@ pub(super) fn pair_speeds(
         }
         for i in [ia, ib] {
             boxes.entry(i).or_insert_with(|| {
-                split.splits[i]
+                let b: Boxes = split.splits[i]
                     .parts
                     .iter()
                     .zip(&split.mine[i])
@@ -141,17 +143,23 @@ pub(super) fn pair_speeds(
                         let v = &p.body.state.v[..p.owned];
                         (v, SpeedBoxes::of(v))
                     })
-                    .collect()
+                    .collect();
+                let own = b
+                    .iter()
+                    .map(|(v, s)| s.max_speed(v, &means[i]))
+                    .fold(0.0, f64::max);
+                (b, own)
             });
         }
-        let (ua, ub) = (means[ia], means[ib]);
-        let over = |i: usize| {
+        let over = |i: usize, u: &Vec3| {
             boxes[&i]
+                .0
                 .iter()
-                .map(|(v, b)| b.max_speeds(v, &ua, &ub))
-                .fold((0.0, 0.0), |a: (f64, f64), b| (a.0.max(b.0), a.1.max(b.1)))
+                .map(|(v, b)| b.max_speed(v, u))
+                .fold(0.0, f64::max)
         };
-        let ((a_ua, a_ub), (b_ua, b_ub)) = (over(ia), over(ib));
+        let (a_ua, b_ub) = (boxes[&ia].1, boxes[&ib].1);
+        let (a_ub, b_ua) = (over(ia, &means[ib]), over(ib, &means[ia]));
         let (a, b) = (&split.whole[ia].def, &split.whole[ib].def);
         out.push(PairSpeed {
             a: a.id,
