@@ -78,15 +78,22 @@ impl<L: WorkerLink> Master<'_, L> {
         })
     }
 
-    /// Log the bodies of each split group that are out of its first body's MEIM group
-    /// (they left it; the split is kept: `time_loop`).
+    /// Log the bodies of each split group that are out of its largest MEIM group (they
+    /// left it; the split is kept: `time_loop`).
     pub(super) fn log_kept_splits(&self) {
         const SHOWN: usize = 8;
         for s in &self.splits {
-            let Some(k) = s.ids().first().and_then(|&id| self.meim.group_of(id)) else {
+            let mut members: BTreeMap<usize, usize> = BTreeMap::new();
+            for &id in s.ids() {
+                if let Some(k) = self.meim.group_of(id) {
+                    *members.entry(k).or_default() += 1;
+                }
+            }
+            // the most members, ties to the lowest group
+            let Some((k, _)) = members.iter().rev().max_by_key(|(_, &n)| n) else {
                 continue;
             };
-            let core = self.meim.group(k);
+            let core = self.meim.group(*k);
             let out: Vec<u32> = s
                 .ids()
                 .iter()
@@ -101,7 +108,7 @@ impl<L: WorkerLink> Master<'_, L> {
                 "step {}: {}{more} out of contact with the split group of {}; the split is kept (every contact is still within the groups the workers hold)",
                 self.clock.step,
                 self.names_of(&out[..out.len().min(SHOWN)]),
-                escape_peer(self.name(s.ids()[0])),
+                escape_peer(self.name(core.first().copied().unwrap_or(0))),
             );
         }
     }
