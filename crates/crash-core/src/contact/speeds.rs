@@ -45,15 +45,10 @@ impl SpeedBoxes {
     /// to its own mean is one figure for all of its pairs; the other body's mean is a
     /// query per pair.
     pub fn max_speed(&self, v: &[Vec3], u: &Vec3) -> f64 {
-        self.maxima(v, [u])[0]
-    }
-
-    /// Largest |v - u| over `v` for each query u (several at once share the scans).
-    fn maxima<const N: usize>(&self, v: &[Vec3], us: [&Vec3; N]) -> [f64; N] {
         debug_assert_eq!(self.boxes.len(), v.len().div_ceil(CHUNK));
         // squares throughout, one root at the end: sqrt is monotone and correctly
         // rounded, so the root of the largest square is the largest norm, bit for bit
-        let bound = |(lo, hi): &(Vec3, Vec3), u: &Vec3| {
+        let bound = |(lo, hi): &(Vec3, Vec3)| {
             let far = |l: f64, h: f64, u: f64| (l - u).abs().max((h - u).abs());
             Vec3::new(
                 far(lo.x, hi.x, u.x),
@@ -62,37 +57,24 @@ impl SpeedBoxes {
             )
             .norm_squared()
         };
-        let bounds: Vec<[f64; N]> = self.boxes.iter().map(|b| us.map(|u| bound(b, u))).collect();
-        let mut m = [0.0f64; N];
-        let scan = |k: usize, m: &mut [f64; N]| {
-            for x in &v[k * CHUNK..((k + 1) * CHUNK).min(v.len())] {
-                for (m, u) in m.iter_mut().zip(us) {
-                    *m = m.max((x - u).norm_squared());
-                }
-            }
+        let bounds: Vec<f64> = self.boxes.iter().map(bound).collect();
+        let scan = |k: usize, m: f64| {
+            v[k * CHUNK..((k + 1) * CHUNK).min(v.len())]
+                .iter()
+                .fold(m, |m, x| m.max((x - u).norm_squared()))
         };
-        // the chunk most likely to hold each maximum first, so most others are skipped
-        let first: [Option<usize>; N] = std::array::from_fn(|q| {
-            (0..bounds.len()).fold(None, |a: Option<usize>, k| match a {
-                Some(j) if bounds[j][q] >= bounds[k][q] => Some(j),
-                _ => Some(k),
-            })
+        // the chunk most likely to hold the maximum first, so most others are skipped
+        let first = (0..bounds.len()).fold(None, |a: Option<usize>, k| match a {
+            Some(j) if bounds[j] >= bounds[k] => Some(j),
+            _ => Some(k),
         });
-        let is_first = |k: usize| first.contains(&Some(k));
-        for (q, k) in first.iter().enumerate() {
-            if let Some(k) = *k {
-                // scanned once even if it is the first of several queries
-                if !first[..q].contains(&Some(k)) {
-                    scan(k, &mut m);
-                }
+        let mut m = first.map_or(0.0, |k| scan(k, 0.0));
+        for (k, &b) in bounds.iter().enumerate() {
+            if Some(k) != first && b > m {
+                m = scan(k, m);
             }
         }
-        for (k, b) in bounds.iter().enumerate() {
-            if !is_first(k) && b.iter().zip(&m).any(|(b, m)| b > m) {
-                scan(k, &mut m);
-            }
-        }
-        m.map(f64::sqrt)
+        m.sqrt()
     }
 }
 
@@ -137,11 +119,9 @@ mod tests {
             let boxes = SpeedBoxes::of(&v);
             for u in field(20, seed + 100).chunks(2) {
                 let (u1, u2) = (u[0] * 3.0, u[1]);
-                let [a, b] = boxes.maxima(&v, [&u1, &u2]);
+                let (a, b) = (boxes.max_speed(&v, &u1), boxes.max_speed(&v, &u2));
                 let (fa, fb) = full(&v, &u1, &u2);
                 assert_eq!((a.to_bits(), b.to_bits()), (fa.to_bits(), fb.to_bits()));
-                let one = boxes.max_speed(&v, &u2);
-                assert_eq!(one.to_bits(), fb.to_bits(), "one query: the full scan's");
             }
         }
     }
@@ -150,7 +130,6 @@ mod tests {
     fn no_nodes_give_zero() {
         let boxes = SpeedBoxes::of(&[]);
         let u = Vec3::new(1.0, 2.0, 3.0);
-        assert_eq!(boxes.maxima(&[], [&u, &u]), [0.0, 0.0]);
         assert_eq!(boxes.max_speed(&[], &u), 0.0);
     }
 }

@@ -35,12 +35,8 @@ pub struct PartState {
 /// holder, built or not). A part on the same holder reads them in place (a floor's
 /// part under the spheres that holder computes).
 pub(super) fn exports(split: &GroupSplit) -> Vec<Vec<Vec<u32>>> {
-    // without a holder table every part is its own holder
-    let holder = |i: usize, q: usize| split.holder.get(i).and_then(|h| h.get(q));
-    let apart = |i: usize, q: usize, j: usize, r: usize| match (holder(i, q), holder(j, r)) {
-        (Some(a), Some(b)) => a != b,
-        _ => true,
-    };
+    let holder = split.holder_keys();
+    let apart = |i: usize, q: usize, j: usize, r: usize| holder[i][q] != holder[j][r];
     let mut needed: Vec<Vec<bool>> = split
         .whole
         .iter()

@@ -76,25 +76,41 @@ impl GroupSplit {
     /// The parts of each contact view, in order: the parts of each holder (by holder
     /// number), or each part alone without a holder table (or one that does not fit).
     pub fn view_parts(&self) -> Vec<Vec<(usize, usize)>> {
+        let holder = self.holder_keys();
+        let mut by: BTreeMap<(u32, usize, usize), Vec<(usize, usize)>> = BTreeMap::new();
+        for (i, keys) in holder.iter().enumerate() {
+            for (q, &k) in keys.iter().enumerate() {
+                by.entry(k).or_default().push((i, q));
+            }
+        }
+        by.into_values().collect()
+    }
+
+    /// Who holds each part (`[i][q]`), as a key equal for parts on one holder: the
+    /// holder table's number, or each part its own key without a table (or with one
+    /// that does not fit the split). The views and the export lists both read it.
+    pub(super) fn holder_keys(&self) -> Vec<Vec<(u32, usize, usize)>> {
         let fits = self.holder.len() == self.splits.len()
             && self
                 .holder
                 .iter()
                 .zip(&self.splits)
                 .all(|(h, s)| h.len() == s.parts.len());
-        let each = self
-            .splits
+        self.splits
             .iter()
             .enumerate()
-            .flat_map(|(i, s)| (0..s.parts.len()).map(move |q| (i, q)));
-        if !fits {
-            return each.map(|p| vec![p]).collect();
-        }
-        let mut by: BTreeMap<u32, Vec<(usize, usize)>> = BTreeMap::new();
-        for (i, q) in each {
-            by.entry(self.holder[i][q]).or_default().push((i, q));
-        }
-        by.into_values().collect()
+            .map(|(i, s)| {
+                (0..s.parts.len())
+                    .map(|q| {
+                        if fits {
+                            (self.holder[i][q], 0, 0)
+                        } else {
+                            (u32::MAX, i, q)
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// Build the contact view of every holder at the current (gathered) positions.
