@@ -6,6 +6,8 @@
 
 use crate::body::{Body, BodyEnergy};
 use crate::clock::Clock;
+use crate::contact::figures::NodeFigures;
+use crate::contact::stage::Given;
 use crate::contact::{ContactConfig, ContactState, PairStats};
 use crate::error::Fault;
 use crate::forces::ForceSums;
@@ -256,11 +258,23 @@ impl Group {
     /// Contact forces at the current positions; lowers each report's stable dt where
     /// contact requires it.
     /// `h`, `step`: the step that led here (0, 0 at the start), for the crossing check.
-    fn contact_pass(&mut self, out: &mut [BodyReport], h: f64, step: u64) -> Result<(), Fault> {
+    /// `figures`: what the step's integration took of each body's nodes (empty at the
+    /// start).
+    fn contact_pass(
+        &mut self,
+        out: &mut [BodyReport],
+        h: f64,
+        step: u64,
+        figures: &[Option<NodeFigures>],
+    ) -> Result<(), Fault> {
         let dts: Vec<f64> = out.iter().map(|r| r.stable_dt).collect();
         // the reports' boxes are the bodies' node boxes at these positions
         let boxes: Vec<_> = out.iter().map(|r| (r.lo, r.hi)).collect();
-        let limit = crate::contact::contact_forces(
+        let given = Given {
+            closing: None,
+            figures,
+        };
+        let limit = crate::contact::stage::contact_forces_given(
             &mut self.bodies,
             &self.contact,
             &mut self.contact_state,
@@ -268,6 +282,7 @@ impl Group {
             &boxes,
             h,
             step,
+            given,
         )?;
         for (r, d) in out.iter_mut().zip(limit) {
             r.stable_dt = r.stable_dt.min(d);
@@ -300,7 +315,7 @@ impl Group {
                 b.probe(nodes, &v, 0.0, &mut self.probed);
             }
         }
-        self.contact_pass(&mut out, 0.0, 0)?;
+        self.contact_pass(&mut out, 0.0, 0, &[])?;
         finite_reports(&out, 0)?;
         Ok(self.owned_reports(out))
     }
@@ -330,18 +345,23 @@ impl Group {
         // are taken in body order: same bits
         let gravity = self.gravity;
         let copies = &self.copies;
+        let contact = self.contact.enabled;
         let stepped = each_body(&mut self.bodies, |b| {
             let before = b.probe_velocities(nodes_of(probes, b.def.id));
             // a copy's energies are never reported: its owner's are (kinematic.rs)
             if copies.binary_search(&b.def.id).is_ok() {
-                b.copy_step(&sc, gravity)
+                b.copy_step(&sc, gravity).map(|s| (s, None))
+            } else if contact {
+                b.integrate_with_figures(&sc, gravity)
             } else {
-                b.integrate(&sc, gravity)
+                b.integrate(&sc, gravity).map(|s| (s, None))
             }
             .map(|s| (s, before))
         });
+        let mut figures = Vec::with_capacity(self.bodies.len());
         for (b, r) in self.bodies.iter().zip(stepped) {
-            let (s, before) = r?;
+            let ((s, fig), before) = r?;
+            figures.push(fig);
             let nodes = nodes_of(probes, b.def.id);
             if !nodes.is_empty() {
                 b.probe(nodes, &before, hbar, &mut self.probed);
@@ -367,7 +387,7 @@ impl Group {
             out.push(r);
         }
         let t2 = Instant::now();
-        self.contact_pass(&mut out, h, step)?;
+        self.contact_pass(&mut out, h, step, &figures)?;
         let t3 = Instant::now();
         self.times.integrate += t1 - t0;
         self.times.elements += t2 - t1;

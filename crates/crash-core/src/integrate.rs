@@ -8,6 +8,8 @@
 //! integrated implicitly: v_{n+1/2} = ((1 - c hbar/2) v_{n-1/2} + hbar a) / (1 + c hbar/2).
 
 use crate::body::{Body, BodyDef, NO_PROGRAM};
+use crate::contact::figures::{ChunkFigures, NodeFigures};
+use crate::contact::sweep::Momentum;
 use crate::element::simd::prefetch;
 use crate::error::Fault;
 use crate::forces::CHUNK;
@@ -214,13 +216,13 @@ impl NodeSums {
 /// chunk order; single chunks, for an even end of the loop on every thread (forces.rs).
 /// The last `halo` nodes (a part's halo nodes, which take their state from their
 /// owner) are left out.
-pub(crate) fn node_chunks(
+pub(crate) fn node_chunks<R: Send>(
     x: &mut [Vec3],
     v: &mut [Vec3],
     w: &mut [Vec3],
     halo: usize,
-    f: impl Fn(usize, &mut [Vec3], &mut [Vec3], &mut [Vec3]) -> NodeSums + Sync + Send,
-) -> Vec<NodeSums> {
+    f: impl Fn(usize, &mut [Vec3], &mut [Vec3], &mut [Vec3]) -> R + Sync + Send,
+) -> Vec<R> {
     let n = x.len().saturating_sub(halo);
     let (x, v, w) = (&mut x[..n], &mut v[..n], &mut w[..n]);
     x.par_chunks_mut(CHUNK)
@@ -247,10 +249,36 @@ pub struct StepClock {
 impl Body {
     /// Advance the nodes of this body from x_n to x_{n+1} (all but a part's halo nodes).
     pub fn integrate(&mut self, clock: &StepClock, gravity: Vec3) -> Result<NodeSums, Fault> {
+        self.integrate_taking(clock, gravity, false).map(|(s, _)| s)
+    }
+
+    /// `integrate`, with the contact stage's figures of the new nodes taken in the same
+    /// loop (`contact::figures`) for a whole, deformable contact body (None otherwise).
+    pub fn integrate_with_figures(
+        &mut self,
+        clock: &StepClock,
+        gravity: Vec3,
+    ) -> Result<(NodeSums, Option<NodeFigures>), Fault> {
+        self.integrate_taking(clock, gravity, true)
+    }
+
+    fn integrate_taking(
+        &mut self,
+        clock: &StepClock,
+        gravity: Vec3,
+        figures: bool,
+    ) -> Result<(NodeSums, Option<NodeFigures>), Fault> {
         if self.def.kinematic {
             // the same bits without the per-node program and force terms (kinematic.rs)
-            return self.integrate_kinematic(clock, gravity);
+            return Ok((self.integrate_kinematic(clock, gravity)?, None));
         }
+        // the momentum's scale needs the whole body's mass first (a sum in node order)
+        let taking = figures && self.def.contact && self.def.halo_nodes == 0;
+        let mass_scale = taking.then(|| {
+            let m = self.def.total_mass();
+            (m, Momentum::scale(m))
+        });
+        let scale = mass_scale.map(|(_, sc)| sc);
         let h = clock.h;
         let hbar = 0.5 * (clock.h_prev + h);
         let c = self.def.mass_damping;
@@ -359,11 +387,20 @@ impl Body {
                 s.add_damping(c, hbar, (m, inr), (vn, wn));
                 s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
             }
-            s
+            // the chunk is still in the cache: the contact stage's figures of it
+            let at = ci * CHUNK;
+            let fig =
+                scale.map(|sc| ChunkFigures::of(s.lo, s.hi, vs, &mass[at..at + vs.len()], sc));
+            (s, fig)
         });
-        let total = NodeSums::total(&parts, clock.step, self.def.id)?;
+        let (sums, figs): (Vec<NodeSums>, Vec<Option<ChunkFigures>>) = parts.into_iter().unzip();
+        let total = NodeSums::total(&sums, clock.step, self.def.id)?;
         self.book(h, &total);
-        Ok(total)
+        let figures = mass_scale.map(|(m, sc)| {
+            let figs: Vec<ChunkFigures> = figs.into_iter().flatten().collect();
+            NodeFigures::gather(&figs, m, sc, total.max_move, (total.lo, total.hi))
+        });
+        Ok((total, figures))
     }
 
     /// The step's sums into the energy record (a step of length h).

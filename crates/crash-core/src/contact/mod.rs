@@ -5,6 +5,7 @@
 pub mod broad;
 pub mod config;
 pub mod curved;
+pub mod figures;
 pub mod forest;
 pub mod narrow;
 pub(crate) mod passes;

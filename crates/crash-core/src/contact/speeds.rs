@@ -15,7 +15,7 @@
 use crate::Vec3;
 
 /// Nodes per velocity box.
-const CHUNK: usize = 64;
+pub(crate) const CHUNK: usize = 64;
 
 /// The velocity box of each chunk of `CHUNK` consecutive nodes.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -23,20 +23,30 @@ pub struct SpeedBoxes {
     boxes: Vec<(Vec3, Vec3)>,
 }
 
+/// The box of the velocities `c` (not empty).
+pub(crate) fn velocity_box(c: &[Vec3]) -> (Vec3, Vec3) {
+    c.iter().fold((c[0], c[0]), |(lo, hi), x| {
+        (
+            Vec3::new(lo.x.min(x.x), lo.y.min(x.y), lo.z.min(x.z)),
+            Vec3::new(hi.x.max(x.x), hi.y.max(x.y), hi.z.max(x.z)),
+        )
+    })
+}
+
 impl SpeedBoxes {
-    /// The boxes of `v` (one serial pass: min/max only).
+    /// The boxes of `v` (min/max only; chunks on the pool, in order: the same boxes).
     pub fn of(v: &[Vec3]) -> Self {
+        use rayon::prelude::*;
         let boxes = v
-            .chunks(CHUNK)
-            .map(|c| {
-                c.iter().fold((c[0], c[0]), |(lo, hi), x| {
-                    (
-                        Vec3::new(lo.x.min(x.x), lo.y.min(x.y), lo.z.min(x.z)),
-                        Vec3::new(hi.x.max(x.x), hi.y.max(x.y), hi.z.max(x.z)),
-                    )
-                })
-            })
+            .par_chunks(CHUNK)
+            .with_min_len(super::stage::PAR_CHUNK / CHUNK)
+            .map(velocity_box)
             .collect();
+        Self { boxes }
+    }
+
+    /// Boxes made elsewhere, one per `CHUNK` nodes in node order (`figures.rs`).
+    pub(crate) fn from_boxes(boxes: Vec<(Vec3, Vec3)>) -> Self {
         Self { boxes }
     }
 

@@ -11,6 +11,7 @@ use super::broad::{candidate_pairs, BodyBox};
 use super::config::{
     ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
 };
+use super::figures::NodeFigures;
 use super::narrow::{forces, search, Hit, Normals, Push};
 use super::passes::{all_pair_passes, PairJob};
 use super::segment::Segment;
@@ -200,10 +201,14 @@ pub(crate) fn pairs_of(
         .collect()
 }
 
+/// `body`'s surface, made if new and refreshed for this pass (`Surface::refresh_given`:
+/// `given` and `step` let it use the integration's figures).
 fn ensure_surface<'s>(
     surfaces: &'s mut BTreeMap<u32, Surface>,
     body: &Body,
     skin: f64,
+    given: Option<&NodeFigures>,
+    step: Option<u64>,
 ) -> &'s mut Surface {
     let s = surfaces
         .entry(body.def.id)
@@ -211,7 +216,7 @@ fn ensure_surface<'s>(
     if !s.fits(body) {
         *s = Surface::new(body);
     }
-    s.refresh(body, skin);
+    s.refresh_given(body, skin, given, step);
     s
 }
 
@@ -258,7 +263,21 @@ pub fn contact_forces(
     h: f64,
     step: u64,
 ) -> Result<Vec<f64>, Fault> {
-    contact_forces_given(bodies, cfg, state, element_dt, bounds, h, step, None)
+    let given = Given {
+        closing: None,
+        figures: &[],
+    };
+    contact_forces_given(bodies, cfg, state, element_dt, bounds, h, step, given)
+}
+
+/// What a caller of the stage already knows: the closing-speed steps of a split
+/// group's pairs (`closing`: then they are not computed), and the figures the
+/// integration took of each body's nodes in the step that led here (`figures`, by body
+/// index; empty or None where it took none).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Given<'a> {
+    pub closing: Option<&'a BTreeMap<(u32, u32), Option<f64>>>,
+    pub figures: &'a [Option<NodeFigures>],
 }
 
 /// The closing-speed step of a pair of different bodies (`SpeedRule::LimitDt`): a
@@ -295,8 +314,10 @@ pub(crate) fn contact_forces_given(
     bounds: &[(Vec3, Vec3)],
     h: f64,
     step: u64,
-    closing: Option<&BTreeMap<(u32, u32), Option<f64>>>,
+    given: Given<'_>,
 ) -> Result<Vec<f64>, Fault> {
+    let closing = given.closing;
+    let fig = |k: usize| given.figures.get(k).and_then(|f| f.as_ref());
     let mut dt = vec![f64::INFINITY; bodies.len()];
     state.stats.clear();
     for b in bodies.iter_mut() {
@@ -331,20 +352,20 @@ pub(crate) fn contact_forces_given(
     let mut in_pairs: Vec<usize> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
     in_pairs.sort_unstable();
     in_pairs.dedup();
-    // the mean velocities (serial sums in node order: their bits) beside the surface
-    // refreshes on the pool, instead of after them on one thread
+    // the speeds (momentum and velocity boxes, each on the pool) beside the surface
+    // refreshes: both sides fill the threads
     let bodies_ = &*bodies;
     let surfaces = &mut state.surfaces;
     let ((), means) = rayon::join(
         || {
             for &k in &in_pairs {
                 let skin = cfg.margin_for(&bodies_[k]);
-                ensure_surface(surfaces, &bodies_[k], skin);
+                ensure_surface(surfaces, &bodies_[k], skin, fig(k), Some(step));
             }
         },
         || {
             let want = cfg.speed_rule == SpeedRule::LimitDt && closing.is_none();
-            let speed = |&k: &usize| (k, BodySpeed::of(&bodies_[k]));
+            let speed = |&k: &usize| (k, BodySpeed::of_given(&bodies_[k], fig(k)));
             want.then(|| in_pairs.iter().map(speed).collect::<Vec<_>>())
         },
     );
@@ -597,7 +618,7 @@ pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetra
         for (n, s) in [(ia, ib), (ib, ia)] {
             let (nb, sb) = (&bodies[n], &bodies[s]);
             let chunks = super::surface::node_chunks(nb);
-            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb));
+            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb), None, None);
             let hits = search(nb, &chunks, sb, surf, false, &mut NodeLists::default());
             let deepest = hits.iter().fold(None::<&Hit>, |d, h| match d {
                 Some(d) if d.depth >= h.depth => Some(d),

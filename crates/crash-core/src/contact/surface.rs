@@ -6,6 +6,7 @@
 //! a segment within the capture distance. A cache: the segments a query returns are
 //! filtered by exact distance, so results never depend on it.
 
+use super::figures::NodeFigures;
 use super::forest::{Entry, Forest};
 use super::segment::{segments, Segment};
 use crate::body::Body;
@@ -53,13 +54,17 @@ pub fn node_chunks(body: &Body) -> Vec<NodeChunk> {
 
 /// `node_chunks`, and in the same read of the nodes whether one lies farther than
 /// `skin` from its position in `reference` (a yes/no: the same answer in any order; an
-/// empty or shorter reference says nothing). One pass over x, v and the reference
-/// instead of two: each pass over a large body costs a stream of its nodes.
-pub fn node_chunks_moved(body: &Body, reference: &[Vec3], skin: f64) -> (Vec<NodeChunk>, bool) {
+/// empty or shorter reference says nothing) and the largest such distance (a bound for
+/// the next steps' checks, `Surface::refresh_given`). One pass over x, v and the
+/// reference instead of two: each pass over a large body costs a stream of its nodes.
+pub fn node_chunks_moved(
+    body: &Body,
+    reference: &[Vec3],
+    skin: f64,
+) -> (Vec<NodeChunk>, bool, f64) {
     let x = &body.state.x;
-    let s2 = skin * skin;
     let check = reference.len() == x.len();
-    let out: Vec<(NodeChunk, bool)> = x
+    let out: Vec<(NodeChunk, (bool, f64))> = x
         .par_chunks(NODE_CHUNK)
         .zip(body.state.v.par_chunks(NODE_CHUNK))
         .enumerate()
@@ -67,17 +72,37 @@ pub fn node_chunks_moved(body: &Body, reference: &[Vec3], skin: f64) -> (Vec<Nod
         .map(|(k, (xs, vs))| {
             let (lo, hi) = crate::mesh::bounds(xs);
             let vmax = vs.iter().map(|v| v.norm()).fold(0.0, f64::max);
-            let moved = check
-                && xs.iter().zip(&reference[k * NODE_CHUNK..]).any(|(a, b)| {
-                    let d2 = (a - b).norm_squared();
-                    d2.is_nan() || d2 > s2
-                });
+            let moved = if check {
+                farthest(xs, &reference[k * NODE_CHUNK..], skin)
+            } else {
+                (false, 0.0)
+            };
             (NodeChunk { lo, hi, vmax }, moved)
         })
         .collect();
-    let moved = out.iter().any(|c| c.1);
-    (out.into_iter().map(|c| c.0).collect(), moved)
+    let moved = out.iter().any(|c| c.1 .0);
+    let far = out.iter().map(|c| c.1 .1).fold(0.0, f64::max);
+    (out.into_iter().map(|c| c.0).collect(), moved, far)
 }
+
+/// Whether a node of `x` lies farther than `skin` from its place in `reference` (or at
+/// a NaN distance), and the largest distance.
+fn farthest(x: &[Vec3], reference: &[Vec3], skin: f64) -> (bool, f64) {
+    let s2 = skin * skin;
+    let (nan, d2) = x
+        .iter()
+        .zip(reference)
+        .fold((false, 0.0f64), |(nan, m), (a, b)| {
+            let d2 = (a - b).norm_squared();
+            (nan || d2.is_nan(), m.max(d2))
+        });
+    (nan || d2 > s2, d2.sqrt())
+}
+
+/// Fraction of the skin below which a bound on the nodes' distances from the last build
+/// settles the skin check without reading the nodes: far above the rounding of the
+/// distances and of the bound.
+const DRIFT_SAFE: f64 = 0.999;
 
 /// Search data of one body's contact surface.
 #[derive(Debug, Clone)]
@@ -120,6 +145,10 @@ pub struct Surface {
     skin: f64,
     built: bool,
     pub builds: u64,
+    /// A bound on every node's distance from `reference`, as of the pass of step
+    /// `seen`.
+    drift: f64,
+    seen: Option<u64>,
 }
 
 fn node_incidence(n: usize, segs: &[Segment]) -> (Vec<u32>, Vec<u32>) {
@@ -239,6 +268,8 @@ impl Surface {
             skin: 0.0,
             built: false,
             builds: 0,
+            drift: f64::INFINITY,
+            seen: None,
         }
     }
 
@@ -252,9 +283,46 @@ impl Surface {
     /// (`node_chunks_moved` against `self.reference`: the nodes are read once for both).
     /// Returns whether it rebuilt.
     pub fn refresh(&mut self, body: &Body, skin: f64) -> bool {
-        let (chunks, moved) = node_chunks_moved(body, &self.reference, skin);
-        self.chunks = chunks;
-        if self.current(body, skin) && !moved {
+        self.refresh_given(body, skin, None, None)
+    }
+
+    /// `refresh` for the pass of step `step`, with the figures the integration took of
+    /// the nodes in the step that led here (`given`, the same bits): the node chunks
+    /// come from them, and the skin check reads the nodes only when the bound on their
+    /// distance from the last build (the distance found at the last read plus every
+    /// step's largest move since) could reach the skin. The bound needs one step
+    /// between this pass and the last (`seen`); otherwise the nodes are read.
+    pub fn refresh_given(
+        &mut self,
+        body: &Body,
+        skin: f64,
+        given: Option<&NodeFigures>,
+        step: Option<u64>,
+    ) -> bool {
+        let follows = step.is_some() && self.seen.is_some() && step == self.seen.map(|s| s + 1);
+        self.seen = step;
+        let current = self.current(body, skin);
+        let moved = match given {
+            Some(f) if follows && current => {
+                self.chunks.clone_from(&f.chunks);
+                let bound = self.drift + f.max_move;
+                if bound <= DRIFT_SAFE * skin {
+                    self.drift = bound;
+                    false
+                } else {
+                    let (moved, far) = farthest(&body.state.x, &self.reference, skin);
+                    self.drift = far;
+                    moved
+                }
+            }
+            _ => {
+                let (chunks, moved, far) = node_chunks_moved(body, &self.reference, skin);
+                self.chunks = chunks;
+                self.drift = far;
+                moved
+            }
+        };
+        if current && !moved {
             return false;
         }
         self.rebuild(body, skin)
@@ -335,6 +403,7 @@ impl Surface {
         self.skin = skin;
         self.built = true;
         self.builds += 1;
+        self.drift = 0.0;
         true
     }
 

@@ -37,7 +37,9 @@ use super::{partition_body, Split};
 use crate::body::Body;
 use crate::clock::Clock;
 use crate::contact::stage::pairs_of;
-use crate::contact::stage::{closing_dt, contact_forces_given, element_form_dt, has_reference};
+use crate::contact::stage::{
+    closing_dt, contact_forces_given, element_form_dt, has_reference, Given,
+};
 use crate::contact::surface::Surface;
 use crate::contact::sweep::BodySpeed;
 use crate::contact::{check_moves, ContactConfig, PenaltyKind};
@@ -353,7 +355,10 @@ impl GroupSplit {
                     &vbounds,
                     h,
                     step,
-                    Some(closing),
+                    Given {
+                        closing: Some(closing),
+                        figures: &[],
+                    },
                 )
                 .map_err(|f| in_whole(f, view))?;
             }
