@@ -22,7 +22,7 @@ use super::sweep::Momentum;
 use crate::forces::CHUNK;
 use crate::Vec3;
 
-const _: () = assert!(NODE_CHUNK % CHUNK == 0 && CHUNK % SPEED_CHUNK == 0);
+const _: () = assert!(NODE_CHUNK.is_multiple_of(CHUNK) && CHUNK.is_multiple_of(SPEED_CHUNK));
 
 /// Velocity boxes per integration chunk.
 const BOXES: usize = CHUNK / SPEED_CHUNK;
