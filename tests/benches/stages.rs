@@ -10,7 +10,10 @@
 //! of this process. Their throughput against one run alone is what the machine gives two
 //! independent jobs at that moment (a VM's two vCPUs are at times two hyperthreads of one
 //! core, and then nothing scales); the table's "machine" column is its median, and
-//! "of machine" the 2-thread speed-up over it, taken rep by rep.
+//! "of machine" the 2-thread speed-up over it, taken rep by rep. Each rep also probes
+//! the one-way core-to-core latency (two threads bouncing one atomic): 40-65 ns when the
+//! host keeps this VM's vCPUs on one cache, about 200 ns when it has moved them apart,
+//! and then every stage that reads what the other thread wrote slows down.
 //!
 //! Run: cargo bench -p crash-tests --bench stages -- SCENE [END_TIME [REPS [THREADS...]]]
 //! (default: scenes/sphere-on-plate.toml to 1.2e-3 s, 3 repetitions, threads 1 2).
@@ -19,6 +22,7 @@
 use crash_core::driver::Run;
 use crash_core::Group;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Barrier;
 use std::time::Instant;
 
@@ -33,6 +37,34 @@ struct Sample {
 
 fn one(scene: &Path, end: f64, threads: usize) -> Sample {
     run_one(scene, end, threads, None)
+}
+
+/// Above this one-way latency the vCPUs sit on different caches of the host.
+const APART_NS: f64 = 120.0;
+
+/// One-way latency [ns] of a cache line bounced between two threads (on two cores
+/// when the machine has them free).
+fn core_to_core() -> f64 {
+    const ROUNDS: u64 = 200_000;
+    let flag = AtomicU64::new(0);
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            for i in 0..ROUNDS {
+                while flag.load(Ordering::Acquire) != 2 * i + 1 {
+                    std::hint::spin_loop();
+                }
+                flag.store(2 * i + 2, Ordering::Release);
+            }
+        });
+        let t0 = Instant::now();
+        for i in 0..ROUNDS {
+            flag.store(2 * i + 1, Ordering::Release);
+            while flag.load(Ordering::Acquire) != 2 * i + 2 {
+                std::hint::spin_loop();
+            }
+        }
+        t0.elapsed().as_secs_f64() * 1e9 / (2 * ROUNDS) as f64
+    })
 }
 
 /// Two 1-thread runs started together; the wall is the later one's.
@@ -109,7 +141,9 @@ fn main() {
     };
     let mut samples: Vec<Vec<Sample>> = threads.iter().map(|_| Vec::new()).collect();
     let mut machine: Vec<f64> = Vec::new();
+    let mut latency: Vec<f64> = Vec::new();
     for r in 0..reps {
+        let before = core_to_core();
         for (k, &t) in threads.iter().enumerate() {
             let s = one(&scene, end, t);
             eprintln!(
@@ -120,10 +154,13 @@ fn main() {
         }
         let w = pair(&scene, end);
         let alone = samples[0][r].wall;
+        let ns = core_to_core();
         eprintln!(
-            "rep {r}, two 1-thread runs side by side: {w:.2} s ({:.2}x the throughput of one)",
+            "rep {r}, two 1-thread runs side by side: {w:.2} s ({:.2}x the throughput of one); core-to-core {before:.0} ns before the rep, {ns:.0} ns after",
             2.0 * alone / w
         );
+        // a rep counts as "apart" if either probe around it says so
+        latency.push(ns.max(before));
         machine.push(2.0 * alone / w);
     }
     println!(
@@ -159,6 +196,26 @@ fn main() {
             100.0 * of
         );
         hashes.extend(samples[k].iter().map(|s| s.hash));
+    }
+    println!(
+        "core-to-core latency, median of the reps: {:.0} ns (over {APART_NS} ns the host had the vCPUs apart)",
+        median(latency.clone())
+    );
+    let last = threads.len() - 1;
+    for (apart, what) in [(false, "together"), (true, "apart")] {
+        let ups: Vec<f64> = (0..reps)
+            .filter(|&r| (latency[r] > APART_NS) == apart)
+            .map(|r| samples[0][r].wall / samples[last][r].wall)
+            .collect();
+        if !ups.is_empty() {
+            println!(
+                "{} threads against {}, reps with the vCPUs {what}: {:.2}x (median of {})",
+                threads[last],
+                threads[0],
+                median(ups.clone()),
+                ups.len()
+            );
+        }
     }
     hashes.dedup();
     if hashes.len() != 1 {
