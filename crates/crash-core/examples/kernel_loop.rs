@@ -10,7 +10,7 @@
 //! (10 000 elements, well under a scheduler time slice) that ran undisturbed is the
 //! least noisy time figure available without hardware counters.
 //!
-//! Diagnostics (docs/performance.md, "The quad kernel on AMD Zen 4"): `CRASH_FTZ=1` sets
+//! Diagnostics (docs/performance-history.md, "The quad kernel on AMD Zen 4"): `CRASH_FTZ=1` sets
 //! flush-to-zero and denormals-are-zero on every thread; `CRASH_FTZ=flags` clears the
 //! MXCSR exception flags on the pool threads and prints them after the run.
 

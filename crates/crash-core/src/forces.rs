@@ -32,7 +32,7 @@ pub const CHUNK: usize = 256;
 // rayon otherwise cuts a loop into two pieces per thread and splits a piece further only
 // when another thread steals it, so a loop of a few dozen chunks (the showcase's sphere
 // has 80, its plate 15) can end with one thread finishing a piece of 10-20 chunks alone
-// (docs/performance.md, session 9). Which thread runs a chunk never changes its result.
+// (docs/performance-history.md, session 9). Which thread runs a chunk never changes its result.
 
 /// Whether the element loop of a body whose per-cycle data (reference data, resultant
 /// states and force slots) take `bytes` writes its force slots with non-temporal stores:

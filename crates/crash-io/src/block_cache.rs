@@ -3,7 +3,7 @@
 //! whose raw bytes equal the cached block at the same place is not compressed again.
 //! On the showcase these arrays are about 40% of a frame's bytes, and compressing them
 //! was that share of the background writer's work, which slows the stepping core
-//! through the CPU's shared resources (docs/performance.md, Output).
+//! through the CPU's shared resources (docs/performance-history.md, Output).
 //!
 //! The raw bytes are compared in full (no hash: a frame must never show another frame's
 //! data); memory is capped at `CAP` bytes, blocks beyond it are compressed every time.

@@ -89,7 +89,7 @@ pub struct Placement {
 impl FrameBody {
     /// The body now. The arrays come from a body the writer has finished with
     /// (`recycle`) when there is one: a frame of fresh vectors cost the step loop its
-    /// page faults (about half of the capture, docs/performance.md, session 10).
+    /// page faults (about half of the capture, docs/performance-history.md, session 10).
     pub fn capture(b: &Body) -> Self {
         let mut f = spare(b.def.id);
         f.fill(b);

@@ -27,7 +27,7 @@ pub const BLOCK: usize = 1 << 16;
 pub const SPILL_MEMORY: usize = 16 << 20;
 
 /// zlib level 1 (fastest): on a showcase frame the default level 6 saves 0.3% of the
-/// bytes for 1.6x the time (docs/performance.md, Output).
+/// bytes for 1.6x the time (docs/performance-history.md, Output).
 const LEVEL: u32 = 1;
 
 /// Where compressed blocks wait until the XML is written.

@@ -165,7 +165,7 @@ fn corner_terms<S: Real>(
 ) -> [V3<S>; 2] {
     // written out, no closure: `std::array::from_fn`'s closure was not inlined into the
     // `#[target_feature]` entry point, so each vector operation in it became a call
-    // passing vectors through memory (docs/performance.md, "The quad kernel on AMD
+    // passing vectors through memory (docs/performance-history.md, "The quad kernel on AMD
     // Zen 4")
     [
         p1.scale(e.bx0[0])

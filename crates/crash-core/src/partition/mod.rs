@@ -28,7 +28,7 @@ use crate::Vec3;
 /// Cost of one triangle per step, the unit of the element weights.
 pub const TRI_COST: f64 = 1.0;
 /// Cost of one quad per step relative to a triangle: the whole-step A/B of
-/// docs/performance.md (second sitting of 2026-11-26, `shell_step` 1 thread): triangle
+/// docs/performance-history.md (second sitting of 2026-11-26, `shell_step` 1 thread): triangle
 /// 6.97 / 6.12 ms for 100 352 elements, quad 13.14 / 11.39 ms for 100 489, i.e.
 /// 69.5 / 61.0 and 130.8 / 113.3 ns per element-cycle: 1.88 and 1.86.
 pub const QUAD_COST: f64 = 1.87;

@@ -147,7 +147,7 @@ impl<L: WorkerLink> Master<'_, L> {
         // Only the frame the run ends on is hashed (the summary's final state hash): the
         // hash goes byte by byte over every node's x, v, w (FNV-1a, about 1 ms for the
         // showcase's 14 000 nodes), which on every frame cost the step loop about 1.5 %
-        // with frames every 50 steps (docs/performance.md, session 9).
+        // with frames every 50 steps (docs/performance-history.md, session 9).
         let hashed = force || self.finished();
         if let Some(h) = self.stream_frame(Some(&mut *sink), hashed)? {
             self.stats.final_hash = h;
