@@ -128,6 +128,17 @@ fn bodies_leaving_a_split_group_keep_the_split_and_the_single_process_state() {
     let stats = run_local(inp, 2, &mut sink, &opts(SplitMode::Auto)).unwrap();
     assert!(stats.splits_kept >= 1, "no group change kept the split");
     assert_eq!(stats.splits, 1, "the split was cut again");
+    // groups.csv's rows: every group is timed, also the bodies that left the split and
+    // are computed with it (each row: its holder's time for the split's parts)
+    let (_, _, rows) = sink.groups.last().unwrap();
+    assert!(
+        rows.iter().filter(|r| r.bodies.len() == 1).count() >= 1,
+        "no body out of the split's largest group: {rows:?}"
+    );
+    assert!(
+        rows.iter().all(|r| r.step_ns > 0),
+        "a group without its step time: {rows:?}"
+    );
     assert_eq!(
         format!("{:016x}", stats.final_hash),
         format!("{reference:016x}")

@@ -163,6 +163,10 @@ impl<L: WorkerLink> Master<'_, L> {
         self.seen.resize(n, false);
         self.group_ns.clear();
         self.group_ns.resize(n, 0);
+        // the holders' times of split groups come with the Halo (split.rs)
+        if self.splits.is_empty() {
+            self.split_ns.clear();
+        }
         // one pass for every worker's count (one pass per worker cost 0.7 ms a step
         // with 10 000 bodies on 64 workers)
         let mut held = vec![0usize; reps.len()];

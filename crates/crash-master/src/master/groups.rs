@@ -40,21 +40,40 @@ impl<L: WorkerLink> Master<'_, L> {
         let mut rows = Vec::new();
         for g in self.meim.groups() {
             let first = g.first().copied().unwrap_or(0);
+            let split = self
+                .splits
+                .iter()
+                .find(|s| g.iter().all(|id| s.ids().contains(id)))
+                .and_then(|s| s.ids().first().copied());
             for (worker, ids, elements) in self.group_shares(g) {
                 rows.push(GroupRow {
                     group: first,
                     bodies: ids.iter().map(|&id| self.name(id).to_string()).collect(),
                     worker,
                     elements,
-                    step_ns: self
-                        .index(first)
-                        .and_then(|i| self.group_ns.get(i))
-                        .copied()
-                        .unwrap_or(0),
+                    step_ns: self.step_ns(first, worker, split),
                 });
             }
         }
         rows
+    }
+
+    /// The last step's compute time of the worker group that computes MEIM group
+    /// `first` on `worker`: within a split group (`split`: its first id), that holder's
+    /// time for its parts, which compute every group of the split together.
+    fn step_ns(&self, first: u32, worker: usize, split: Option<u32>) -> u64 {
+        let held = split.and_then(|sf| {
+            self.split_ns
+                .iter()
+                .find(|&&(w, f, _)| w == worker && f == sf)
+                .map(|&(_, _, ns)| ns)
+        });
+        held.or_else(|| {
+            self.index(first)
+                .and_then(|i| self.group_ns.get(i))
+                .copied()
+        })
+        .unwrap_or(0)
     }
 
     /// Hand the group rows to the sink (once per step).

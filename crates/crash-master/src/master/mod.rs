@@ -132,6 +132,9 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     /// id (0: no group starts there). A vector, not a map: filled for every group of
     /// every step.
     group_ns: Vec<u64>,
+    /// Compute time of each holder's parts of a split group in the last step: (worker,
+    /// the split's first id, ns). Every holder reports under the same first id.
+    split_ns: Vec<(usize, u32, u64)>,
     /// Step of the last group rows handed to the sink.
     groups_step: Option<u64>,
     search: PairSearch,
@@ -252,6 +255,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             ),
             names: input.names_by_id(&ids),
             group_ns: Default::default(),
+            split_ns: Vec::new(),
             groups_step: None,
             search: PairSearch::new(c.margin, skin),
             info,

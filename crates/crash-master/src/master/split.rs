@@ -356,6 +356,7 @@ impl<L: WorkerLink> Master<'_, L> {
             c.push(Command::Halo(imports));
         }
         let replies = self.exchange(cmds)?;
+        self.split_ns.clear();
         let mut figures = SplitFigures::default();
         let mut merged: BTreeMap<u32, BodyReport> = BTreeMap::new();
         for (w, r) in replies.into_iter().enumerate() {
@@ -393,6 +394,9 @@ impl<L: WorkerLink> Master<'_, L> {
                     r.compute_ns += rep.compute_ns;
                 }
                 for g in rep.groups {
+                    // each holder's time for groups.csv; the cost model takes the
+                    // first holder's, under the home's report
+                    self.split_ns.push((w, g.first, g.nanos));
                     let home = self
                         .splits
                         .get(group_of.get(&g.first).copied().unwrap_or(0));
