@@ -8,8 +8,7 @@
 //!
 //! Each repetition ends with a control: two 1-thread runs side by side in two threads
 //! of this process. Their throughput against one run alone is what the machine gives two
-//! independent jobs at that moment (a VM's two vCPUs are at times two hyperthreads of one
-//! core, and then nothing scales); the table's "machine" column is its median, and
+//! independent jobs at that moment; the table's "machine" column is its median, and
 //! "of machine" the 2-thread speed-up over it, taken rep by rep. Each rep also probes
 //! the one-way core-to-core latency (two threads bouncing one atomic): 40-65 ns when the
 //! host keeps this VM's vCPUs on one cache, about 200 ns when it has moved them apart,
@@ -33,10 +32,6 @@ struct Sample {
     contact: f64,
     per: f64,
     hash: u64,
-}
-
-fn one(scene: &Path, end: f64, threads: usize) -> Sample {
-    run_one(scene, end, threads, None)
 }
 
 /// Above this one-way latency the vCPUs sit on different caches of the host.
@@ -67,17 +62,18 @@ fn core_to_core() -> f64 {
     })
 }
 
-/// Two 1-thread runs started together; the wall is the later one's.
-fn pair(scene: &Path, end: f64) -> f64 {
+/// Two 1-thread runs started together: the later one's wall, and both hashes.
+fn pair(scene: &Path, end: f64) -> (f64, [u64; 2]) {
     let start = Barrier::new(2);
     std::thread::scope(|s| {
-        let a = s.spawn(|| run_one(scene, end, 1, Some(&start)).wall);
-        let b = run_one(scene, end, 1, Some(&start)).wall;
-        a.join().unwrap().max(b)
+        let a = s.spawn(|| one(scene, end, 1, Some(&start)));
+        let b = one(scene, end, 1, Some(&start));
+        let a = a.join().unwrap();
+        (a.wall.max(b.wall), [a.hash, b.hash])
     })
 }
 
-fn run_one(scene: &Path, end: f64, threads: usize, start: Option<&Barrier>) -> Sample {
+fn one(scene: &Path, end: f64, threads: usize, start: Option<&Barrier>) -> Sample {
     let built = crash_scene::load(scene).unwrap().build().unwrap();
     let mut cfg = built.run_config();
     cfg.end_time = end;
@@ -142,17 +138,19 @@ fn main() {
     let mut samples: Vec<Vec<Sample>> = threads.iter().map(|_| Vec::new()).collect();
     let mut machine: Vec<f64> = Vec::new();
     let mut latency: Vec<f64> = Vec::new();
+    let mut pair_hashes: Vec<u64> = Vec::new();
     for r in 0..reps {
         let before = core_to_core();
         for (k, &t) in threads.iter().enumerate() {
-            let s = one(&scene, end, t);
+            let s = one(&scene, end, t, None);
             eprintln!(
                 "rep {r}, {t} thread(s): {:.2} s, hash {:016x}",
                 s.wall, s.hash
             );
             samples[k].push(s);
         }
-        let w = pair(&scene, end);
+        let (w, pair_hash) = pair(&scene, end);
+        pair_hashes.extend(pair_hash);
         let alone = samples[0][r].wall;
         let ns = core_to_core();
         eprintln!(
@@ -217,6 +215,9 @@ fn main() {
             );
         }
     }
+    // the side-by-side runs are 1-thread runs too
+    hashes.extend(pair_hashes);
+    hashes.sort_unstable();
     hashes.dedup();
     if hashes.len() != 1 {
         eprintln!("state hashes differ between thread counts: {hashes:016x?}");

@@ -15,11 +15,7 @@ impl<L: WorkerLink> Master<'_, L> {
     /// bodies that left it while it is kept: `time_loop`) one per holder with elements
     /// of it, with the bodies that have elements there and the elements its parts own.
     pub(super) fn group_shares(&self, g: &[u32]) -> Vec<(usize, Vec<u32>, usize)> {
-        if let Some(s) = self
-            .splits
-            .iter()
-            .find(|s| g.iter().all(|id| s.ids().contains(id)))
-        {
+        if let Some(s) = self.split_holding(g) {
             let shares: Vec<_> = s
                 .shares(g)
                 .into_iter()
@@ -35,16 +31,20 @@ impl<L: WorkerLink> Master<'_, L> {
         vec![(worker, g.to_vec(), elements)]
     }
 
+    /// The split group whose bodies include all of `g` (the split itself, or bodies
+    /// that left it while it is kept).
+    fn split_holding(&self, g: &[u32]) -> Option<&super::split::SplitGroup> {
+        self.splits
+            .iter()
+            .find(|s| g.iter().all(|id| s.ids().contains(id)))
+    }
+
     /// The current MEIM groups as rows (a split group: one row per holder).
     pub(super) fn group_rows(&self) -> Vec<GroupRow> {
         let mut rows = Vec::new();
         for g in self.meim.groups() {
             let first = g.first().copied().unwrap_or(0);
-            let split = self
-                .splits
-                .iter()
-                .find(|s| g.iter().all(|id| s.ids().contains(id)))
-                .and_then(|s| s.ids().first().copied());
+            let split = self.split_holding(g).and_then(|s| s.ids().first().copied());
             for (worker, ids, elements) in self.group_shares(g) {
                 rows.push(GroupRow {
                     group: first,
