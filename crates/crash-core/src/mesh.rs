@@ -32,6 +32,32 @@ impl Mesh {
         self.tris.len() + self.quads.len()
     }
 
+    /// Renumber the nodes in the order the elements (triangles, then quads) first use
+    /// them; nodes no element uses keep their relative order at the end. The elements
+    /// and the geometry are unchanged.
+    pub fn number_nodes_by_first_use(&mut self) {
+        let mut new_id = vec![u32::MAX; self.nodes.len()];
+        let mut order = Vec::with_capacity(self.nodes.len());
+        let used = self
+            .tris
+            .iter()
+            .flatten()
+            .chain(self.quads.iter().flatten());
+        for n in used.copied().chain(0..self.nodes.len() as u32) {
+            if new_id[n as usize] == u32::MAX {
+                new_id[n as usize] = order.len() as u32;
+                order.push(n);
+            }
+        }
+        self.nodes = order.iter().map(|&n| self.nodes[n as usize]).collect();
+        for t in &mut self.tris {
+            *t = t.map(|n| new_id[n as usize]);
+        }
+        for q in &mut self.quads {
+            *q = q.map(|n| new_id[n as usize]);
+        }
+    }
+
     /// Apply a rigid rotation (3x3, orthonormal) and then a translation.
     pub fn transform(&mut self, rotation: &nalgebra::Matrix3<f64>, translation: Vec3) {
         for p in &mut self.nodes {
@@ -187,6 +213,19 @@ mod tests {
             quads: vec![],
         };
         assert!(matches!(m.validate("b"), Err(CoreError::Degenerate { .. })));
+    }
+
+    #[test]
+    fn numbering_by_first_use_keeps_every_element_and_its_geometry() {
+        let mut m = square();
+        m.nodes.push(Vec3::new(5.0, 5.0, 5.0)); // used by no element: kept, at the end
+        m.quads[0] = [2, 3, 0, 1];
+        let (area, corners) = (m.area(), m.quads[0].map(|n| m.nodes[n as usize]));
+        m.number_nodes_by_first_use();
+        assert_eq!(m.quads[0], [0, 1, 2, 3]);
+        assert_eq!(m.quads[0].map(|n| m.nodes[n as usize]), corners);
+        assert_eq!(m.nodes[4], Vec3::new(5.0, 5.0, 5.0));
+        assert_eq!(m.area(), area);
     }
 
     #[test]

@@ -49,7 +49,11 @@ pub fn plate(lx: f64, ly: f64, nx: usize, ny: usize, kind: ElementKind) -> Mesh 
 }
 
 /// Sphere of the given radius: a subdivided icosahedron (near-uniform triangles,
-/// 20 * 4^level elements), outward normals.
+/// 20 * 4^level elements), outward normals. The triangles come out in subdivision
+/// order (each base face's children together, recursively), and the nodes are numbered
+/// in the order the triangles first use them, so that a run of elements and the run of
+/// nodes they touch cover one patch of the sphere: threads that take halves of both
+/// then share only the patches' rim (docs/performance.md, "Locality").
 pub fn icosphere(radius: f64, level: u32) -> Mesh {
     let t = (1.0 + 5f64.sqrt()) / 2.0;
     let mut nodes: Vec<Vec3> = [
@@ -109,11 +113,13 @@ pub fn icosphere(radius: f64, level: u32) -> Mesh {
         }
         tris = next;
     }
-    Mesh {
+    let mut m = Mesh {
         nodes: nodes.into_iter().map(|p| p * radius).collect(),
         tris,
         quads: Vec::new(),
-    }
+    };
+    m.number_nodes_by_first_use();
+    m
 }
 
 /// Open cylinder (tube) along z: n_around x n_along cells, centred at the origin.
@@ -285,6 +291,23 @@ mod tests {
             assert!((m.area() - 1.0).abs() < 1e-12);
             m.validate("p").expect("valid");
         }
+    }
+
+    #[test]
+    fn icosphere_threads_halves_share_only_a_rim() {
+        // the elements of each half (as two threads take them) read nodes of the other
+        // half only along the rim between the halves (performance.md, session 19):
+        // level 5, 1 000 of 20 480 elements; numbered level by level, 11 305
+        let m = icosphere(1.0, 5);
+        let (ne, nn) = (m.tris.len(), m.nodes.len() as u32);
+        let crossing = m
+            .tris
+            .iter()
+            .enumerate()
+            .filter(|(e, t)| t.iter().any(|&n| (n < nn / 2) != (*e < ne / 2)))
+            .count();
+        println!("{crossing} of {ne} elements read a node of the other half");
+        assert!(crossing * 10 < ne, "{crossing} of {ne}");
     }
 
     #[test]
