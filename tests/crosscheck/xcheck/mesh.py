@@ -65,7 +65,9 @@ def icosphere(radius, level):
     """Subdivided icosahedron (docs/crosscheck.md): unit-sphere nodes, each level splits
     every triangle [a, b, c] into [a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca];
     a new midpoint node is appended (normalised mean of its edge's ends) the first time
-    its edge is met, visiting the triangles in order and their edges ab, bc, ca."""
+    its edge is met, visiting the triangles in order and their edges ab, bc, ca. Then
+    the nodes are numbered in the order the triangles first use them (crash's
+    Mesh::number_nodes_by_first_use)."""
     nodes = [_normalize(p) for p in _ICO_NODES]
     tris = [list(t) for t in _ICO_TRIS]
     for _ in range(level):
@@ -89,6 +91,13 @@ def icosphere(radius, level):
             ca = midpoint(c, a)
             nxt += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
         tris = nxt
+    new_id, order = {}, []
+    for n in [n for t in tris for n in t] + list(range(len(nodes))):
+        if n not in new_id:
+            new_id[n] = len(order)
+            order.append(n)
+    nodes = [nodes[n] for n in order]
+    tris = [[new_id[n] for n in t] for t in tris]
     return np.array(nodes) * radius, _ints(tris, 3), _ints([], 4)
 
 
