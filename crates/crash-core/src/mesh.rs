@@ -34,8 +34,9 @@ impl Mesh {
 
     /// Renumber the nodes in the order the elements (triangles, then quads) first use
     /// them; nodes no element uses keep their relative order at the end. The elements
-    /// and the geometry are unchanged.
-    pub fn number_nodes_by_first_use(&mut self) {
+    /// and the geometry are unchanged. Returns the number of used nodes (the unused
+    /// ones start there).
+    pub fn number_nodes_by_first_use(&mut self) -> usize {
         let mut new_id = vec![u32::MAX; self.nodes.len()];
         let mut order = Vec::with_capacity(self.nodes.len());
         let used = self
@@ -43,12 +44,15 @@ impl Mesh {
             .iter()
             .flatten()
             .chain(self.quads.iter().flatten());
-        for n in used.copied().chain(0..self.nodes.len() as u32) {
+        let take = |n: u32, new_id: &mut [u32], order: &mut Vec<u32>| {
             if new_id[n as usize] == u32::MAX {
                 new_id[n as usize] = order.len() as u32;
                 order.push(n);
             }
-        }
+        };
+        used.for_each(|&n| take(n, &mut new_id, &mut order));
+        let used_count = order.len();
+        (0..self.nodes.len() as u32).for_each(|n| take(n, &mut new_id, &mut order));
         self.nodes = order.iter().map(|&n| self.nodes[n as usize]).collect();
         for t in &mut self.tris {
             *t = t.map(|n| new_id[n as usize]);
@@ -56,6 +60,7 @@ impl Mesh {
         for q in &mut self.quads {
             *q = q.map(|n| new_id[n as usize]);
         }
+        used_count
     }
 
     /// Apply a rigid rotation (3x3, orthonormal) and then a translation.
@@ -221,7 +226,7 @@ mod tests {
         m.nodes.push(Vec3::new(5.0, 5.0, 5.0)); // used by no element: kept, at the end
         m.quads[0] = [2, 3, 0, 1];
         let (area, corners) = (m.area(), m.quads[0].map(|n| m.nodes[n as usize]));
-        m.number_nodes_by_first_use();
+        assert_eq!(m.number_nodes_by_first_use(), 4);
         assert_eq!(m.quads[0], [0, 1, 2, 3]);
         assert_eq!(m.quads[0].map(|n| m.nodes[n as usize]), corners);
         assert_eq!(m.nodes[4], Vec3::new(5.0, 5.0, 5.0));

@@ -239,25 +239,15 @@ pub fn spherical_cap(r: f64, level: u32, theta: f64) -> (Mesh, Vec<usize>) {
         *p = rot * *p;
     }
     let zcut = -theta.cos() + 1e-9;
-    let tris: Vec<[u32; 3]> = m
-        .tris
-        .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&n| m.nodes[n as usize].z <= zcut))
-        .collect();
-    let mut new_id = vec![u32::MAX; m.nodes.len()];
-    let mut nodes = Vec::new();
-    for t in &tris {
-        for &n in t {
-            if new_id[n as usize] == u32::MAX {
-                new_id[n as usize] = nodes.len() as u32;
-                nodes.push(m.nodes[n as usize] * r);
-            }
-        }
+    m.tris
+        .retain(|t| t.iter().all(|&n| m.nodes[n as usize].z <= zcut));
+    let used = m.number_nodes_by_first_use();
+    m.nodes.truncate(used);
+    for p in &mut m.nodes {
+        *p *= r;
     }
-    let tris: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|n| new_id[n as usize])).collect();
     let mut edges = std::collections::BTreeMap::new();
-    for t in &tris {
+    for t in &m.tris {
         for k in 0..3 {
             let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
             *edges.entry((a, b)).or_insert(0) += 1;
@@ -270,14 +260,7 @@ pub fn spherical_cap(r: f64, level: u32, theta: f64) -> (Mesh, Vec<usize>) {
         .collect();
     rim.sort_unstable();
     rim.dedup();
-    (
-        Mesh {
-            nodes,
-            tris,
-            quads: Vec::new(),
-        },
-        rim,
-    )
+    (m, rim)
 }
 
 #[cfg(test)]
