@@ -1,4 +1,4 @@
-//! The scaling benchmark (issue 16, point 6): one scene in six modes, timed in one
+//! The scaling benchmark (issue 16, point 6): one scene in seven modes, timed in one
 //! sitting with the repetitions interleaved (mode A, B, C, D, then again), so machine
 //! load affects every mode alike:
 //!
@@ -7,12 +7,16 @@
 //! - `crash-master --split auto` + 2 workers: a group above its fair share is split
 //!   over both workers by elements (two exchanges per step instead of one),
 //! - `crash-master` + 2 workers x 1 thread, all with `--idle-spin` (a SCHED_IDLE
-//!   spinner per process keeps vCPUs from halting between messages).
+//!   spinner per process keeps vCPUs from halting between messages),
+//! - `crash run --workers 2 --split auto --threads 1`: the split in one process, whose
+//!   two workers run one after the other: its worker compute column is what the split costs
+//!   free of any network or of processes sharing the cores.
 //!
 //! Prints, per mode, the median wall time of the run (summary.json `wall_time_s`: from
 //! the first command to the last frame), ns per element-cycle, the speed-up over
-//! `--threads 1`, the barrier's median per step and its parts, and checks that every
-//! mode ends with the same final state hash (exit 1 otherwise).
+//! `--threads 1`, the barrier's median per step and its parts, the workers' compute
+//! times summed (summary.json `cluster.compute_ns_per_worker`) over the first mode's,
+//! and checks that every mode ends with the same final state hash (exit 1 otherwise).
 //!
 //! Run: cargo bench -p crash-tests --bench scaling -- SCENE [END_TIME [REPS [MODES]]]
 //! (default: scenes/ten-spheres-three-plates-small.toml to 1e-3 s, 3 repetitions, all
@@ -30,6 +34,8 @@ use std::process::{Command, Stdio};
 enum Mode {
     Local {
         threads: usize,
+        /// In-process workers, and `--split auto` when more than one.
+        workers: usize,
     },
     Cluster {
         workers: usize,
@@ -41,7 +47,13 @@ enum Mode {
 impl Mode {
     fn label(self) -> String {
         match self {
-            Mode::Local { threads } => format!("crash run --threads {threads}"),
+            Mode::Local {
+                threads,
+                workers: 1,
+            } => format!("crash run --threads {threads}"),
+            Mode::Local { threads, workers } => {
+                format!("crash run --workers {workers} --split auto --threads {threads}")
+            }
             Mode::Cluster {
                 workers,
                 split,
@@ -60,9 +72,16 @@ fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
     let out_s = out.to_str().unwrap();
     let scene_s = scene.to_str().unwrap();
     match mode {
-        Mode::Local { threads } => {
+        Mode::Local { threads, workers } => {
+            let split: &[&str] = if workers > 1 {
+                &["--split", "auto"]
+            } else {
+                &[]
+            };
             let st = Command::new(bin("crash"))
                 .args(["run", scene_s, "--threads", &threads.to_string()])
+                .args(["--workers", &workers.to_string()])
+                .args(split)
                 .args(["--end-time", end, "--output-interval", end, "--out", out_s])
                 .args(["--quiet", "--no-pictures", "--allow-warnings"])
                 .env("RUST_LOG", "warn")
@@ -147,8 +166,14 @@ fn main() {
     let end = args.get(1).cloned().unwrap_or_else(|| "1e-3".into());
     let reps: usize = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(3);
     let modes = [
-        Mode::Local { threads: 1 },
-        Mode::Local { threads: 2 },
+        Mode::Local {
+            threads: 1,
+            workers: 1,
+        },
+        Mode::Local {
+            threads: 2,
+            workers: 1,
+        },
         Mode::Cluster {
             workers: 1,
             split: false,
@@ -168,6 +193,10 @@ fn main() {
             workers: 2,
             split: false,
             spin: true,
+        },
+        Mode::Local {
+            threads: 1,
+            workers: 2,
         },
     ];
     let modes: Vec<Mode> = match args.get(3) {
@@ -204,10 +233,19 @@ fn main() {
         s0.steps
     );
     println!(
-        "| mode | wall [s] | ns/element-cycle | speed-up vs the first | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | final hash |"
+        "| mode | wall [s] | ns/element-cycle | speed-up vs the first | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | worker compute, summed, vs the first | final hash |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let base = median(runs[0].iter().map(|s| s.wall_time_s).collect());
+    // the workers' compute summed (one process: its one in-process worker)
+    let work = |r: &[Summary]| {
+        median(
+            r.iter()
+                .map(|s| s.cluster.compute_ns_per_worker.iter().sum::<u64>() as f64)
+                .collect(),
+        )
+    };
+    let base_work = work(&runs[0]);
     let mut hashes = Vec::new();
     for (mode, r) in modes.iter().zip(&runs) {
         let wall = median(r.iter().map(|s| s.wall_time_s).collect());
@@ -220,7 +258,7 @@ fn main() {
             )
         };
         println!(
-            "| {} | {wall:.2} | {ns:.1} | {:.2}x | {:.0} | {:.1} / {:.1} / {:.1} | {:.1} | {} |",
+            "| {} | {wall:.2} | {ns:.1} | {:.2}x | {:.0} | {:.1} / {:.1} / {:.1} | {:.1} | {:.2}x | {} |",
             mode.label(),
             base / wall,
             part("median"),
@@ -228,6 +266,7 @@ fn main() {
             part("worker_codec"),
             part("wire_wake"),
             part("master_work"),
+            work(r) / base_work,
             r[0].final_state_hash
         );
         hashes.extend(r.iter().map(|s| s.final_state_hash.clone()));
