@@ -237,7 +237,7 @@ fn main() {
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let base = median(runs[0].iter().map(|s| s.wall_time_s).collect());
-    // the workers' compute summed (one process: its one in-process worker)
+    // the workers' compute summed (one process: its in-process workers')
     let work = |r: &[Summary]| {
         median(
             r.iter()
