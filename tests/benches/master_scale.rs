@@ -79,6 +79,7 @@ impl InstantWorker {
             probes: Vec::new(),
             parts: Vec::new(),
             part_dts: Default::default(),
+            split_contacts: Vec::new(),
         }
     }
 

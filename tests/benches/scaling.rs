@@ -60,7 +60,11 @@ impl Mode {
                 spin,
             } => format!(
                 "master{} + {workers} worker(s) x 1 thread{}",
-                if split { " --split auto" } else { "" },
+                if split {
+                    " --split auto"
+                } else {
+                    " --split off"
+                },
                 if spin { ", --idle-spin" } else { "" }
             ),
         }

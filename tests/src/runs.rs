@@ -48,6 +48,24 @@ pub fn rows(s: &RecordSink) -> Vec<[u64; 8]> {
     s.energy.iter().map(|r| bits(r.time, &r.totals)).collect()
 }
 
+/// Exact bits of the contacts.csv rows (pairs with pushed nodes): time, bodies,
+/// normal force, deepest penetration.
+pub fn contact_rows(sink: &RecordSink) -> Vec<(u64, u32, u32, u64, u64)> {
+    let mut out = Vec::new();
+    for (_, time, stats) in &sink.contact_stats {
+        for s in stats.iter().filter(|s| s.active_nodes > 0) {
+            out.push((
+                time.to_bits(),
+                s.a,
+                s.b,
+                s.normal_force.to_bits(),
+                s.max_penetration.to_bits(),
+            ));
+        }
+    }
+    out
+}
+
 /// The single-process reference: the core driver on one group of all bodies.
 pub fn driver_reference(input: &RunInput) -> (Vec<[u64; 8]>, u64) {
     let mut g = Group::new(input.bodies.all().unwrap(), input.gravity);

@@ -7,8 +7,8 @@
 use crash_master::{CostModel, RecordSink, RunOptions};
 use crash_tests::fixtures::test_scene;
 use crash_tests::procs::{master, out_dir, worker};
-use crash_tests::runs::run_local;
 use crash_tests::runs::{bits, input, rows, rows as rows_of};
+use crash_tests::runs::{contact_rows, run_local};
 use std::path::Path;
 use std::time::Duration;
 
@@ -27,23 +27,6 @@ fn local_sink(scene: &str) -> (RecordSink, u64) {
 fn local(scene: &str) -> (Vec<[u64; 8]>, u64) {
     let (sink, hash) = local_sink(scene);
     (rows(&sink), hash)
-}
-
-/// Exact bits of the contacts.csv rows (pairs with pushed nodes).
-fn contact_rows(sink: &RecordSink) -> Vec<(u64, u32, u32, u64, u64)> {
-    let mut out = Vec::new();
-    for (_, time, stats) in &sink.contact_stats {
-        for s in stats.iter().filter(|s| s.active_nodes > 0) {
-            out.push((
-                time.to_bits(),
-                s.a,
-                s.b,
-                s.normal_force.to_bits(),
-                s.max_penetration.to_bits(),
-            ));
-        }
-    }
-    out
 }
 
 /// energy.csv rows and the final hash of a finished run directory.
@@ -117,12 +100,18 @@ fn two_worker_processes_match_the_local_run_bit_for_bit_with_1_and_2_threads() {
 }
 
 /// The CI smoke test: two workers, a small scene whose bodies migrate over the wire
-/// (merge onto one worker, then spread again), same hash as the local run.
+/// (merge onto one worker, then spread again; crash-master's default `--split auto`
+/// splits the group of the two spheres in contact over both), same hash and
+/// contacts.csv as the local run.
 #[test]
 fn two_worker_smoke_with_migration_over_the_wire() {
     let scene = "two-spheres-tiny.toml";
     let (sink, ref_hash) = local_sink(scene);
-    let (rows, hash, _, contacts) = remote(scene, 1, "smoke");
+    let (rows, hash, summary, contacts) = remote(scene, 1, "smoke");
+    assert!(
+        summary.cluster.splits >= 1,
+        "the group in contact was not split"
+    );
     assert!(
         rows == rows_of(&sink),
         "energy rows differ from the local run"

@@ -2,12 +2,12 @@
 //! in-process workers with a group cut into parts on several workers gives the state
 //! hash of the single-process core driver, bit for bit (the showcase, many spheres on one
 //! deformable plate, and a scene whose groups change, so split groups are merged back
-//! and split again).
+//! and split again), and the contact statistics (contacts.csv) of one worker.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_master::{CostModel, RecordSink, RunInput, RunOptions, SplitMode};
 use crash_tests::procs::{master, out_dir, worker};
-use crash_tests::runs::{driver_reference, input, input_of, resume_local, run_local};
+use crash_tests::runs::{contact_rows, driver_reference, input, input_of, resume_local, run_local};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -29,11 +29,21 @@ fn scene(rel: &str, end: f64) -> RunInput {
 }
 
 /// The final state hash over `workers` in-process workers with `split`, and how many
-/// splits were made.
+/// splits were made. Its contact statistics are one worker's, bit for bit: each push
+/// booked once, by the holder owning its slave node, the sums exact.
 fn split_run(inp: &RunInput, workers: usize, split: SplitMode) -> (u64, u64) {
     let mut sink = RecordSink::default();
     let stats = run_local(inp.clone(), workers, &mut sink, &opts(split)).unwrap();
     assert_eq!(Some(stats.final_hash), sink.last_hash);
+    let mut one = RecordSink::default();
+    run_local(inp.clone(), 1, &mut one, &opts(SplitMode::Off)).unwrap();
+    let (got, want) = (contact_rows(&sink), contact_rows(&one));
+    assert!(!want.is_empty(), "no contact in the scene");
+    let first = (0..want.len().max(got.len())).find(|&k| got.get(k) != want.get(k));
+    assert_eq!(
+        first, None,
+        "first contacts.csv row that differs from one worker's"
+    );
     (stats.final_hash, stats.splits)
 }
 

@@ -261,6 +261,10 @@ fn step_report_round_trips_bit_exact() {
             max_penetration_ratio: 0.0075,
             normal_force: 123.456,
             force_on_a: Vec3::new(-1.0, 0.25, 1e-300),
+            tally: crash_core::contact::Tally {
+                normal: i128::MAX - 5,
+                on_a: [-1, i128::MIN, 1 << 100],
+            },
             kin_a: Default::default(),
             kin_b: crash_core::contact::KinLoad {
                 power: -3.5e-7,
@@ -273,6 +277,21 @@ fn step_report_round_trips_bit_exact() {
                     (90_000, Vec3::new(0.0, 1e-300, 2.0)),
                 ],
             },
+        }],
+        split_contacts: vec![crash_core::contact::PairStats {
+            a: 3,
+            b: 7,
+            active_nodes: 2,
+            max_penetration: 2.5e-6,
+            max_penetration_ratio: 0.001,
+            normal_force: 0.5,
+            force_on_a: Vec3::new(0.0, 0.0, -0.5),
+            tally: crash_core::contact::Tally {
+                normal: 1 << 63,
+                on_a: [0, 0, -(1 << 63)],
+            },
+            kin_a: Default::default(),
+            kin_b: Default::default(),
         }],
     };
     let msg = reply_to_pb(&Reply::Report(rep.clone()));

@@ -273,6 +273,7 @@ impl Group {
         let given = Given {
             closing: None,
             figures,
+            counted: &[],
         };
         let limit = crate::contact::stage::contact_forces_given(
             &mut self.bodies,

@@ -278,6 +278,9 @@ pub struct ClusterSummary {
     /// Group changes that kept the split groups as they were (bodies only left them).
     #[serde(default)]
     pub splits_kept: u64,
+    /// Groups split over workers, each time a split was made.
+    #[serde(default)]
+    pub splits: u64,
     pub max_groups: usize,
     /// The groups at the end: smallest body id, member ids, worker.
     pub final_groups: Vec<GroupSummary>,

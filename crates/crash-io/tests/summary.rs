@@ -122,6 +122,7 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
             migrations: 3,
             group_changes: 4,
             splits_kept: 1,
+            splits: 2,
             max_groups: 13,
             final_groups: vec![crash_io::summary::GroupSummary {
                 group: 0,

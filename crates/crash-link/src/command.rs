@@ -138,7 +138,8 @@ pub enum Command {
     Halo(Vec<PartState>),
     /// Run the pending contact pass of the split groups now, with each split body's
     /// element step over all its parts (as the next Step would carry them): before
-    /// the whole bodies are assembled (frames, checkpoints, merging back). `Ack`.
+    /// the whole bodies are assembled (frames, checkpoints, merging back). Answered by
+    /// a `Report` with `split_contacts` only.
     Contact(SplitFigures),
     /// The full states of the parts this worker computes (of every split group), for
     /// the assembly of whole bodies. Answered by `Parts`.
@@ -202,6 +203,11 @@ pub struct StepReport {
     /// pair's closing-speed figures over them (a Halo): merged by the master, they go
     /// back with the next Step (`Step::contact`).
     pub part_dts: SplitFigures,
+    /// This worker's share of the split groups' contact statistics from the pass the
+    /// last step left pending (a Step runs it first, or a Contact), sorted by pair:
+    /// each push booked by the holder owning its slave node, so the master's merge
+    /// per pair (`PairStats::merge`) gives one process's figures.
+    pub split_contacts: Vec<PairStats>,
 }
 
 #[derive(Debug, Clone)]

@@ -30,7 +30,10 @@ use thiserror::Error;
 /// v15: split groups send no velocities for the closing speed: parts send their
 /// momentum on a fixed quantum, holders their largest relative speeds per pair
 /// (PartDts.pair_*), which the master merges and sends back with the next step.
-pub const PROTOCOL_VERSION: u32 = 15;
+/// v16: contact statistics carry their exact force sums (ContactStats.tally); a split
+/// group's holders report their share of its statistics (Report.split_contacts) with
+/// the Step that runs the pending contact pass, and Contact is answered by a Report.
+pub const PROTOCOL_VERSION: u32 = 16;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

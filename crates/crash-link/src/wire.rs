@@ -611,6 +611,8 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
             probes: (!rep.probes.is_empty()).then(|| probes_to_pb(&rep.probes)),
             parts: (!rep.parts.is_empty()).then(|| part_states_to_pb(&rep.parts)),
             part_dts: (!rep.part_dts.is_empty()).then(|| part_dts_to_pb(&rep.part_dts)),
+            split_contacts: (!rep.split_contacts.is_empty())
+                .then(|| contacts_to_pb(&rep.split_contacts)),
         }),
         Reply::Parts(p) => PbReply::Parts(part_bodies_to_pb(p)),
         Reply::Unloaded(bodies) => PbReply::Unloaded(pb::BodyLoads {
@@ -710,6 +712,10 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
         part_dts: match &r.part_dts {
             Some(d) => part_dts_from_pb(d)?,
             None => SplitFigures::default(),
+        },
+        split_contacts: match &r.split_contacts {
+            Some(c) => contacts_from_pb(c)?,
+            None => Vec::new(),
         },
     })
 }

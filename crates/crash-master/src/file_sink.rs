@@ -516,6 +516,7 @@ impl Sink for FileSink {
             migrations: stats.migrations.len(),
             group_changes: stats.group_changes,
             splits_kept: stats.splits_kept,
+            splits: stats.splits,
             max_groups: stats.max_groups,
             final_groups: stats
                 .final_groups

@@ -203,6 +203,7 @@ impl Checkpoints {
         let t = Instant::now();
         s.stats_mut().wall_s = self.wall_before + self.wall.elapsed().as_secs_f64();
         let state = s.checkpoint()?;
+        s.settle_rows(sink)?;
         if disk {
             sink.checkpoint(&state).map_err(MasterError::sink)?;
         }

@@ -79,7 +79,7 @@ struct Args {
     estimated_costs: bool,
     /// Split a group over several workers by elements: off, auto (a group above its
     /// fair share of the work), always. Same bits either way.
-    #[arg(long, default_value = "off", value_name = "WHEN")]
+    #[arg(long, default_value = "auto", value_name = "WHEN")]
     split: crash_master::SplitMode,
     /// Keep a CPU awake between messages with one lowest-priority (SCHED_IDLE)
     /// spinning thread: on virtual machines whose idle vCPUs take tens of microseconds

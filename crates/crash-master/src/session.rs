@@ -76,6 +76,12 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         self.m.checkpoint()
     }
 
+    /// Write the contact rows a split group's pending contact pass holds back (running
+    /// it first): before a checkpoint is written, every row up to its step is.
+    pub fn settle_rows(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        self.m.settle_rows(sink)
+    }
+
     /// Whether the last command found workers gone or frozen: `recover` can continue
     /// without them.
     pub fn has_lost(&self) -> bool {

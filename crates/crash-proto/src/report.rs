@@ -4,7 +4,7 @@ use crate::body::vec3;
 use crate::error::ProtoError;
 use crate::pb;
 use crate::pb::fault::Kind;
-use crash_core::contact::{KinLoad, PairStats};
+use crash_core::contact::{KinLoad, PairStats, Tally};
 use crash_core::{BodyEnergy, BodyReport, Fault, NodeProbe, Reaction};
 
 const VALUES: usize = 15;
@@ -121,6 +121,8 @@ const CONTACT_VALUES: usize = 8;
 /// Stride of `ContactStats::kin_programs` (pair index, side, program, force[3]) and of
 /// `kin_nodes` (pair index, side, node, force[3]).
 const KIN_VALUES: usize = 6;
+/// Words of `ContactStats::tally` per pair: four i128 sums, high and low halves.
+const TALLY_WORDS: usize = 8;
 
 /// Column-pack contact statistics.
 pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
@@ -130,8 +132,17 @@ pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
         values: Vec::with_capacity(CONTACT_VALUES * stats.len()),
         kin_programs: Vec::new(),
         kin_nodes: Vec::new(),
+        tally: Vec::with_capacity(TALLY_WORDS * stats.len()),
     };
     for (k, s) in stats.iter().enumerate() {
+        for v in [
+            s.tally.normal,
+            s.tally.on_a[0],
+            s.tally.on_a[1],
+            s.tally.on_a[2],
+        ] {
+            out.tally.extend_from_slice(&[(v >> 64) as u64, v as u64]);
+        }
         out.pairs.extend_from_slice(&[s.a, s.b]);
         out.active_nodes.push(s.active_nodes as u64);
         out.values.extend_from_slice(&[
@@ -160,20 +171,26 @@ pub fn contacts_to_pb(stats: &[PairStats]) -> pb::ContactStats {
 
 pub fn contacts_from_pb(p: &pb::ContactStats) -> Result<Vec<PairStats>, ProtoError> {
     let n = p.active_nodes.len();
-    if p.pairs.len() != 2 * n || p.values.len() != CONTACT_VALUES * n {
+    if p.pairs.len() != 2 * n
+        || p.values.len() != CONTACT_VALUES * n
+        || p.tally.len() != TALLY_WORDS * n
+    {
         return Err(ProtoError::Invalid(format!(
-            "contact statistics of {n} pairs have {} ids and {} values",
+            "contact statistics of {n} pairs have {} ids, {} values and {} sum words",
             p.pairs.len(),
-            p.values.len()
+            p.values.len(),
+            p.tally.len()
         )));
     }
     let mut out = Vec::with_capacity(n);
-    for ((ab, &active), v) in p
+    for (((ab, &active), v), t) in p
         .pairs
         .chunks_exact(2)
         .zip(&p.active_nodes)
         .zip(p.values.chunks_exact(CONTACT_VALUES))
+        .zip(p.tally.chunks_exact(TALLY_WORDS))
     {
+        let word = |k: usize| (i128::from(t[2 * k] as i64) << 64) | i128::from(t[2 * k + 1]);
         out.push(PairStats {
             a: ab[0],
             b: ab[1],
@@ -182,6 +199,10 @@ pub fn contacts_from_pb(p: &pb::ContactStats) -> Result<Vec<PairStats>, ProtoErr
             max_penetration_ratio: v[1],
             normal_force: v[2],
             force_on_a: vec3(&v[3..6]),
+            tally: Tally {
+                normal: word(0),
+                on_a: [word(1), word(2), word(3)],
+            },
             kin_a: KinLoad {
                 power: v[6],
                 ..KinLoad::default()

@@ -485,6 +485,7 @@ impl Engine {
             probes: Vec::new(),
             parts: Vec::new(),
             part_dts: Default::default(),
+            split_contacts: Vec::new(),
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.first();

@@ -16,6 +16,7 @@ pub(crate) mod segpair;
 pub mod smooth;
 pub mod speeds;
 pub mod stage;
+pub mod stats;
 pub mod stiffening;
 pub mod surface;
 pub mod sweep;
@@ -28,6 +29,6 @@ pub use config::{
 };
 pub use segment::{project, segments, Projection, Segment};
 pub use stage::{
-    body_bounds, check_moves, contact_forces, initial_penetrations, ContactState, KinLoad,
-    PairStats, Penetration,
+    body_bounds, check_moves, contact_forces, initial_penetrations, ContactState, Penetration,
 };
+pub use stats::{KinLoad, PairStats, Tally};

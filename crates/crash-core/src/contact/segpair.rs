@@ -7,7 +7,7 @@ use super::curved::{normal_pullback, NormalOf};
 use super::quadrature::BULGE_REACH;
 use super::quadrature::{point_pushes, NormalLoad, Points};
 use super::reach::{near_sets, union};
-use super::stage::{KinLoad, PairStats};
+use super::stats::{KinLoad, PairStats};
 use super::surface::Surface;
 use crate::body::Body;
 use crate::Vec3;
@@ -67,7 +67,7 @@ pub(crate) fn segment_pair(
     }
     st.kin_a.settle_nodes();
     st.kin_b.settle_nodes();
-    st.max_penetration_ratio = st.max_penetration / thin;
+    st.settle(thin);
     st
 }
 
@@ -141,9 +141,11 @@ fn apply_points(
             &p.master_f[..p.master_count as usize],
             &mut l_m,
         );
-        st.max_penetration = st.max_penetration.max(p.depth);
-        st.normal_force += p.normal_force;
-        st.force_on_a += if slave_is_a { p.force } else { -p.force };
+        st.book(
+            p.depth,
+            p.normal_force,
+            Some(if slave_is_a { p.force } else { -p.force }),
+        );
     }
     if slave_is_a {
         (st.kin_a, st.kin_b) = (l_s, l_m);

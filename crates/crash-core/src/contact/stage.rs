@@ -16,132 +16,17 @@ use super::narrow::{forces, search, Hit, Normals, Push};
 use super::passes::{all_pair_passes, PairJob};
 use super::segment::Segment;
 use super::segpair::segment_pair;
+use super::stats::PairStats;
 use super::stiffening;
 use super::surface::Surface;
 use super::sweep::{closing_speed, BodySpeed};
 use super::verlet::NodeLists;
-use crate::body::{Body, NO_PROGRAM};
+use crate::body::Body;
 use crate::error::Fault;
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::mem::take;
-
-/// What a pair's forces from one pass do to a kinematic body over the next step, kept
-/// so that its work can be counted by the integration's own rule once that step's
-/// length is known: W = hbar f_n . (v_{n-1/2} + v_{n+1/2}) / 2 summed over the nodes,
-/// where v_{n+1/2} is the prescribed velocity (every DOF of a kinematic body is).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct KinLoad {
-    /// Sum over the pushes of f . v, v the node's velocity at the pass [W].
-    pub power: f64,
-    /// Force summed per velocity program of the pushed nodes, sorted by program; nodes
-    /// held at rest (no program) are left out [N].
-    pub by_program: Vec<(u16, Vec3)>,
-    /// The force per node, sorted by node, each summed in hit order [N]: what an output
-    /// frame shows on the kinematic body (the master sums the pairs in pair order);
-    /// workers send it only before a frame (empty otherwise).
-    #[serde(default)]
-    pub nodes: Vec<(u32, Vec3)>,
-}
-
-impl KinLoad {
-    pub(crate) fn push(&mut self, node: u32, f: Vec3, v: Vec3, program: u16) {
-        self.nodes.push((node, f));
-        self.power += f.dot(&v);
-        if program == NO_PROGRAM {
-            return;
-        }
-        match self.by_program.binary_search_by_key(&program, |p| p.0) {
-            Ok(k) => self.by_program[k].1 += f,
-            Err(k) => self.by_program.insert(k, (program, f)),
-        }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.power == 0.0 && self.by_program.is_empty() && self.nodes.is_empty()
-    }
-
-    /// A copy with or without the per-node forces (sent only before a frame).
-    fn copy(&self, nodes: bool) -> Self {
-        Self {
-            power: self.power,
-            by_program: self.by_program.clone(),
-            nodes: if nodes {
-                self.nodes.clone()
-            } else {
-                Vec::new()
-            },
-        }
-    }
-
-    /// Sum the pushes per node (kept in hit order by the stable sort).
-    pub(crate) fn settle_nodes(&mut self) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        self.nodes.sort_by_key(|n| n.0);
-        let mut out: Vec<(u32, Vec3)> = Vec::with_capacity(self.nodes.len());
-        for &(n, f) in &self.nodes {
-            match out.last_mut() {
-                Some(last) if last.0 == n => last.1 += f,
-                _ => out.push((n, f)),
-            }
-        }
-        self.nodes = out;
-    }
-}
-
-/// Contact statistics of one candidate body pair after a force pass.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PairStats {
-    /// Body ids, a <= b (a == b: self-contact).
-    pub a: u32,
-    pub b: u32,
-    /// Nodes (of either body) pushed by a penalty force.
-    pub active_nodes: usize,
-    /// Largest penetration depth [m] and its ratio to the thinner body's thickness.
-    pub max_penetration: f64,
-    pub max_penetration_ratio: f64,
-    /// Sum of the normal force magnitudes [N].
-    pub normal_force: f64,
-    /// Resultant contact force on body a from body b [N].
-    pub force_on_a: Vec3,
-    /// This pass's forces on body a (on body b) when it is kinematic (empty otherwise),
-    /// whose own motion never feels contact: per pair, so that the energy ledger
-    /// (`KinematicWork`) counts their work in pair order whatever the grouping.
-    #[serde(default)]
-    pub kin_a: KinLoad,
-    #[serde(default)]
-    pub kin_b: KinLoad,
-}
-
-impl PairStats {
-    /// The statistics of pair (a, b) before any push is booked.
-    pub(crate) fn empty(a: u32, b: u32, active_nodes: usize) -> Self {
-        Self {
-            a,
-            b,
-            active_nodes,
-            max_penetration: 0.0,
-            max_penetration_ratio: 0.0,
-            normal_force: 0.0,
-            force_on_a: Vec3::zeros(),
-            kin_a: KinLoad::default(),
-            kin_b: KinLoad::default(),
-        }
-    }
-
-    /// A copy for a step report: the per-node loads on kinematic bodies only when
-    /// `nodes` (a frame follows), so other steps neither copy nor send them.
-    pub fn for_report(&self, nodes: bool) -> Self {
-        Self {
-            kin_a: self.kin_a.copy(nodes),
-            kin_b: self.kin_b.copy(nodes),
-            ..*self
-        }
-    }
-}
 
 /// Search caches of a group (R-trees, Verlet reference positions) and the last pass's
 /// statistics. Not part of the physical state: rebuilt lazily after deserialization.
@@ -266,6 +151,7 @@ pub fn contact_forces(
     let given = Given {
         closing: None,
         figures: &[],
+        counted: &[],
     };
     contact_forces_given(bodies, cfg, state, element_dt, bounds, h, step, given)
 }
@@ -273,11 +159,14 @@ pub fn contact_forces(
 /// What a caller of the stage already knows: the closing-speed steps of a split
 /// group's pairs (`closing`: then they are not computed), and the figures the
 /// integration took of each body's nodes in the step that led here (`figures`, by body
-/// index; empty or None where it took none).
+/// index; empty or None where it took none), and which nodes' pushes the statistics
+/// book (`counted`, by body index then node; empty: every node): a split group's
+/// views overlap, and each push is booked by the holder owning its slave node.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Given<'a> {
     pub closing: Option<&'a BTreeMap<(u32, u32), Option<f64>>>,
     pub figures: &'a [Option<NodeFigures>],
+    pub counted: &'a [Vec<bool>],
 }
 
 /// The closing-speed step of a pair of different bodies (`SpeedRule::LimitDt`): a
@@ -493,7 +382,7 @@ pub(crate) fn contact_forces_given(
                 node: nb_,
             },
         );
-        let mut st = PairStats::empty(a.def.id, b.def.id, first.len() + second.len());
+        let mut st = PairStats::empty(a.def.id, b.def.id, 0);
         let thin = a.def.section.thickness.min(b.def.section.thickness);
         let segs_b: Vec<Segment> = first
             .iter()
@@ -503,27 +392,45 @@ pub(crate) fn contact_forces_given(
             .iter()
             .map(|p| sa.segments[p.hit.segment as usize])
             .collect();
-        apply(bodies, ia, ib, &first, &segs_b, &mut st, true);
-        apply(bodies, ib, ia, &second, &segs_a, &mut st, false);
+        let counted = |k: usize| given.counted.get(k).map(Vec::as_slice);
+        apply(
+            bodies,
+            (ia, ib),
+            &first,
+            &segs_b,
+            &mut st,
+            true,
+            counted(ia),
+        );
+        apply(
+            bodies,
+            (ib, ia),
+            &second,
+            &segs_a,
+            &mut st,
+            false,
+            counted(ib),
+        );
         st.kin_a.settle_nodes();
         st.kin_b.settle_nodes();
-        st.max_penetration_ratio = st.max_penetration / thin;
+        st.settle(thin);
         state.stats.push(st);
     }
     Ok(dt)
 }
 
-/// Add the pushes of one pass: +f on the node of body `inode`, -w_k f on the segment
-/// nodes of body `iseg`, sequentially in hit order; what lands on a kinematic body goes
-/// into the pair's `KinLoad` too.
+/// Add the pushes of one pass (nodes of body `inode` on segments of `iseg`): +f on
+/// the node, -w_k f on the segment nodes, sequentially in hit order; what lands on a
+/// kinematic body goes into the pair's `KinLoad` too. The pair's statistics book the
+/// pushes whose node `counted` holds (every push without it).
 fn apply(
     bodies: &mut [Body],
-    inode: usize,
-    iseg: usize,
+    (inode, iseg): (usize, usize),
     pushes: &[Push],
     segs: &[Segment],
     st: &mut PairStats,
     node_body_is_a: bool,
+    counted: Option<&[bool]>,
 ) {
     let (kin_node, kin_seg) = (bodies[inode].def.kinematic, bodies[iseg].def.kinematic);
     // the pair's loads so far (the first pass's), continued by this pass in hit order
@@ -547,10 +454,10 @@ fn apply(
                 l_seg.push(n, -f, b.state.v[n as usize], b.def.program[n as usize]);
             }
         }
-        st.max_penetration = st.max_penetration.max(p.hit.depth);
-        st.normal_force += p.normal_force;
-        if inode != iseg {
-            st.force_on_a += if node_body_is_a { p.force } else { -p.force };
+        if counted.is_none_or(|c| c.get(node).copied().unwrap_or(false)) {
+            st.active_nodes += 1;
+            let on_a = (inode != iseg).then(|| if node_body_is_a { p.force } else { -p.force });
+            st.book(p.hit.depth, p.normal_force, on_a);
         }
     }
     // (a kinematic body has no self pair: the seg side is the node side only there)

@@ -42,7 +42,7 @@ use crate::contact::stage::{
 };
 use crate::contact::surface::Surface;
 use crate::contact::sweep::BodySpeed;
-use crate::contact::{check_moves, ContactConfig, PenaltyKind};
+use crate::contact::{check_moves, ContactConfig, PairStats, PenaltyKind};
 use crate::contact::{ContactPass, SpeedRule};
 use crate::error::{CoreError, Fault};
 use crate::Vec3;
@@ -87,6 +87,8 @@ pub struct GroupSplit {
     /// Select the node lists of the other parts' views too (no sub-bodies): a shared
     /// group derives from them what each part sends the other holders.
     pub(super) all_lists: bool,
+    /// Contact statistics of the last pass, the parts computed here (`contact_stats`).
+    stats: Vec<PairStats>,
     /// The holder of each part (`holder[i][q]`; empty: every part its own), so that
     /// a holder's parts share one contact view and only what another holder reads
     /// crosses the wire (`export::exports`). Set before the first view build.
@@ -138,6 +140,7 @@ impl GroupSplit {
             mine: parts.iter().map(|&k| vec![true; k]).collect(),
             all_lists: false,
             holder: Vec::new(),
+            stats: Vec::new(),
         })
     }
 
@@ -322,6 +325,7 @@ impl GroupSplit {
         if rebuild {
             self.build_views()?;
         }
+        self.stats.clear();
         for view in self.views.iter_mut() {
             if !view.parts.iter().any(|&(i, q)| self.mine[i][q]) {
                 continue;
@@ -358,6 +362,7 @@ impl GroupSplit {
                     Given {
                         closing: Some(closing),
                         figures: &[],
+                        counted: &view.counted,
                     },
                 )
                 .map_err(|f| in_whole(f, view))?;
@@ -378,6 +383,7 @@ impl GroupSplit {
                     fc[k] = own[at as usize];
                 }
             }
+            merge_stats(&mut self.stats, view.state.stats());
         }
         Ok(rebuild)
     }
@@ -405,18 +411,20 @@ impl GroupSplit {
         (nodes, owned)
     }
 
-    /// Pushes computed by the parts in the last pass, summed over the parts (those that
-    /// touch no owned node of their part are computed and dropped).
-    pub fn pushes(&self) -> usize {
-        self.views
-            .iter()
-            .map(|v| {
-                v.state
-                    .stats()
-                    .iter()
-                    .map(|s| s.active_nodes)
-                    .sum::<usize>()
-            })
-            .sum()
+    /// Contact statistics of the last pass over the parts computed here, sorted by
+    /// pair: each push booked once, by the view of the part owning its slave node, so
+    /// over every holder they add up to the whole group's (`PairStats::merge`).
+    pub fn contact_stats(&self) -> &[PairStats] {
+        &self.stats
+    }
+}
+
+/// Add the statistics of one view (sorted by pair) into `into` (sorted by pair).
+fn merge_stats(into: &mut Vec<PairStats>, add: &[PairStats]) {
+    for s in add {
+        match into.binary_search_by_key(&(s.a, s.b), |x| (x.a, x.b)) {
+            Ok(k) => into[k].merge(s),
+            Err(k) => into.insert(k, s.for_report(false)),
+        }
     }
 }

@@ -49,6 +49,9 @@ pub struct View {
     /// Per part of `parts` of a contact body: its body among `bodies` and the view
     /// index of each owned node.
     pub(super) owned_at: Vec<Option<OwnedAt>>,
+    /// Per view body and view node: owned by one of `parts` (the contact statistics
+    /// book the pushes of these slave nodes only: each push once over all views).
+    pub(super) counted: Vec<Vec<bool>>,
     pub(super) state: ContactState,
 }
 
@@ -62,6 +65,7 @@ impl View {
             fill: Vec::new(),
             parts,
             owned_at: Vec::new(),
+            counted: Vec::new(),
             state: ContactState::default(),
         }
     }
@@ -175,6 +179,7 @@ impl GroupSplit {
             }
             if mine {
                 view.owned_at = owned_at(&view, &self.splits, &self.whole)?;
+                view.counted = counted(&view);
             }
             views.push(view);
         }
@@ -248,6 +253,21 @@ fn owned_at(
             Ok(Some((k, at)))
         })
         .collect()
+}
+
+/// Per view body, which view nodes the view's parts own (from `owned_at`).
+fn counted(view: &View) -> Vec<Vec<bool>> {
+    let mut out: Vec<Vec<bool>> = view
+        .bodies
+        .iter()
+        .map(|b| vec![false; b.state.x.len()])
+        .collect();
+    for (own, at) in view.owned_at.iter().flatten() {
+        for &k in at {
+            out[*own][k as usize] = true;
+        }
+    }
+    out
 }
 
 /// Node boxes of the elements of some bodies (each with its element list) at their

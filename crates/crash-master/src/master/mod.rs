@@ -30,6 +30,7 @@ use crash_link::{LinkError, WorkerLink};
 mod barrier;
 mod confirm;
 mod groups;
+mod held;
 mod newcomers;
 mod output;
 mod placement;
@@ -165,6 +166,8 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     /// pair's closing-speed figures, for the contact pass it left pending (empty when
     /// none is): the next Step carries them.
     split_contact: crash_core::partition::SplitFigures,
+    /// The last step's contact rows while its split groups' contact pass is pending.
+    held: Option<held::HeldRows>,
     pub(crate) stats: RunStats,
 }
 
@@ -275,6 +278,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             hashed_step: None,
             splits: Vec::new(),
             split_contact: Default::default(),
+            held: None,
             stats: RunStats::default(),
         })
     }

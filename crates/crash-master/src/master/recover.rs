@@ -64,6 +64,7 @@ impl<L: WorkerLink> Master<'_, L> {
         // a Reset forgets the split groups too; the rule splits again at the next regroup
         self.splits.clear();
         self.split_contact = Default::default();
+        self.held = None;
         self.restore_loop(ck);
         let placement = self.place_all();
         // per body: does its new worker lack the definition?

@@ -31,7 +31,8 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     /// Hand the due rows to the sink (`before`: the step's start time, None at the
-    /// start of the run).
+    /// start of the run); the rcforc row not while the step's contact rows are held
+    /// (held.rs writes it with them).
     pub(super) fn write_results(
         &mut self,
         sink: &mut dyn Sink,
@@ -39,6 +40,7 @@ impl<L: WorkerLink> Master<'_, L> {
     ) -> Result<(), MasterError> {
         let (step, now) = (self.clock.step, self.clock.time);
         let [matsum, rcforc, nodout, spcforc] = self.rows_due(before, now);
+        let rcforc = rcforc && self.held.is_none();
         let rows = ResultRows {
             matsum: matsum.then_some(&self.reports[..]),
             rcforc: rcforc.then_some(&self.contacts[..]),

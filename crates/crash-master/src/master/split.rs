@@ -445,8 +445,9 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     /// Run the contact pass the last step left pending on every holder, with the
-    /// element steps kept from it (before the whole bodies are assembled).
-    fn flush_split_contact(&mut self) -> Result<(), MasterError> {
+    /// element steps kept from it (before the whole bodies are assembled); its
+    /// statistics complete the held rows (held.rs).
+    pub(super) fn flush_split_contact(&mut self) -> Result<(), MasterError> {
         if self.split_contact.is_empty() {
             return Ok(());
         }
@@ -460,7 +461,16 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
-        self.expect_acks(cmds, "Contact")
+        let mut reps = vec![StepReport::default(); nw];
+        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+            for reply in r {
+                let Reply::Report(rep) = reply else {
+                    return Err(self.bad_reply(w, "Contact"));
+                };
+                reps[w].split_contacts.extend(rep.split_contacts);
+            }
+        }
+        self.take_split_stats(&mut reps)
     }
 
     /// Worker `w` computes parts of a split group holding body `id`.

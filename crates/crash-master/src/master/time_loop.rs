@@ -119,11 +119,15 @@ impl<L: WorkerLink> Master<'_, L> {
                 },
                 "Step",
             )?;
+            // the split groups' contact statistics of the pass this Step ran first
+            self.take_split_stats(&mut reps)?;
             // split groups: one more exchange (split.rs)
             self.relay_split(&mut reps)?;
             reps
         };
         let wall = ns(t0);
+        // the last step's rows, if held for those statistics (held.rs)
+        self.release_rows(sink)?;
         // a fault being replayed did not recur: its reporter lied (confirm.rs)
         self.replayed_without_fault(at.step);
         let slowest = reps
@@ -159,8 +163,13 @@ impl<L: WorkerLink> Master<'_, L> {
         let (step, time) = (self.clock.step, self.clock.time);
         sink.energy(step, time, &energy)
             .map_err(MasterError::sink)?;
-        sink.contact_stats(step, time, &self.contacts)
-            .map_err(MasterError::sink)?;
+        if self.rows_wait() {
+            let [_, rcforc, _, _] = self.rows_due(Some(at.time), time);
+            self.hold_rows(rcforc);
+        } else {
+            sink.contact_stats(step, time, &self.contacts)
+                .map_err(MasterError::sink)?;
+        }
         self.write_results(sink, Some(at.time))?;
         let boxes: Vec<BodyBox> = self.reports.iter().map(|r| self.box_of(r)).collect();
         let changed = self.update_meim(&boxes);
@@ -248,6 +257,7 @@ impl<L: WorkerLink> Master<'_, L> {
 
     /// Final frame (the state hash) and statistics.
     pub(crate) fn finish(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        self.settle_rows(sink)?;
         self.output(sink, true)?;
         self.record_progress();
         let b = &self.stats.barrier;

@@ -206,6 +206,8 @@ impl Engine {
                     let first = s.first();
                     return Some(self.failed(first, e));
                 }
+                rep.split_contacts
+                    .extend_from_slice(s.g.split.contact_stats());
                 if s.g.split.builds != builds {
                     tracing::debug!(
                         "step {}: split group of body {}: contact views built ({} so far), export nodes per part {:?}",
@@ -295,11 +297,13 @@ impl Engine {
     }
 
     /// The pending contact pass of every split group held here, before an assembly
-    /// (the master sends the element steps the next Step would carry).
+    /// (the master sends the element steps the next Step would carry); the report
+    /// carries this worker's share of their contact statistics.
     pub(super) fn contact(&mut self, dts: SplitFigures) -> Reply {
         if self.broken {
             return Reply::Error(EngineError::Broken.to_string());
         }
+        let mut rep = StepReport::default();
         for k in 0..self.shared.len() {
             let s = &mut self.shared[k];
             if !s.g.contact_pending() {
@@ -315,8 +319,10 @@ impl Engine {
                 let first = s.first();
                 return self.failed(first, e);
             }
+            rep.split_contacts
+                .extend_from_slice(s.g.split.contact_stats());
         }
-        Reply::Ack
+        Reply::Report(rep)
     }
 
     /// No contact pass is pending (an assembly reads the contact forces).

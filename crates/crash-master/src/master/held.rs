@@ -1,0 +1,118 @@
+//! Contact rows held for a split group's pending contact pass. A split group's
+//! contact pass of step n runs on its holders at the start of step n + 1 (or in a
+//! `Contact` before an assembly: split.rs), so its statistics arrive one exchange
+//! after the step's other figures. The step's contacts.csv rows and its rcforc row
+//! wait for them: each holder books the pushes of the slave nodes it owns, the master
+//! merges the shares per pair (`PairStats::merge`: exact sums, the bits of one
+//! process) with the unsplit groups' statistics, and writes the step's rows then,
+//! before any row of a later step and before a checkpoint is written.
+
+use super::Master;
+use crate::error::MasterError;
+use crate::sink::{ResultRows, Sink};
+use crash_core::contact::PairStats;
+use crash_link::{StepReport, WorkerLink};
+
+/// A step's contact rows waiting for its split groups' statistics.
+#[derive(Debug, Clone)]
+pub(super) struct HeldRows {
+    step: u64,
+    time: f64,
+    /// The unsplit groups' statistics of the step.
+    contacts: Vec<PairStats>,
+    /// The step writes an rcforc row.
+    rcforc: bool,
+    /// The split groups' statistics, merged over the holders (None: the pass is still
+    /// pending).
+    split: Option<Vec<PairStats>>,
+}
+
+/// Add a holder's share of statistics (sorted by pair) into `into` (sorted by pair).
+fn merge_shares(into: &mut Vec<PairStats>, share: &[PairStats]) {
+    for s in share {
+        match into.binary_search_by_key(&(s.a, s.b), |x| (x.a, x.b)) {
+            Ok(k) => into[k].merge(s),
+            Err(k) => into.insert(k, s.clone()),
+        }
+    }
+}
+
+impl<L: WorkerLink> Master<'_, L> {
+    /// Whether the step just gathered left a split group's contact pass pending: its
+    /// contact rows are then held (`hold_rows`) rather than written.
+    pub(super) fn rows_wait(&self) -> bool {
+        !self.split_contact.is_empty()
+    }
+
+    /// Hold the rows of the step just gathered (`rcforc`: it writes an rcforc row).
+    pub(super) fn hold_rows(&mut self, rcforc: bool) {
+        self.held = Some(HeldRows {
+            step: self.clock.step,
+            time: self.clock.time,
+            contacts: self.contacts.clone(),
+            rcforc,
+            split: None,
+        });
+    }
+
+    /// The holders' shares of the pending pass's statistics, from the replies that ran
+    /// it (a Step's or a Contact's, by worker): checked, merged per pair. Rows are held
+    /// exactly while a pass is pending, so replies that come while rows are held are
+    /// the ones that ran it.
+    pub(super) fn take_split_stats(&mut self, reps: &mut [StepReport]) -> Result<(), MasterError> {
+        let mut merged: Vec<PairStats> = Vec::new();
+        for (w, rep) in reps.iter_mut().enumerate() {
+            let share = std::mem::take(&mut rep.split_contacts);
+            for c in &share {
+                let finite = c.max_penetration.is_finite()
+                    && c.max_penetration_ratio.is_finite()
+                    && c.kin_a.is_empty()
+                    && c.kin_b.is_empty();
+                if !(finite && c.a <= c.b && self.holds_part(w, c.a) && self.holds_part(w, c.b)) {
+                    let what = format!("split contact statistics of the pair ({}, {})", c.a, c.b);
+                    return Err(self.implausible(w, &what));
+                }
+            }
+            merge_shares(&mut merged, &share);
+        }
+        if let Some(h) = self.held.as_mut().filter(|h| h.split.is_none()) {
+            h.split = Some(merged);
+        }
+        Ok(())
+    }
+
+    /// Write the held rows once their split statistics are in.
+    pub(super) fn release_rows(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        if self.held.as_ref().is_none_or(|h| h.split.is_none()) {
+            return Ok(());
+        }
+        let Some(h) = self.held.take() else {
+            return Ok(());
+        };
+        let mut rows = h.contacts;
+        rows.extend(h.split.unwrap_or_default());
+        rows.sort_by_key(|c| (c.a, c.b));
+        sink.contact_stats(h.step, h.time, &rows)
+            .map_err(MasterError::sink)?;
+        if h.rcforc {
+            let only = ResultRows {
+                matsum: None,
+                rcforc: Some(&rows),
+                nodout: None,
+                spcforc: None,
+            };
+            sink.results(h.step, h.time, &only)
+                .map_err(MasterError::sink)?;
+        }
+        Ok(())
+    }
+
+    /// Write the held rows now: run the pending contact pass first if it still is
+    /// (before a checkpoint is written, and at the end of the run).
+    pub(crate) fn settle_rows(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        if self.held.as_ref().is_some_and(|h| h.split.is_none()) {
+            self.flush_split_contact()?;
+        }
+        self.release_rows(sink)
+    }
+}
