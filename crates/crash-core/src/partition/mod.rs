@@ -12,6 +12,7 @@ mod contact;
 mod export;
 mod parts;
 mod report;
+mod select;
 mod shared;
 mod view;
 

@@ -1,13 +1,11 @@
 //! Contact views of a split group (`GroupSplit`): what each holder's view holds,
 //! how it is selected and filled (the reach rule is in `contact`'s module text).
 
+use super::select::{element_boxes, select, Reach};
 use super::{GroupSplit, Split};
 use crate::body::Body;
 use crate::contact::ContactState;
 use crate::error::{CoreError, Fault};
-use crate::Vec3;
-use rstar::primitives::Rectangle;
-use rstar::{RTree, AABB};
 use std::collections::BTreeMap;
 
 /// What a contact view holds, for the tests that show each piece is needed.
@@ -129,6 +127,21 @@ impl GroupSplit {
             .map(|b| b.def.section.thickness)
             .fold(0.0, f64::max);
         let g = tmax + 2.0 * self.skin;
+        let contact = |j: usize| self.whole[j].def.contact;
+        // every element of every contact body, once
+        let every: Vec<Vec<u32>> = self
+            .whole
+            .iter()
+            .map(|b| (0..b.def.element_count() as u32).collect())
+            .collect();
+        let all = element_boxes(
+            self.whole
+                .iter()
+                .zip(&every)
+                .enumerate()
+                .filter(|(j, _)| contact(*j))
+                .map(|(j, (b, e))| (j, b, &e[..])),
+        );
         let mut views = Vec::new();
         for parts in self.view_parts() {
             let mine = parts.iter().any(|&(i, q)| self.mine[i][q]);
@@ -140,16 +153,20 @@ impl GroupSplit {
             }
             // only the parts of contact bodies read contact forces
             let boxes = element_boxes(view.parts.iter().filter_map(|&(i, q)| {
-                let b = &self.whole[i];
-                b.def
-                    .contact
-                    .then(|| (b, &self.splits[i].parts[q].element[..]))
+                contact(i).then(|| (i, &self.whole[i], &self.splits[i].parts[q].element[..]))
             }));
-            for (j, b) in self.whole.iter().enumerate() {
-                if !b.def.contact {
-                    continue;
-                }
-                let (node, element) = select(b, &boxes, g, self.rule.ring);
+            let reach = Reach {
+                all: &all,
+                mine: &boxes,
+                g,
+                ring: self.rule.ring,
+            };
+            let owned = |j: usize, n: u32| {
+                let q = self.splits[j].owner[n as usize].0 as usize;
+                view.gives(j, q)
+            };
+            let picked = select(&self.whole, owned, &reach);
+            for (j, (b, (node, element))) in self.whole.iter().zip(picked).enumerate() {
                 if node.is_empty() {
                     continue;
                 }
@@ -178,7 +195,7 @@ impl GroupSplit {
                 view.element.push(element);
             }
             if mine {
-                view.owned_at = owned_at(&view, &self.splits, &self.whole)?;
+                view.owned_at = owned_at(&view, &self.splits, &self.whole);
                 view.counted = counted(&view);
             }
             views.push(view);
@@ -219,38 +236,33 @@ fn runs(owner: impl Iterator<Item = (u32, u32)>) -> Vec<Run> {
     out
 }
 
-/// A part's body among its view's bodies, and the view index of each owned node.
+/// A part's body among its view's bodies, and the view index of each owned node
+/// (`NOT_IN_VIEW` for an owned node no hit can touch: its contact force is zero).
 pub(super) type OwnedAt = (usize, Vec<u32>);
 
-/// Per part of a view (of a contact body): its body among the view's bodies and the
-/// view index of each of its owned nodes.
-fn owned_at(
-    view: &View,
-    splits: &[Split],
-    whole: &[Body],
-) -> Result<Vec<Option<OwnedAt>>, CoreError> {
+/// The view index of an owned node that is not in the view.
+pub(super) const NOT_IN_VIEW: u32 = u32::MAX;
+
+/// Per part of a view (of a contact body with nodes in the view): its body among the
+/// view's bodies and the view index of each of its owned nodes.
+fn owned_at(view: &View, splits: &[Split], whole: &[Body]) -> Vec<Option<OwnedAt>> {
     view.parts
         .iter()
         .map(|&(i, q)| {
             if !whole[i].def.contact {
-                return Ok(None);
+                return None;
             }
-            let missing = || CoreError::Other {
-                body: whole[i].def.name.clone(),
-                what: "an owned node is not in its part's contact view".into(),
-            };
-            let k = view
-                .index
-                .iter()
-                .position(|&j| j == i)
-                .ok_or_else(missing)?;
+            let k = view.index.iter().position(|&j| j == i)?;
             let p = &splits[i].parts[q];
             let at = p.node[..p.owned]
                 .iter()
-                .map(|n| view.node[k].binary_search(n).map(|k| k as u32))
-                .collect::<Result<_, _>>()
-                .map_err(|_| missing())?;
-            Ok(Some((k, at)))
+                .map(|n| {
+                    view.node[k]
+                        .binary_search(n)
+                        .map_or(NOT_IN_VIEW, |k| k as u32)
+                })
+                .collect();
+            Some((k, at))
         })
         .collect()
 }
@@ -263,103 +275,11 @@ fn counted(view: &View) -> Vec<Vec<bool>> {
         .map(|b| vec![false; b.state.x.len()])
         .collect();
     for (own, at) in view.owned_at.iter().flatten() {
-        for &k in at {
+        for &k in at.iter().filter(|&&k| k != NOT_IN_VIEW) {
             out[*own][k as usize] = true;
         }
     }
     out
-}
-
-/// Node boxes of the elements of some bodies (each with its element list) at their
-/// current positions, in one R-tree.
-fn element_boxes<'a>(
-    parts: impl Iterator<Item = (&'a Body, &'a [u32])>,
-) -> RTree<Rectangle<[f64; 3]>> {
-    let boxes = parts
-        .flat_map(|(b, element)| {
-            element.iter().map(move |&e| {
-                let (lo, hi) = node_box(b, e as usize);
-                Rectangle::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
-            })
-        })
-        .collect();
-    RTree::bulk_load(boxes)
-}
-
-/// Box of element e's nodes (triangles then quads) at the current positions.
-fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
-    let d = &b.def;
-    let nt = d.tris.len();
-    let ns: &[u32] = if e < nt {
-        &d.tris[e].nodes
-    } else {
-        &d.quads[e - nt].nodes
-    };
-    ns.iter().fold(crate::mesh::bounds(&[]), |(lo, hi), &n| {
-        let p = b.state.x[n as usize];
-        (lo.inf(&p), hi.sup(&p))
-    })
-}
-
-/// Does the box (lo, hi) grown by r meet one of the part's element boxes?
-fn near(part: &RTree<Rectangle<[f64; 3]>>, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
-    let q = AABB::from_corners(
-        [lo.x - r, lo.y - r, lo.z - r],
-        [hi.x + r, hi.y + r, hi.z + r],
-    );
-    part.locate_in_envelope_intersecting(&q).next().is_some()
-}
-
-/// The nodes and elements (whole-body indices, sorted) of body `b` in the contact view
-/// of a part whose element boxes are `part`: the slaves within g of an element box of
-/// the part, the segments whose node box comes within 2g of one, and (`ring`) every
-/// segment at one of their nodes.
-fn select(b: &Body, part: &RTree<Rectangle<[f64; 3]>>, g: f64, ring: bool) -> (Vec<u32>, Vec<u32>) {
-    let d = &b.def;
-    let x = &b.state.x;
-    let nt = d.tris.len();
-    let nodes_of = |e: usize| -> &[u32] {
-        if e < nt {
-            &d.tris[e].nodes
-        } else {
-            &d.quads[e - nt].nodes
-        }
-    };
-    let mut keep: Vec<bool> = x.iter().map(|p| near(part, (*p, *p), g)).collect();
-    let mut take: Vec<bool> = (0..d.element_count())
-        .map(|e| near(part, node_box(b, e), 2.0 * g))
-        .collect();
-    // every segment at a slave comes within 2g (it holds the slave): taken above
-    for e in 0..take.len() {
-        if take[e] {
-            for &n in nodes_of(e) {
-                keep[n as usize] = true;
-            }
-        }
-    }
-    // the ring: every segment at a node of the view, so that each normal read sums all
-    // of its node's segments (the slaves' segments are taken already: their boxes hold
-    // the slave, within g of the part's box)
-    if ring {
-        let core = keep.clone();
-        for (e, t) in take.iter_mut().enumerate() {
-            if nodes_of(e).iter().any(|&n| core[n as usize]) {
-                *t = true;
-            }
-        }
-        for e in 0..take.len() {
-            if take[e] {
-                for &n in nodes_of(e) {
-                    keep[n as usize] = true;
-                }
-            }
-        }
-    }
-    let node = (0..x.len() as u32).filter(|&n| keep[n as usize]).collect();
-    let element = (0..take.len() as u32)
-        .filter(|&e| take[e as usize])
-        .collect();
-    (node, element)
 }
 
 /// A fault found on a view, with the whole body's node and segment numbers.
