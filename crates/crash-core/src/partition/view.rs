@@ -152,9 +152,12 @@ impl GroupSplit {
                 continue;
             }
             // only the parts of contact bodies read contact forces
-            let boxes = element_boxes(view.parts.iter().filter_map(|&(i, q)| {
-                contact(i).then(|| (i, &self.whole[i], &self.splits[i].parts[q].element[..]))
-            }));
+            let boxes = element_boxes(
+                view.parts
+                    .iter()
+                    .filter(|&&(i, _)| contact(i))
+                    .map(|&(i, q)| (i, &self.whole[i], &self.splits[i].parts[q].element[..])),
+            );
             let reach = Reach {
                 all: &all,
                 mine: &boxes,
