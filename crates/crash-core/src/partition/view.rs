@@ -1,7 +1,7 @@
 //! Contact views of a split group (`GroupSplit`): what each holder's view holds,
 //! how it is selected and filled (the reach rule is in `contact`'s module text).
 
-use super::select::{element_boxes, select, Reach};
+use super::select::{select, Boxes, Reach};
 use super::{GroupSplit, Split};
 use crate::body::Body;
 use crate::contact::ContactState;
@@ -127,21 +127,17 @@ impl GroupSplit {
             .map(|b| b.def.section.thickness)
             .fold(0.0, f64::max);
         let g = tmax + 2.0 * self.skin;
-        let contact = |j: usize| self.whole[j].def.contact;
-        // every element of every contact body, once
-        let every: Vec<Vec<u32>> = self
+        // every element of every contact body
+        let every: Vec<Option<Vec<u32>>> = self
             .whole
             .iter()
-            .map(|b| (0..b.def.element_count() as u32).collect())
+            .map(|b| {
+                b.def
+                    .contact
+                    .then(|| (0..b.def.element_count() as u32).collect())
+            })
             .collect();
-        let all = element_boxes(
-            self.whole
-                .iter()
-                .zip(&every)
-                .enumerate()
-                .filter(|(j, _)| contact(*j))
-                .map(|(j, (b, e))| (j, b, &e[..])),
-        );
+        let all = Boxes::of_elements(&self.whole, &every);
         let mut views = Vec::new();
         for parts in self.view_parts() {
             let mine = parts.iter().any(|&(i, q)| self.mine[i][q]);
@@ -152,12 +148,18 @@ impl GroupSplit {
                 continue;
             }
             // only the parts of contact bodies read contact forces
-            let boxes = element_boxes(
-                view.parts
-                    .iter()
-                    .filter(|&&(i, _)| contact(i))
-                    .map(|&(i, q)| (i, &self.whole[i], &self.splits[i].parts[q].element[..])),
-            );
+            // the holder's parts' elements, per body (only the parts of contact
+            // bodies read contact forces)
+            let mut lists: Vec<Option<Vec<u32>>> = vec![None; self.whole.len()];
+            for &(i, q) in view
+                .parts
+                .iter()
+                .filter(|&&(i, _)| self.whole[i].def.contact)
+            {
+                let l = lists[i].get_or_insert_with(Vec::new);
+                l.extend_from_slice(&self.splits[i].parts[q].element);
+            }
+            let boxes = Boxes::of_elements(&self.whole, &lists);
             let reach = Reach {
                 all: &all,
                 mine: &boxes,
