@@ -328,3 +328,46 @@ fn with_the_ring_a_views_own_lumped_masses_are_the_whole_bodies_where_hits_read_
         }
     }
 }
+
+/// One body of two parallel sheets (one mesh, two components) with self-contact, the
+/// sheets closing at 2 m/s each: every hit is the body's own, which a view selects by
+/// the self-contact rule (nodes within G, segments within 2G of the holder's elements
+/// of that body; `partition::select`).
+fn two_sheets() -> Vec<Body> {
+    let (t, gap, v) = (0.002, 1e-4, 2.0);
+    let sheet = |z: f64| {
+        let mut m = plate(0.1, 0.1, 10, 10, ElementKind::Quad);
+        m.transform(&nalgebra::Matrix3::identity(), Vec3::new(0.0, 0.0, z));
+        m
+    };
+    let (mut m, b) = (sheet(0.0), sheet(t + gap));
+    let n = m.nodes.len() as u32;
+    m.nodes.extend(b.nodes.iter().copied());
+    m.quads.extend(b.quads.iter().map(|q| q.map(|i| i + n)));
+    let mut body = shell(0, &m, t);
+    body.def_mut().self_contact = true;
+    for (i, x) in body.state.v.iter_mut().enumerate() {
+        *x = Vec3::new(0.0, 0.0, if i < n as usize { v } else { -v });
+    }
+    vec![body]
+}
+
+#[test]
+fn a_self_contacting_body_in_parts_steps_bit_identically_to_the_whole_body() {
+    let bodies = two_sheets();
+    let end = 5e-4;
+    let want = whole_run(&bodies, end);
+    assert!(want.active >= 10, "the sheets touch: {} nodes", want.active);
+    for k in 1..=4 {
+        let (got, pushes, _) = split_run(&bodies, &[k], ViewRule::default(), end);
+        assert_eq!(got.hashes.len(), want.hashes.len(), "{k} parts: steps");
+        assert_eq!(
+            first_difference(&got, &want),
+            None,
+            "{k} parts: x, v, w or dt"
+        );
+        let stats_differ = (0..want.contacts.len()).find(|&s| got.contacts[s] != want.contacts[s]);
+        assert_eq!(stats_differ, None, "{k} parts: contact statistics");
+        assert_eq!(pushes, want.pushes, "{k} parts: pushes booked");
+    }
+}
