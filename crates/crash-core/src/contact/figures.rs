@@ -16,7 +16,7 @@
 //! divide the search's (`NODE_CHUNK`) and contain whole velocity boxes
 //! (`speeds::CHUNK`), so every figure covers the nodes it covered before.
 
-use super::speeds::{velocity_box, SpeedBoxes, CHUNK as SPEED_CHUNK};
+use super::speeds::{SpeedBoxes, CHUNK as SPEED_CHUNK};
 use super::surface::{NodeChunk, NODE_CHUNK};
 use super::sweep::Momentum;
 use crate::forces::CHUNK;
@@ -43,17 +43,34 @@ impl ChunkFigures {
     /// The figures of nodes with new positions boxed in (lo, hi), velocities `v` and
     /// masses `m`, on the body's momentum scale.
     pub(crate) fn of(lo: Vec3, hi: Vec3, v: &[Vec3], m: &[f64], scale: f64) -> Self {
+        // one pass over the chunk for the three figures (each the same bits as its own
+        // pass: min/max, the largest square, an integer sum)
         let mut boxes = [(Vec3::zeros(), Vec3::zeros()); BOXES];
         let mut count = 0;
-        for (b, c) in boxes.iter_mut().zip(v.chunks(SPEED_CHUNK)) {
-            *b = velocity_box(c);
+        let mut vmax2 = 0.0f64;
+        let mut p = [0i64; 3];
+        for ((b, c), mc) in boxes
+            .iter_mut()
+            .zip(v.chunks(SPEED_CHUNK))
+            .zip(m.chunks(SPEED_CHUNK))
+        {
+            let (mut blo, mut bhi) = (c[0], c[0]);
+            for (x, &mi) in c.iter().zip(mc) {
+                blo = Vec3::new(blo.x.min(x.x), blo.y.min(x.y), blo.z.min(x.z));
+                bhi = Vec3::new(bhi.x.max(x.x), bhi.y.max(x.y), bhi.z.max(x.z));
+                vmax2 = vmax2.max(x.norm_squared());
+                for d in 0..3 {
+                    p[d] = p[d].wrapping_add(Momentum::term(mi, x[d], scale));
+                }
+            }
+            *b = (blo, bhi);
             count += 1;
         }
         Self {
             lo,
             hi,
-            vmax2: v.iter().map(|v| v.norm_squared()).fold(0.0, f64::max),
-            momentum: Momentum::of_serial(v, m, scale),
+            vmax2,
+            momentum: Momentum(p),
             boxes,
             count,
         }

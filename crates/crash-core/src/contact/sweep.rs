@@ -73,12 +73,17 @@ impl Momentum {
         let mut p = [0i64; 3];
         for (v, &mi) in v.iter().zip(m) {
             for d in 0..3 {
-                // NaN clamps to NaN and truncates to 0: a NaN state faults elsewhere
-                let t = mi * v[d].clamp(-SPEED_CAP, SPEED_CAP) * scale;
-                p[d] = p[d].wrapping_add(t as i64);
+                p[d] = p[d].wrapping_add(Self::term(mi, v[d], scale));
             }
         }
         Self(p)
+    }
+
+    /// One node's term of one component: m v on the quantum.
+    #[inline]
+    pub(crate) fn term(m: f64, v: f64, scale: f64) -> i64 {
+        // NaN clamps to NaN and truncates to 0: a NaN state faults elsewhere
+        (m * v.clamp(-SPEED_CAP, SPEED_CAP) * scale) as i64
     }
 
     /// The mean velocity of a body of total mass `mass` and scale `scale` whose
