@@ -185,3 +185,82 @@ fn a_fault_in_a_split_group_is_the_drivers_fault() {
         other => panic!("{other}"),
     }
 }
+
+/// A sink that checks the order of the contact rows against the checkpoints: one
+/// `contact_stats` call per step, in step order, and every checkpoint handed over
+/// after its step's rows (a split group's rows wait for its pending contact pass:
+/// crash-master `master/held.rs`).
+#[derive(Default)]
+struct RowOrder {
+    inner: RecordSink,
+    last: Option<u64>,
+    checked: usize,
+}
+
+impl crash_master::Sink for RowOrder {
+    fn energy(
+        &mut self,
+        step: u64,
+        time: f64,
+        totals: &crash_core::EnergyTotals,
+    ) -> Result<(), crash_master::SinkError> {
+        self.inner.energy(step, time, totals)
+    }
+    fn contact_stats(
+        &mut self,
+        step: u64,
+        time: f64,
+        stats: &[crash_core::contact::PairStats],
+    ) -> Result<(), crash_master::SinkError> {
+        let want = self.last.map_or(0, |s| s + 1);
+        assert_eq!(step, want, "contact rows out of step order");
+        self.last = Some(step);
+        self.inner.contact_stats(step, time, stats)
+    }
+    fn checkpoint(
+        &mut self,
+        state: &crash_master::MasterCheckpoint,
+    ) -> Result<(), crash_master::SinkError> {
+        assert_eq!(
+            self.last,
+            Some(state.clock.step),
+            "a checkpoint before its step's contact rows"
+        );
+        self.checked += 1;
+        self.inner.checkpoint(state)
+    }
+    fn frame_begin(&mut self, step: u64, time: f64) -> Result<(), crash_master::SinkError> {
+        self.inner.frame_begin(step, time)
+    }
+    fn frame_body(&mut self, body: crash_io::FrameBody) -> Result<(), crash_master::SinkError> {
+        self.inner.frame_body(body)
+    }
+    fn frame_end(&mut self) -> Result<(), crash_master::SinkError> {
+        self.inner.frame_end()
+    }
+    fn finish(
+        &mut self,
+        stats: &crash_master::RunStats,
+        error: Option<&crash_master::MasterError>,
+    ) -> Result<(), crash_master::SinkError> {
+        self.inner.finish(stats, error)
+    }
+}
+
+#[test]
+fn split_groups_write_their_contact_rows_once_per_step_in_order_before_each_checkpoint() {
+    let inp = input("ten-spheres-tiny.toml");
+    let o = RunOptions {
+        checkpoint_every: 7,
+        ..opts(SplitMode::Always)
+    };
+    let mut sink = RowOrder::default();
+    let stats = run_local(inp.clone(), 2, &mut sink, &o).unwrap();
+    assert!(stats.splits >= 2, "{} splits", stats.splits);
+    assert!(sink.checked >= 2, "{} checkpoints", sink.checked);
+    assert_eq!(sink.last, Some(stats.steps), "the last step's rows");
+    // and they are one worker's rows
+    let mut one = RecordSink::default();
+    run_local(inp, 1, &mut one, &opts(SplitMode::Off)).unwrap();
+    assert!(contact_rows(&sink.inner) == contact_rows(&one));
+}
