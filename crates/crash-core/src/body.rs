@@ -536,6 +536,16 @@ impl BodyDef {
         self.tris.len() + self.quads.len()
     }
 
+    /// The nodes of element e (triangles first, then quads).
+    pub fn element_nodes(&self, e: usize) -> &[u32] {
+        let nt = self.tris.len();
+        if e < nt {
+            &self.tris[e].nodes
+        } else {
+            &self.quads[e - nt].nodes
+        }
+    }
+
     pub fn total_mass(&self) -> f64 {
         self.mass.iter().sum()
     }

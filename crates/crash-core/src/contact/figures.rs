@@ -16,7 +16,7 @@
 //! divide the search's (`NODE_CHUNK`) and contain whole velocity boxes
 //! (`speeds::CHUNK`), so every figure covers the nodes it covered before.
 
-use super::speeds::{SpeedBoxes, CHUNK as SPEED_CHUNK};
+use super::speeds::{widen, SpeedBoxes, CHUNK as SPEED_CHUNK};
 use super::surface::{NodeChunk, NODE_CHUNK};
 use super::sweep::Momentum;
 use crate::forces::CHUNK;
@@ -54,16 +54,15 @@ impl ChunkFigures {
             .zip(v.chunks(SPEED_CHUNK))
             .zip(m.chunks(SPEED_CHUNK))
         {
-            let (mut blo, mut bhi) = (c[0], c[0]);
+            let mut bx = (c[0], c[0]);
             for (x, &mi) in c.iter().zip(mc) {
-                blo = Vec3::new(blo.x.min(x.x), blo.y.min(x.y), blo.z.min(x.z));
-                bhi = Vec3::new(bhi.x.max(x.x), bhi.y.max(x.y), bhi.z.max(x.z));
+                bx = widen(bx, x);
                 vmax2 = vmax2.max(x.norm_squared());
                 for d in 0..3 {
                     p[d] = p[d].wrapping_add(Momentum::term(mi, x[d], scale));
                 }
             }
-            *b = (blo, bhi);
+            *b = bx;
             count += 1;
         }
         Self {

@@ -25,12 +25,17 @@ pub struct SpeedBoxes {
 
 /// The box of the velocities `c` (not empty).
 pub(crate) fn velocity_box(c: &[Vec3]) -> (Vec3, Vec3) {
-    c.iter().fold((c[0], c[0]), |(lo, hi), x| {
-        (
-            Vec3::new(lo.x.min(x.x), lo.y.min(x.y), lo.z.min(x.z)),
-            Vec3::new(hi.x.max(x.x), hi.y.max(x.y), hi.z.max(x.z)),
-        )
-    })
+    c.iter().fold((c[0], c[0]), widen)
+}
+
+/// The box (lo, hi) grown to hold x (per component min/max: a NaN component is
+/// skipped, as `f64::min` skips it).
+#[inline]
+pub(crate) fn widen((lo, hi): (Vec3, Vec3), x: &Vec3) -> (Vec3, Vec3) {
+    (
+        Vec3::new(lo.x.min(x.x), lo.y.min(x.y), lo.z.min(x.z)),
+        Vec3::new(hi.x.max(x.x), hi.y.max(x.y), hi.z.max(x.z)),
+    )
 }
 
 impl SpeedBoxes {

@@ -175,9 +175,13 @@ impl PairStats {
     /// The figures from the sums once every push is booked (`thin`: the thinner body's
     /// thickness).
     pub(crate) fn settle(&mut self, thin: f64) {
+        self.values_from_tally();
+        self.max_penetration_ratio = self.max_penetration / thin;
+    }
+
+    fn values_from_tally(&mut self) {
         self.normal_force = Tally::value(self.tally.normal);
         self.force_on_a = Vec3::from_fn(|d, _| Tally::value(self.tally.on_a[d]));
-        self.max_penetration_ratio = self.max_penetration / thin;
     }
 
     /// Join another share of the same pair's pushes (a split group's holders each
@@ -191,8 +195,18 @@ impl PairStats {
         // the ratio of the max (division is monotone: the max of the ratios)
         self.max_penetration_ratio = self.max_penetration_ratio.max(o.max_penetration_ratio);
         self.tally = self.tally.add(&o.tally);
-        self.normal_force = Tally::value(self.tally.normal);
-        self.force_on_a = Vec3::from_fn(|d, _| Tally::value(self.tally.on_a[d]));
+        self.values_from_tally();
+    }
+
+    /// Merge shares (`add`, sorted by pair) into `into` (sorted by pair): a pair in
+    /// both is merged, a new one inserted in its place.
+    pub fn merge_sorted(into: &mut Vec<PairStats>, add: &[PairStats]) {
+        for s in add {
+            match into.binary_search_by_key(&(s.a, s.b), |x| (x.a, x.b)) {
+                Ok(k) => into[k].merge(s),
+                Err(k) => into.insert(k, s.clone()),
+            }
+        }
     }
 
     /// A copy for a step report: the per-node loads on kinematic bodies only when

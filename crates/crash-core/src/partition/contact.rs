@@ -398,7 +398,7 @@ impl GroupSplit {
                     }
                 }
             }
-            merge_stats(&mut self.stats, view.state.stats());
+            PairStats::merge_sorted(&mut self.stats, view.state.stats());
         }
         Ok(rebuild)
     }
@@ -431,15 +431,5 @@ impl GroupSplit {
     /// over every holder they add up to the whole group's (`PairStats::merge`).
     pub fn contact_stats(&self) -> &[PairStats] {
         &self.stats
-    }
-}
-
-/// Add the statistics of one view (sorted by pair) into `into` (sorted by pair).
-fn merge_stats(into: &mut Vec<PairStats>, add: &[PairStats]) {
-    for s in add {
-        match into.binary_search_by_key(&(s.a, s.b), |x| (x.a, x.b)) {
-            Ok(k) => into[k].merge(s),
-            Err(k) => into.insert(k, s.for_report(false)),
-        }
     }
 }

@@ -48,7 +48,7 @@ impl Split {
     /// data keep their bits); the state is the whole body's at its nodes and elements.
     pub fn new(whole: &Body, p: &Partition) -> Result<Self, CoreError> {
         let d = &*whole.def;
-        let (nn, nt, ne) = (d.node_count(), d.tris.len(), d.element_count());
+        let (nn, ne) = (d.node_count(), d.element_count());
         let err = |what: String| CoreError::Other {
             body: d.name.clone(),
             what,
@@ -60,13 +60,7 @@ impl Split {
                 p.parts
             )));
         }
-        let nodes_of = |e: usize| -> &[u32] {
-            if e < nt {
-                &d.tris[e].nodes
-            } else {
-                &d.quads[e - nt].nodes
-            }
-        };
+        let nodes_of = |e: usize| d.element_nodes(e);
         // owner of each node: the part of its lowest-index element
         let mut owner_part = vec![u32::MAX; nn];
         for e in 0..ne {

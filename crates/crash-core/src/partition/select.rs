@@ -138,13 +138,7 @@ fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
 }
 
 fn nodes_of(b: &Body, e: usize) -> &[u32] {
-    let d = &b.def;
-    let nt = d.tris.len();
-    if e < nt {
-        &d.tris[e].nodes
-    } else {
-        &d.quads[e - nt].nodes
-    }
+    b.def.element_nodes(e)
 }
 
 /// The nodes and segments (whole-body indices, sorted) of every body of `bodies` in

@@ -7,6 +7,7 @@
 //! process) with the unsplit groups' statistics, and writes the step's rows then,
 //! before any row of a later step and before a checkpoint is written.
 
+use super::plausible::stats_finite;
 use super::Master;
 use crate::error::MasterError;
 use crate::sink::{ResultRows, Sink};
@@ -25,16 +26,6 @@ pub(super) struct HeldRows {
     /// The split groups' statistics, merged over the holders (None: the pass is still
     /// pending).
     split: Option<Vec<PairStats>>,
-}
-
-/// Add a holder's share of statistics (sorted by pair) into `into` (sorted by pair).
-fn merge_shares(into: &mut Vec<PairStats>, share: &[PairStats]) {
-    for s in share {
-        match into.binary_search_by_key(&(s.a, s.b), |x| (x.a, x.b)) {
-            Ok(k) => into[k].merge(s),
-            Err(k) => into.insert(k, s.clone()),
-        }
-    }
 }
 
 impl<L: WorkerLink> Master<'_, L> {
@@ -64,16 +55,15 @@ impl<L: WorkerLink> Master<'_, L> {
         for (w, rep) in reps.iter_mut().enumerate() {
             let share = std::mem::take(&mut rep.split_contacts);
             for c in &share {
-                let finite = c.max_penetration.is_finite()
-                    && c.max_penetration_ratio.is_finite()
-                    && c.kin_a.is_empty()
-                    && c.kin_b.is_empty();
-                if !(finite && c.a <= c.b && self.holds_part(w, c.a) && self.holds_part(w, c.b)) {
+                // a split group holds no kinematic body: no loads on one
+                let no_kin = c.kin_a.is_empty() && c.kin_b.is_empty();
+                let held = self.holds_part(w, c.a) && self.holds_part(w, c.b);
+                if !(stats_finite(c) && no_kin && c.a <= c.b && held) {
                     let what = format!("split contact statistics of the pair ({}, {})", c.a, c.b);
                     return Err(self.implausible(w, &what));
                 }
             }
-            merge_shares(&mut merged, &share);
+            PairStats::merge_sorted(&mut merged, &share);
         }
         if let Some(h) = self.held.as_mut().filter(|h| h.split.is_none()) {
             h.split = Some(merged);
@@ -83,10 +73,7 @@ impl<L: WorkerLink> Master<'_, L> {
 
     /// Write the held rows once their split statistics are in.
     pub(super) fn release_rows(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
-        if self.held.as_ref().is_none_or(|h| h.split.is_none()) {
-            return Ok(());
-        }
-        let Some(h) = self.held.take() else {
+        let Some(h) = self.held.take_if(|h| h.split.is_some()) else {
             return Ok(());
         };
         let mut rows = h.contacts;

@@ -10,13 +10,21 @@
 
 use super::Master;
 use crate::error::MasterError;
-use crash_core::contact::KinLoad;
+use crash_core::contact::{KinLoad, PairStats};
 use crash_core::{BodyEnergy, BodyReport, BodyState, Fault, Vec3};
 use crash_io::FrameBody;
 use crash_link::{escape_peer, LinkError, StepReport, WorkerLink};
 
 fn finite3(v: &Vec3) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
+}
+
+/// A pair's contact figures are finite.
+pub(super) fn stats_finite(c: &PairStats) -> bool {
+    c.max_penetration.is_finite()
+        && c.max_penetration_ratio.is_finite()
+        && c.normal_force.is_finite()
+        && finite3(&c.force_on_a)
 }
 
 fn energy_ok(e: &BodyEnergy) -> Result<(), String> {
@@ -185,10 +193,7 @@ impl<L: WorkerLink> Master<'_, L> {
             let own = |id: u32| self.index(id).is_some_and(|i| self.worker_of[i] == Some(w));
             // a kinematic body may be a read-only copy in one of its groups
             let near = |id: u32| own(id) || self.is_kinematic(id);
-            let finite = c.max_penetration.is_finite()
-                && c.max_penetration_ratio.is_finite()
-                && c.normal_force.is_finite()
-                && finite3(&c.force_on_a);
+            let finite = stats_finite(c);
             let pair = (own(c.a) || own(c.b)) && near(c.a) && near(c.b) && c.a <= c.b;
             if !(pair && finite) {
                 return Err(format!("contact statistics of the pair ({}, {})", c.a, c.b));
