@@ -580,13 +580,10 @@ impl Engine {
 /// A read-only copy of a kinematic body: its definition and motion, no contact forces of
 /// its own yet, a blank energy record (a copy's energy is never reported).
 fn read_only_copy(b: &Body) -> Body {
-    let mut state = b.state.clone();
-    for f in &mut state.f_contact {
+    let mut copy = b.clone();
+    for f in &mut copy.state.f_contact {
         *f = crash_core::Vec3::zeros();
     }
-    state.energy = Default::default();
-    Body {
-        def: b.def.clone(),
-        state,
-    }
+    copy.state.energy = Default::default();
+    copy
 }
