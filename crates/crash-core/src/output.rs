@@ -1,7 +1,8 @@
 //! Derived element quantities for output: stress resultants and surface stresses.
 
-use crate::body::Body;
+use crate::body::{Body, BodyDef};
 use crate::element::membrane::{gradient, green};
+use crate::Vec3;
 
 /// Stress resultants of one element: membrane forces per length (Nxx, Nyy, Nxy) from
 /// the second Piola–Kirchhoff stress (small strain: ~Cauchy) and bending moments per
@@ -33,29 +34,41 @@ impl Body {
 
     /// Each element's resultants in that order, without a vector (a frame's capture
     /// writes them straight into its arrays).
-    pub fn resultants_each(&self, mut f: impl FnMut(Resultants)) {
-        let sec = &self.def.section;
-        let x = &self.state.x;
-        for (k, e) in self.def.tris.iter().enumerate() {
-            let p = e.nodes.map(|n| x[n as usize]);
-            let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
-            f(Resultants {
-                n: sec.plane(sec.membrane, green(&f1, &f2)),
-                m: self.state.shell[k].m,
-            });
-        }
-        let nt = self.def.tris.len();
-        for (k, e) in self.def.quads.iter().enumerate() {
-            let p = e.nodes.map(|n| x[n as usize]);
-            let (f1, f2) = gradient(&p, &e.bx0_all(), &e.by0_all());
-            let g = green(&f1, &f2);
-            f(Resultants {
-                n: sec.plane(
-                    sec.membrane,
-                    [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]],
-                ),
-                m: self.state.shell[nt + k].m,
-            });
-        }
+    pub fn resultants_each(&self, f: impl FnMut(Resultants)) {
+        let shell = &self.state.shell;
+        resultants_of(&self.def, &self.state.x, |k| shell[k].m, f);
+    }
+}
+
+/// The resultants of every element of `def` at positions `x` (triangles first, then
+/// quads), each element's bending moments `m(k)` taken as they are: the membrane forces
+/// follow from the positions, so a frame can derive them away from the step loop.
+pub fn resultants_of(
+    def: &BodyDef,
+    x: &[Vec3],
+    m: impl Fn(usize) -> [f64; 3],
+    mut f: impl FnMut(Resultants),
+) {
+    let sec = &def.section;
+    for (k, e) in def.tris.iter().enumerate() {
+        let p = e.nodes.map(|n| x[n as usize]);
+        let (f1, f2) = gradient(&p, &e.bx0, &e.by0);
+        f(Resultants {
+            n: sec.plane(sec.membrane, green(&f1, &f2)),
+            m: m(k),
+        });
+    }
+    let nt = def.tris.len();
+    for (k, e) in def.quads.iter().enumerate() {
+        let p = e.nodes.map(|n| x[n as usize]);
+        let (f1, f2) = gradient(&p, &e.bx0_all(), &e.by0_all());
+        let g = green(&f1, &f2);
+        f(Resultants {
+            n: sec.plane(
+                sec.membrane,
+                [g[0] - e.e0[0], g[1] - e.e0[1], g[2] - e.e0[2]],
+            ),
+            m: m(nt + k),
+        });
     }
 }

@@ -1,7 +1,10 @@
 //! A snapshot of every body at one time: what one .vtu file and one picture show.
 
+use crash_core::body::BodyDef;
+use crash_core::output::{resultants_of, Resultants};
 use crash_core::{Body, Vec3};
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 use std::sync::Mutex;
 
 /// Frame bodies whose arrays a consumer (the frame writer, a wire encoder) has finished
@@ -70,6 +73,21 @@ pub struct FrameBody {
     /// for every element and the part is 0).
     #[serde(default)]
     pub parts: Option<PartCells>,
+    /// Set by `capture_deferred`: the definition the membrane forces `n` and the von
+    /// Mises stresses still have to be derived from (`complete`), away from the step
+    /// loop. None: every array is filled.
+    #[serde(skip)]
+    pub pending: Option<Pending>,
+}
+
+/// The definition a deferred capture derives its element arrays from.
+#[derive(Debug, Clone)]
+pub struct Pending(Arc<BodyDef>);
+
+impl PartialEq for Pending {
+    fn eq(&self, o: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &o.0)
+    }
 }
 
 /// Where each element of a split body is computed: its part and that part's worker.
@@ -91,12 +109,61 @@ impl FrameBody {
     /// (`recycle`) when there is one: a frame of fresh vectors cost the step loop its
     /// page faults (about half of the capture, docs/performance-history.md, session 10).
     pub fn capture(b: &Body) -> Self {
+        let mut f = Self::capture_deferred(b);
+        f.complete();
+        f
+    }
+
+    /// `capture` of what only the step loop has (positions, velocities, contact forces,
+    /// bending moments); the membrane forces and the stresses, which follow from
+    /// those and the definition, are left to `complete`, which a consumer (the frame
+    /// writer's thread, a wire encoder) runs: they were about half of what a frame cost
+    /// the step loop.
+    pub fn capture_deferred(b: &Body) -> Self {
         let mut f = spare(b.def.id);
         f.fill(b);
         f
     }
 
-    /// Overwrite every field with body `b` now, keeping the vectors' memory.
+    /// Derive what `capture_deferred` left (the same bits as `capture`); nothing when
+    /// every array is filled.
+    pub fn complete(&mut self) {
+        let Some(Pending(def)) = self.pending.take() else {
+            return;
+        };
+        let t = self.thickness;
+        let (top, bottom, n) = (
+            &mut self.von_mises_top,
+            &mut self.von_mises_bottom,
+            &mut self.n,
+        );
+        let m = &self.m;
+        resultants_of(
+            &def,
+            &self.x,
+            |k| m[k],
+            |r: Resultants| {
+                let (vt, vb) = r.von_mises(t);
+                top.push(vt);
+                bottom.push(vb);
+                n.push(r.n);
+            },
+        );
+    }
+
+    /// This body with every array filled: itself, or a completed copy of a deferred
+    /// capture (for a consumer that only borrows it).
+    pub fn completed(&self) -> std::borrow::Cow<'_, FrameBody> {
+        if self.pending.is_none() {
+            return std::borrow::Cow::Borrowed(self);
+        }
+        let mut c = self.clone();
+        c.complete();
+        std::borrow::Cow::Owned(c)
+    }
+
+    /// Overwrite every field with body `b` now, keeping the vectors' memory; the
+    /// derived element arrays are left empty and pending.
     fn fill(&mut self, b: &Body) {
         let t = b.def.section.thickness;
         let s = &b.state;
@@ -116,13 +183,7 @@ impl FrameBody {
         self.von_mises_bottom.clear();
         self.n.clear();
         self.m.clear();
-        b.resultants_each(|r| {
-            let (top, bottom) = r.von_mises(t);
-            self.von_mises_top.push(top);
-            self.von_mises_bottom.push(bottom);
-            self.n.push(r.n);
-            self.m.push(r.m);
-        });
+        self.m.extend(s.shell.iter().map(|e| e.m));
         if s.f_contact.len() == s.x.len() {
             refill(&mut self.f_contact, &s.f_contact);
         } else {
@@ -131,6 +192,7 @@ impl FrameBody {
         }
         self.placement = None;
         self.parts = None;
+        self.pending = Some(Pending(b.def.clone()));
     }
 
     pub fn element_count(&self) -> usize {
@@ -225,6 +287,7 @@ mod tests {
         let a = body(3, ElementKind::Quad, 6);
         let mut fresh = FrameBody::default();
         fresh.fill(&a);
+        fresh.complete();
         // spares of other bodies, larger and smaller, with placement and parts set
         let mut sphere = Body::new(
             9,
@@ -250,5 +313,41 @@ mod tests {
         }
         assert!(fresh.von_mises_top.iter().any(|&s| s > 0.0));
         assert_eq!(fresh.f_contact.len(), fresh.x.len());
+    }
+
+    #[test]
+    fn a_deferred_capture_completes_to_the_bodys_resultants_bit_for_bit() {
+        for kind in [ElementKind::Tri, ElementKind::Quad] {
+            let mut b = body(5, kind, 4);
+            for (k, e) in b.state.shell.iter_mut().enumerate() {
+                e.m = [1.0 + k as f64, -2.0, 0.5 * k as f64];
+            }
+            let mut f = FrameBody::capture_deferred(&b);
+            assert!(f.pending.is_some() && f.n.is_empty() && f.von_mises_top.is_empty());
+            assert_eq!(f.completed().n.len(), b.element_count());
+            f.complete();
+            assert!(f.pending.is_none());
+            let t = b.def.section.thickness;
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let r = b.resultants();
+            assert_eq!(
+                bits(f.n.as_flattened()),
+                bits(r.iter().flat_map(|r| r.n).collect::<Vec<_>>().as_slice())
+            );
+            assert_eq!(
+                bits(f.m.as_flattened()),
+                bits(r.iter().flat_map(|r| r.m).collect::<Vec<_>>().as_slice())
+            );
+            let vm: Vec<(f64, f64)> = r.iter().map(|r| r.von_mises(t)).collect();
+            assert_eq!(
+                bits(&f.von_mises_top),
+                bits(&vm.iter().map(|v| v.0).collect::<Vec<_>>())
+            );
+            assert_eq!(
+                bits(&f.von_mises_bottom),
+                bits(&vm.iter().map(|v| v.1).collect::<Vec<_>>())
+            );
+            assert_eq!(f, FrameBody::capture(&b));
+        }
     }
 }

@@ -283,7 +283,9 @@ fn write_loop(shared: &Shared, mut series: SeriesWriter) {
                     series.set_format(format);
                     series.begin_frame(time, step)
                 }
-                Job::Body(b) => {
+                Job::Body(mut b) => {
+                    // what the step loop left of a deferred capture, on this thread
+                    b.complete();
                     let r = series.frame_body(&b);
                     crate::frame::recycle(*b);
                     r

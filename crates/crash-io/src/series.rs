@@ -206,7 +206,8 @@ impl SeriesWriter {
             .open
             .as_mut()
             .ok_or_else(|| IoError::Invalid("a frame body arrived outside a frame".into()))?;
-        let r = f.enc.body(body).at(&f.path);
+        // a deferred capture handed straight here (not through the background writer)
+        let r = f.enc.body(&body.completed()).at(&f.path);
         if r.is_err() {
             self.open = None;
         }

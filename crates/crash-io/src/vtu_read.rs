@@ -372,6 +372,7 @@ fn piece_bodies(r: &Reader, piece: Node) -> Result<Vec<FrameBody>, IoError> {
             f_contact: vecs(&fc, start..end),
             placement: None,
             parts: None,
+            pending: None,
         };
         let uu = vecs(&u, start..end);
         b.x0 = b.x.iter().zip(&uu).map(|(x, u)| x - u).collect();

@@ -144,6 +144,8 @@ fn unpack3(id: u32, field: &'static str, d: &[f64]) -> Result<Vec<Vec3>, ProtoEr
 }
 
 fn frame_body_to_pb(b: &FrameBody) -> pb::FrameBody {
+    // a deferred capture is completed here, on the worker, as the frame writer would
+    let b = &*b.completed();
     pb::FrameBody {
         id: b.id,
         name: b.name.clone(),
@@ -210,6 +212,7 @@ fn frame_body_from_pb(p: &pb::FrameBody) -> Result<FrameBody, ProtoError> {
         f_contact,
         placement: None,
         parts: None,
+        pending: None,
     })
 }
 

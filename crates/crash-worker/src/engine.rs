@@ -543,7 +543,7 @@ impl Engine {
         ids.iter()
             .map(|id| {
                 held.get(id)
-                    .map(|b| FrameBody::capture(b))
+                    .map(|b| FrameBody::capture_deferred(b))
                     .ok_or(EngineError::NotHeld {
                         id: *id,
                         what: "a frame",
