@@ -454,6 +454,11 @@ fn serve(
         if let Reply::Report(rep) = &mut reply {
             rep.codec_ns = decode_ns + last_encode_ns;
         }
+        if let Reply::Frame(bodies) = &mut reply {
+            // the wire carries whole frames: what the capture left to derive, on the pool
+            use rayon::prelude::*;
+            pool.install(|| bodies.par_iter_mut().for_each(|b| b.complete()));
+        }
         if let Some(tamper) = opts.tamper {
             tamper(&mut reply);
         }
