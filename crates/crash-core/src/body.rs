@@ -234,8 +234,8 @@ pub struct BodyState {
 pub struct Body {
     pub def: Arc<BodyDef>,
     pub state: BodyState,
-    /// `BodyDef::total_mass` of `def`, kept for the integration's momentum figures (a
-    /// serial sum over the nodes was 2-3 % of the showcase's step on 2 threads).
+    /// `BodyDef::total_mass` of `def`, kept for the integration's momentum figures,
+    /// which summed every node's mass serially each step (a serial part of the step).
     #[serde(skip)]
     mass_sum: MassSum,
 }
