@@ -144,7 +144,8 @@ fn unpack3(id: u32, field: &'static str, d: &[f64]) -> Result<Vec<Vec3>, ProtoEr
 }
 
 fn frame_body_to_pb(b: &FrameBody) -> pb::FrameBody {
-    // a deferred capture is completed here, on the worker, as the frame writer would
+    // whole arrays on the wire: the network worker completes a deferred capture on its
+    // pool before this (crash-worker client.rs); a copy is completed here otherwise
     let b = &*b.completed();
     pb::FrameBody {
         id: b.id,
