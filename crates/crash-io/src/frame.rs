@@ -115,10 +115,10 @@ impl FrameBody {
     }
 
     /// `capture` of what only the step loop has (positions, velocities, contact forces,
-    /// bending moments); the membrane forces and the stresses, which follow from
-    /// those and the definition, are left to `complete`, which a consumer (the frame
-    /// writer's thread, a wire encoder) runs: they were about half of what a frame cost
-    /// the step loop.
+    /// bending moments); what follows from those and the definition (the initial
+    /// positions and the connectivity, the membrane forces, the stresses) is left to
+    /// `complete`, which a consumer (the frame writer's thread, a network worker's pool)
+    /// runs: it was most of what a frame cost the step loop.
     pub fn capture_deferred(b: &Body) -> Self {
         let mut f = spare(b.def.id);
         f.fill(b);
@@ -131,6 +131,11 @@ impl FrameBody {
         let Some(Pending(def)) = self.pending.take() else {
             return;
         };
+        refill(&mut self.x0, &def.x0);
+        self.tris.clear();
+        self.tris.extend(def.tris.iter().map(|e| e.nodes));
+        self.quads.clear();
+        self.quads.extend(def.quads.iter().map(|e| e.nodes));
         let t = self.thickness;
         let (top, bottom, n) = (
             &mut self.von_mises_top,
@@ -162,8 +167,8 @@ impl FrameBody {
         std::borrow::Cow::Owned(c)
     }
 
-    /// Overwrite every field with body `b` now, keeping the vectors' memory; the
-    /// derived element arrays are left empty and pending.
+    /// Overwrite every field with body `b` now, keeping the vectors' memory; what
+    /// follows from the definition is left empty and pending.
     fn fill(&mut self, b: &Body) {
         let t = b.def.section.thickness;
         let s = &b.state;
@@ -172,13 +177,11 @@ impl FrameBody {
         self.name.push_str(&b.def.name);
         self.thickness = t;
         refill(&mut self.x, &s.x);
-        refill(&mut self.x0, &b.def.x0);
         refill(&mut self.v, &s.v);
         refill(&mut self.w, &s.w);
+        self.x0.clear();
         self.tris.clear();
-        self.tris.extend(b.def.tris.iter().map(|e| e.nodes));
         self.quads.clear();
-        self.quads.extend(b.def.quads.iter().map(|e| e.nodes));
         self.von_mises_top.clear();
         self.von_mises_bottom.clear();
         self.n.clear();
@@ -196,7 +199,10 @@ impl FrameBody {
     }
 
     pub fn element_count(&self) -> usize {
-        self.tris.len() + self.quads.len()
+        match &self.pending {
+            Some(Pending(def)) => def.element_count(),
+            None => self.tris.len() + self.quads.len(),
+        }
     }
 
     /// Larger of the top and bottom von Mises stress of element `e`.
@@ -324,6 +330,8 @@ mod tests {
             }
             let mut f = FrameBody::capture_deferred(&b);
             assert!(f.pending.is_some() && f.n.is_empty() && f.von_mises_top.is_empty());
+            assert!(f.x0.is_empty() && f.tris.is_empty() && f.quads.is_empty());
+            assert_eq!(f.element_count(), b.element_count());
             assert_eq!(f.completed().n.len(), b.element_count());
             f.complete();
             assert!(f.pending.is_none());

@@ -132,21 +132,31 @@ fn state_ok(s: &BodyState, nodes: usize, elements: usize) -> Result<(), String> 
 
 /// A frame body: counts of the definition, finite nodal values, connectivity in range.
 fn frame_ok(b: &FrameBody, nodes: usize, elements: usize) -> Result<(), String> {
-    let n = [b.x.len(), b.x0.len(), b.v.len(), b.w.len()];
+    let n = [b.x.len(), b.v.len(), b.w.len()];
     if n.iter().any(|&k| k != nodes) {
         return Err(format!(
             "a frame of {n:?} nodal values for a body of {nodes} nodes"
         ));
     }
-    if b.tris.len() + b.quads.len() != elements {
-        return Err(format!(
-            "a frame of {} elements for a body of {elements}",
-            b.tris.len() + b.quads.len()
-        ));
-    }
-    let conn = b.tris.iter().flatten().chain(b.quads.iter().flatten());
-    if conn.into_iter().any(|&i| i as usize >= nodes) {
-        return Err("an element referring to a node beyond the body's".into());
+    // a deferred capture never crossed the wire (`pending` is not sent): an in-process
+    // worker's, whose initial positions and connectivity are the body's own
+    if b.pending.is_none() {
+        if b.x0.len() != nodes {
+            return Err(format!(
+                "a frame of {} initial positions for a body of {nodes} nodes",
+                b.x0.len()
+            ));
+        }
+        if b.tris.len() + b.quads.len() != elements {
+            return Err(format!(
+                "a frame of {} elements for a body of {elements}",
+                b.tris.len() + b.quads.len()
+            ));
+        }
+        let conn = b.tris.iter().flatten().chain(b.quads.iter().flatten());
+        if conn.into_iter().any(|&i| i as usize >= nodes) {
+            return Err("an element referring to a node beyond the body's".into());
+        }
     }
     if !b.x.iter().chain(&b.v).chain(&b.w).all(finite3) {
         return Err("a non-finite nodal value".into());
