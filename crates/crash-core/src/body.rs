@@ -234,19 +234,13 @@ pub struct BodyState {
 pub struct Body {
     pub def: Arc<BodyDef>,
     pub state: BodyState,
-    /// `BodyDef::total_mass` of `def`, kept for the integration's momentum figures,
-    /// which summed every node's mass serially each step (a serial part of the step).
+    /// `BodyDef::total_mass` of the definition it was taken of (`total_mass`): the
+    /// integration's momentum figures and the closing speed read it every step, and a
+    /// serial sum over the nodes was a serial part of the step. Holding the `Weak`
+    /// keeps that definition's address from being reused, so the sum is never read for
+    /// another; `def_mut` clears it before the definition can change.
     #[serde(skip)]
-    mass_sum: MassSum,
-}
-
-/// The total mass of definition `of` (none yet: a dangling `Weak`). Holding the `Weak`
-/// keeps its address from being reused, so a sum is never read for a definition it was
-/// not taken of; `def_mut` clears it before the definition can change.
-#[derive(Debug, Clone, Default)]
-struct MassSum {
-    of: std::sync::Weak<BodyDef>,
-    total: f64,
+    mass_sum: std::sync::OnceLock<(std::sync::Weak<BodyDef>, f64)>,
 }
 
 impl Body {
@@ -364,7 +358,7 @@ impl Body {
                 halo_nodes: 0,
                 uncounted: None,
             }),
-            mass_sum: MassSum::default(),
+            mass_sum: Default::default(),
         })
     }
 
@@ -376,19 +370,8 @@ impl Body {
     /// The definition, for changes while a body is being built (copies it first if it
     /// is shared: never on the stepping path).
     pub fn def_mut(&mut self) -> &mut BodyDef {
-        self.mass_sum = MassSum::default();
+        self.mass_sum = Default::default();
         Arc::make_mut(&mut self.def)
-    }
-
-    /// `BodyDef::total_mass`, summed once per definition (the same bits).
-    pub(crate) fn mass_sum(&mut self) -> f64 {
-        if !std::ptr::eq(self.mass_sum.of.as_ptr(), Arc::as_ptr(&self.def)) {
-            self.mass_sum = MassSum {
-                of: Arc::downgrade(&self.def),
-                total: self.def.total_mass(),
-            };
-        }
-        self.mass_sum.total
     }
 
     /// Put a definition and a state back together, checking that they fit.
@@ -418,7 +401,7 @@ impl Body {
         Ok(Self {
             def,
             state,
-            mass_sum: MassSum::default(),
+            mass_sum: Default::default(),
         })
     }
 
@@ -430,8 +413,19 @@ impl Body {
         self.def.element_count()
     }
 
+    /// `BodyDef::total_mass`, summed once per definition (the same bits; a definition
+    /// put in `def` after the first sum is summed at every call).
     pub fn total_mass(&self) -> f64 {
-        self.def.total_mass()
+        let of = |w: &std::sync::Weak<BodyDef>| std::ptr::eq(w.as_ptr(), Arc::as_ptr(&self.def));
+        match self.mass_sum.get() {
+            Some((w, m)) if of(w) => *m,
+            Some(_) => self.def.total_mass(),
+            None => {
+                let m = self.def.total_mass();
+                let _ = self.mass_sum.set((Arc::downgrade(&self.def), m));
+                m
+            }
+        }
     }
 
     /// Rigid initial motion: v_I = v + omega x (x_I - centre), w_I = omega.

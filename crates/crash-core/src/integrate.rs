@@ -275,7 +275,7 @@ impl Body {
         // the momentum's scale needs the whole body's mass first (a sum in node order)
         let taking = figures && self.def.contact && self.def.halo_nodes == 0;
         let mass_scale = taking.then(|| {
-            let m = self.mass_sum();
+            let m = self.total_mass();
             (m, Momentum::scale(m))
         });
         let scale = mass_scale.map(|(_, sc)| sc);

@@ -73,9 +73,9 @@ pub struct FrameBody {
     /// for every element and the part is 0).
     #[serde(default)]
     pub parts: Option<PartCells>,
-    /// Set by `capture_deferred`: the definition the membrane forces `n` and the von
-    /// Mises stresses still have to be derived from (`complete`), away from the step
-    /// loop. None: every array is filled.
+    /// Set by `capture_deferred`: the definition that the initial positions, the
+    /// connectivity, the membrane forces `n` and the von Mises stresses still have to be
+    /// derived from (`complete`), away from the step loop. None: every array is filled.
     #[serde(skip)]
     pub pending: Option<Pending>,
 }

@@ -108,7 +108,7 @@ impl std::ops::Add for Momentum {
 /// Centre-of-mass velocity of a body (mass-weighted mean of v, summed on the fixed
 /// quantum of `Momentum`).
 pub fn mean_velocity(b: &Body) -> Vec3 {
-    let mass = b.def.total_mass();
+    let mass = b.total_mass();
     let scale = Momentum::scale(mass);
     Momentum::of(&b.state.v, &b.def.mass, scale).mean(mass, scale)
 }

@@ -198,7 +198,7 @@ impl SharedGroup {
             mass: bodies
                 .iter()
                 .map(|b| {
-                    let m = b.def.total_mass();
+                    let m = b.total_mass();
                     (m, Momentum::scale(m))
                 })
                 .collect(),
