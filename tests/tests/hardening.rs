@@ -69,6 +69,7 @@ fn made_up_fault(reply: &mut Reply) {
                 place: "node 0".into(),
                 what: "velocity or position",
             },
+            split_contacts: None,
         };
     }
 }
@@ -92,6 +93,7 @@ fn made_up_own_fault(reply: &mut Reply) {
                 place: "node 0".into(),
                 what: "velocity or position",
             },
+            split_contacts: None,
         };
     }
 }

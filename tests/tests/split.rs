@@ -186,6 +186,79 @@ fn a_fault_in_a_split_group_is_the_drivers_fault() {
     }
 }
 
+/// Nothing computed is lost at a fault: a split group's contact rows of step n wait for
+/// its pass, which runs at the start of step n + 1. When a later exchange faults, the
+/// rows of every step before the fault are written as one worker writes them: the two
+/// spheres in contact, the left one pushed into the right one by a load of `force`
+/// newtons from 0.1 ms. Returns the fault.
+fn rows_kept_at_fault(force: &str) -> crash_core::Fault {
+    let text = std::fs::read_to_string(crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
+        .unwrap()
+        .replace(
+            "penalty_scale = 0.1",
+            "penalty_scale = 0.1\nmargin = 1.0e-5",
+        )
+        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [1.0, 0.0, 0.0]")
+        .replace("velocity = [-5.0, 0.0, 0.0]", "velocity = [-1.0, 0.0, 0.0]")
+        .replace(
+            "position = [-0.0625, 0.0, 0.0]",
+            "position = [-0.0505, 0.0, 0.0]",
+        )
+        .replace(
+            "position = [0.0625, 0.0, 0.0]",
+            "position = [0.0505, 0.0, 0.0]",
+        )
+        + &format!(
+            "\n[[bodies.load]]\nselect = \"all\"\nforce = [{force}, 0.0, 0.0]\nstart = 1.0e-4\n"
+        );
+    let scene = crash_scene::parse(&text, "pushed.toml").unwrap();
+    let inp = RunInput::from_built(scene.build().unwrap());
+    let mut one = RecordSink::default();
+    let expected = match run_local(inp.clone(), 1, &mut one, &opts(SplitMode::Off)).unwrap_err() {
+        crash_master::MasterError::Fault(f) => f,
+        other => panic!("{other}"),
+    };
+    let mut sink = RecordSink::default();
+    match run_local(inp, 2, &mut sink, &opts(SplitMode::Always)).unwrap_err() {
+        crash_master::MasterError::Fault(f) => assert_eq!(f, expected),
+        other => panic!("{other}"),
+    }
+    let steps = |s: &RecordSink| s.contact_stats.iter().map(|r| r.0).collect::<Vec<_>>();
+    // in contact from the first step to the last one before the fault
+    let last = steps(&one).last().copied();
+    assert_eq!(
+        steps(&one),
+        (1..=last.unwrap_or(0)).collect::<Vec<_>>(),
+        "{expected}"
+    );
+    assert_eq!(steps(&sink), steps(&one), "contact rows lost at the fault");
+    assert_eq!(contact_rows(&sink), contact_rows(&one));
+    expected
+}
+
+/// The fault in the exchange after the one that ran the pass: the left sphere
+/// outruns the contact margin, found when the parts' moves meet (the Halo exchange).
+#[test]
+fn a_fault_after_a_split_groups_contact_pass_keeps_the_rows_of_every_step_before() {
+    let f = rows_kept_at_fault("1.0e5");
+    assert!(
+        matches!(f, crash_core::Fault::Tunnelling { step, .. } if step > 20),
+        "{f}"
+    );
+}
+
+/// The fault in the exchange that runs the pass (a Step): a load beyond any finite
+/// acceleration gives the left sphere non-finite velocities in its integration; the
+/// holders' shares of the pass come back with the fault and the other's report.
+#[test]
+fn a_fault_in_the_step_that_runs_a_split_groups_contact_pass_keeps_the_rows_before() {
+    let f = rows_kept_at_fault("1.0e308");
+    assert!(
+        matches!(f, crash_core::Fault::NonFinite { step, .. } if step > 20),
+        "{f}"
+    );
+}
+
 /// A sink that checks the order of the contact rows against the checkpoints: one
 /// `contact_stats` call per step, in step order, and every checkpoint handed over
 /// after its step's rows (a split group's rows wait for its pending contact pass:

@@ -306,6 +306,28 @@ fn step_report_round_trips_bit_exact() {
         assert_eq!(a.stable_dt.to_bits(), b.stable_dt.to_bits());
         assert_eq!(a.energy.kinetic.to_bits(), b.energy.kinetic.to_bits());
     }
+    // a fault carries the share of the pass it ran (an empty one is a share too) or none
+    for share in [Some(rep.split_contacts.clone()), Some(Vec::new()), None] {
+        let fault = Reply::Fault {
+            group_first: 3,
+            fault: Fault::DtCollapse {
+                step: 9,
+                dt: 1e-12,
+                floor: 1e-10,
+                body: 3,
+                element: 1,
+            },
+            split_contacts: share.clone(),
+        };
+        let bytes = reply_to_pb(&fault).encode_to_vec();
+        let back =
+            reply_from_pb(&crash_proto::pb::WorkerMessage::decode(bytes.as_slice()).unwrap())
+                .unwrap();
+        let Reply::Fault { split_contacts, .. } = back else {
+            panic!("not a fault")
+        };
+        assert_eq!(split_contacts, share);
+    }
 }
 
 #[test]

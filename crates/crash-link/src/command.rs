@@ -222,10 +222,14 @@ pub enum Reply {
     States(Vec<(u32, BodyState)>),
     /// (body id, part, state) of the parts this worker computes (`Parts`).
     Parts(Vec<(u32, u32, BodyState)>),
-    /// A physical fault in the group whose smallest body id is `group_first`.
+    /// A physical fault in the group whose smallest body id is `group_first`, with this
+    /// worker's share of the split groups' contact statistics from the pass the last
+    /// step left pending (`StepReport::split_contacts`) when it ran to its end before
+    /// the fault (None otherwise): the master then still writes that step's rows.
     Fault {
         group_first: u32,
         fault: Fault,
+        split_contacts: Option<Vec<PairStats>>,
     },
     /// The command could not be carried out (a protocol or bookkeeping error).
     Error(String),

@@ -33,7 +33,9 @@ use thiserror::Error;
 /// v16: contact statistics carry their exact force sums (ContactStats.tally); a split
 /// group's holders report their share of its statistics (Report.split_contacts) with
 /// the Step that runs the pending contact pass, and Contact is answered by a Report.
-pub const PROTOCOL_VERSION: u32 = 16;
+/// v17: a Fault reply carries the worker's share of that pass when it ran
+/// (Failure.split_contacts), so the step before a fault keeps its contact rows.
+pub const PROTOCOL_VERSION: u32 = 17;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

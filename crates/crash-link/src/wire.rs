@@ -628,13 +628,19 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
         Reply::States(states) => PbReply::States(pb::States {
             states: states.iter().map(|(id, s)| state_to_pb(*id, s)).collect(),
         }),
-        Reply::Fault { group_first, fault } => PbReply::Failure(pb::Failure {
+        Reply::Fault {
+            group_first,
+            fault,
+            split_contacts,
+        } => PbReply::Failure(pb::Failure {
             kind: Some(pb::failure::Kind::Fault(fault_to_pb(fault))),
             group_first: *group_first,
+            split_contacts: split_contacts.as_deref().map(contacts_to_pb),
         }),
         Reply::Error(e) => PbReply::Failure(pb::Failure {
             kind: Some(pb::failure::Kind::Error(e.clone())),
             group_first: 0,
+            split_contacts: None,
         }),
     };
     pb::WorkerMessage { reply: Some(reply) }
@@ -673,6 +679,11 @@ pub fn reply_from_pb(msg: &pb::WorkerMessage) -> Result<Reply, ProtoError> {
                     pb::failure::Kind::Fault(fault) => Reply::Fault {
                         group_first: f.group_first,
                         fault: fault_from_pb(fault)?,
+                        split_contacts: f
+                            .split_contacts
+                            .as_ref()
+                            .map(contacts_from_pb)
+                            .transpose()?,
                     },
                     pb::failure::Kind::Error(e) => Reply::Error(e.clone()),
                 }

@@ -147,6 +147,12 @@ fn drive<'a, L: WorkerLink>(
         };
     }
     s.stats_mut().wall_s = wall_before + wall.elapsed().as_secs_f64();
+    if let Err(MasterError::Fault(_)) = &result {
+        // the last complete step's rows, if a split group's pass held them
+        if let Err(e) = s.rows_after_fault(sink) {
+            tracing::warn!("the contact rows of the step before the fault: {e}");
+        }
+    }
     s.end(result.as_ref().err());
     match result {
         Ok(_) => {

@@ -82,6 +82,12 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         self.m.settle_rows(sink)
     }
 
+    /// After a fault ended the run: the held contact rows of the last complete step,
+    /// when every holder's share of their pass came back (master/held.rs).
+    pub fn rows_after_fault(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        self.m.rows_after_fault(sink)
+    }
+
     /// Whether the last command found workers gone or frozen: `recover` can continue
     /// without them.
     pub fn has_lost(&self) -> bool {

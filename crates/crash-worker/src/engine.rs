@@ -146,10 +146,18 @@ impl Engine {
                     Err(EngineError::Step { step: at.step, dt })
                 } else {
                     let mut reply = self.run(|g| g.advance_with(&at, dt, due), kin_nodes);
-                    if let Reply::Report(rep) = &mut reply {
-                        if let Some(fault) = self.step_shared(&at, dt, due, &contact, rep) {
-                            return fault;
+                    match &mut reply {
+                        Reply::Report(rep) => {
+                            if let Some(fault) = self.step_shared(&at, dt, due, &contact, rep) {
+                                return fault;
+                            }
                         }
+                        // a whole group faulted: the split groups' pending passes
+                        // still give the step before its contact rows
+                        Reply::Fault { split_contacts, .. } => {
+                            *split_contacts = self.share_after_fault(0, &contact, Vec::new());
+                        }
+                        _ => {}
                     }
                     self.at = Some(at.after(dt));
                     return reply;
@@ -498,9 +506,11 @@ impl Engine {
                 }
                 Err(fault) => {
                     self.broken = true;
+                    // no split group's pass is run here (Step: `handle`)
                     return Reply::Fault {
                         group_first: first,
                         fault,
+                        split_contacts: Some(Vec::new()),
                     };
                 }
             }

@@ -4,6 +4,7 @@
 use super::Master;
 use crate::error::MasterError;
 use crate::input::CostModel;
+use crash_core::contact::PairStats;
 use crash_core::{BodyReport, Clock, Fault};
 use crash_link::{escape_peer, Command, GroupTime, LinkError, Reply, StepReport, WorkerLink};
 
@@ -42,6 +43,7 @@ impl<L: WorkerLink> Master<'_, L> {
         cmds: Vec<Vec<Command>>,
     ) -> Result<Vec<Vec<Reply>>, MasterError> {
         self.faulted = None;
+        self.fault_shares = None;
         let counts: Vec<usize> = cmds.iter().map(Vec::len).collect();
         let mut failed: Vec<Option<LinkError>> = vec![None; counts.len()];
         for (w, list) in cmds.into_iter().enumerate() {
@@ -57,6 +59,9 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let mut out = Vec::with_capacity(counts.len());
         let mut fault: Option<(u32, Fault, usize)> = None;
+        // each worker's share of a pending split contact pass, in case a fault ends
+        // the run here (held.rs: `rows_after_fault`)
+        let mut shares: Vec<Option<Vec<PairStats>>> = vec![None; counts.len()];
         let mut refused: Option<(usize, String)> = None;
         for (w, &count) in counts.iter().enumerate() {
             let mut replies = Vec::with_capacity(count);
@@ -73,7 +78,9 @@ impl<L: WorkerLink> Master<'_, L> {
                         Ok(Reply::Fault {
                             group_first,
                             fault: f,
+                            split_contacts,
                         }) => {
+                            shares[w] = split_contacts;
                             // plausible.rs: a lie drops the worker (as a loss)
                             if let Err(what) = self.check_fault(w, group_first, &f) {
                                 failed[w] = Some(LinkError::Implausible(escape_peer(&what)));
@@ -83,7 +90,12 @@ impl<L: WorkerLink> Master<'_, L> {
                                 fault = Some((group_first, f, w));
                             }
                         }
-                        Ok(r) => replies.push(r),
+                        Ok(r) => {
+                            if let Reply::Report(rep) = &r {
+                                shares[w] = Some(rep.split_contacts.clone());
+                            }
+                            replies.push(r);
+                        }
                     }
                 }
             }
@@ -106,6 +118,7 @@ impl<L: WorkerLink> Master<'_, L> {
             return Err(self.worker_error(w, LinkError::Refused(reason)));
         }
         if let Some((_, f, w)) = fault {
+            self.fault_shares = Some(shares);
             // confirm.rs: replayed elsewhere before it is believed (with checkpoints)
             return Err(self.on_fault(w, f));
         }

@@ -94,6 +94,33 @@ impl<L: WorkerLink> Master<'_, L> {
         Ok(())
     }
 
+    /// The run ends with a fault: write the held rows of the last complete step if
+    /// their statistics are in. They are when the fault came after the exchange that
+    /// ran the pending pass (in the Halo exchange, which checks the moves over the
+    /// parts), or with it when every holder's share came back, from the fault or from
+    /// the others' reports (barrier.rs). Otherwise the rows stay unwritten: a holder's
+    /// pass did not run to its end.
+    pub(crate) fn rows_after_fault(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {
+        let shares = self.fault_shares.take();
+        if self.held.as_ref().is_some_and(|h| h.split.is_none()) {
+            let Some(shares) = shares else {
+                return Ok(());
+            };
+            if (0..shares.len()).any(|w| self.holds_parts(w) && shares[w].is_none()) {
+                return Ok(());
+            }
+            let mut reps: Vec<StepReport> = shares
+                .into_iter()
+                .map(|s| StepReport {
+                    split_contacts: s.unwrap_or_default(),
+                    ..StepReport::default()
+                })
+                .collect();
+            self.take_split_stats(&mut reps)?;
+        }
+        self.release_rows(sink)
+    }
+
     /// Write the held rows now: run the pending contact pass first if it still is
     /// (before a checkpoint is written, and at the end of the run).
     pub(crate) fn settle_rows(&mut self, sink: &mut dyn Sink) -> Result<(), MasterError> {

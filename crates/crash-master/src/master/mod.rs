@@ -101,6 +101,9 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     rebalance: bool,
     /// The worker and fault of the last exchange's fault reply (`confirm`).
     faulted: Option<(usize, crash_core::Fault)>,
+    /// Each worker's share of the pending split contact pass from the exchange that
+    /// faulted (None where none came back), for the rows held (`held`).
+    fault_shares: Option<Vec<Option<Vec<crash_core::contact::PairStats>>>>,
     /// A fault being replayed on the other workers (`confirm`).
     suspect: Option<confirm::Suspect>,
     /// Workers still in the run (a lost one is dropped for good; indices stay; a
@@ -235,6 +238,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             fresh: Vec::new(),
             rebalance: false,
             faulted: None,
+            fault_shares: None,
             suspect: None,
             lost: Vec::new(),
             source: None,

@@ -474,6 +474,11 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     /// Worker `w` computes parts of a split group holding body `id`.
+    /// Whether worker `w` holds parts of a split group.
+    pub(super) fn holds_parts(&self, w: usize) -> bool {
+        self.splits.iter().any(|s| s.workers.contains(&w))
+    }
+
     pub(super) fn holds_part(&self, w: usize, id: u32) -> bool {
         self.splits
             .iter()

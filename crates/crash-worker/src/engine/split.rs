@@ -13,6 +13,7 @@
 
 use super::Engine;
 use crate::error::EngineError;
+use crash_core::contact::PairStats;
 use crash_core::partition::{PartState, SharedGroup, SplitFigures};
 use crash_core::{Body, BodyState, Clock, Due};
 use crash_link::{BodyLoad, Reply, SplitSpec, StepReport};
@@ -223,15 +224,40 @@ impl Engine {
             match r {
                 Ok(p) => rep.parts.extend(p),
                 Err(fault) => {
+                    let group_first = s.first();
                     self.broken = true;
+                    let ran = std::mem::take(&mut rep.split_contacts);
                     return Some(Reply::Fault {
-                        group_first: s.first(),
+                        group_first,
                         fault,
+                        split_contacts: self.share_after_fault(k + 1, contact, ran),
                     });
                 }
             }
         }
         None
+    }
+
+    /// This worker's share of the pending contact passes after a fault in a Step:
+    /// `ran`, the shares of the split groups before `from`, then the passes of the
+    /// groups from `from` on run now (each reads only its own group's states, which
+    /// the fault did not touch). None when one of them fails: the step's rows are then
+    /// not complete.
+    pub(super) fn share_after_fault(
+        &mut self,
+        from: usize,
+        contact: &SplitFigures,
+        mut ran: Vec<PairStats>,
+    ) -> Option<Vec<PairStats>> {
+        for s in self.shared.iter_mut().skip(from) {
+            if !s.g.contact_pending() {
+                continue;
+            }
+            let d = dts_of(&s.g, contact).ok()?;
+            s.g.contact(&d).ok()?;
+            ran.extend_from_slice(s.g.split.contact_stats());
+        }
+        Some(ran)
     }
 
     /// The reply to a split group's failure: a fault of the run (the engine is broken
@@ -240,7 +266,12 @@ impl Engine {
         match e {
             crash_core::partition::SplitError::Fault(fault) => {
                 self.broken = true;
-                Reply::Fault { group_first, fault }
+                // the pass that faulted leaves the step's rows incomplete
+                Reply::Fault {
+                    group_first,
+                    fault,
+                    split_contacts: None,
+                }
             }
             e => Reply::Error(EngineError::Shared(e.to_string()).to_string()),
         }
