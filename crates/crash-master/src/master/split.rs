@@ -336,25 +336,44 @@ impl<L: WorkerLink> Master<'_, L> {
             .enumerate()
             .flat_map(|(k, s)| s.ids.iter().map(move |&id| (id, k)))
             .collect();
-        // each holder gets the other holders' parts of its groups
-        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
-        for (w, c) in cmds.iter_mut().enumerate() {
-            let holds: Vec<usize> = (0..self.splits.len())
-                .filter(|&k| self.splits[k].workers.contains(&w))
-                .collect();
-            if holds.is_empty() {
-                continue;
+        // each holder gets the other holders' parts of its groups, in sender order; a
+        // part moves to its last recipient (with two workers, its only one) and is
+        // cloned for the others
+        let holds: Vec<Vec<usize>> = (0..nw)
+            .map(|w| {
+                (0..self.splits.len())
+                    .filter(|&k| self.splits[k].workers.contains(&w))
+                    .collect()
+            })
+            .collect();
+        let mut imports: Vec<Vec<PartState>> = vec![Vec::new(); nw];
+        for (v, parts) in from.into_iter().enumerate() {
+            for p in parts {
+                let Some(k) = group_of.get(&p.id) else {
+                    continue;
+                };
+                let to: Vec<usize> = (0..nw)
+                    .filter(|&w| w != v && holds[w].contains(k))
+                    .collect();
+                if let Some((&last, rest)) = to.split_last() {
+                    for &w in rest {
+                        imports[w].push(p.clone());
+                    }
+                    imports[last].push(p);
+                }
             }
-            let imports: Vec<PartState> = from
-                .iter()
-                .enumerate()
-                .filter(|(v, _)| *v != w)
-                .flat_map(|(_, p)| p.iter())
-                .filter(|p| group_of.get(&p.id).is_some_and(|k| holds.contains(k)))
-                .cloned()
-                .collect();
-            c.push(Command::Halo(imports));
         }
+        let cmds: Vec<Vec<Command>> = imports
+            .into_iter()
+            .zip(&holds)
+            .map(|(i, h)| {
+                if h.is_empty() {
+                    Vec::new()
+                } else {
+                    vec![Command::Halo(i)]
+                }
+            })
+            .collect();
         let replies = self.exchange(cmds)?;
         self.split_ns.clear();
         let mut figures = SplitFigures::default();
