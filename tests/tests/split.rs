@@ -189,9 +189,9 @@ fn a_fault_in_a_split_group_is_the_drivers_fault() {
 /// Nothing computed is lost at a fault: a split group's contact rows of step n wait for
 /// its pass, which runs at the start of step n + 1. When a later exchange faults, the
 /// rows of every step before the fault are written as one worker writes them: the two
-/// spheres in contact, the left one pushed into the right one by a load of `force`
-/// newtons from 0.1 ms. Returns the fault.
-fn rows_kept_at_fault(force: &str) -> crash_core::Fault {
+/// spheres in contact from the start, then `extra` (TOML appended to the scene, whose
+/// last body is the right sphere). Returns the fault.
+fn rows_kept_at_fault(extra: &str) -> crash_core::Fault {
     let text = std::fs::read_to_string(crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
         .unwrap()
         .replace(
@@ -208,9 +208,7 @@ fn rows_kept_at_fault(force: &str) -> crash_core::Fault {
             "position = [0.0625, 0.0, 0.0]",
             "position = [0.0505, 0.0, 0.0]",
         )
-        + &format!(
-            "\n[[bodies.load]]\nselect = \"all\"\nforce = [{force}, 0.0, 0.0]\nstart = 1.0e-4\n"
-        );
+        + extra;
     let scene = crash_scene::parse(&text, "pushed.toml").unwrap();
     let inp = RunInput::from_built(scene.build().unwrap());
     let mut one = RecordSink::default();
@@ -236,11 +234,17 @@ fn rows_kept_at_fault(force: &str) -> crash_core::Fault {
     expected
 }
 
-/// The fault in the exchange after the one that ran the pass: the left sphere
-/// outruns the contact margin, found when the parts' moves meet (the Halo exchange).
+/// A load of `force` newtons along x on every node of the right sphere from 0.1 ms.
+fn pull_right(force: &str) -> String {
+    format!("\n[[bodies.load]]\nselect = \"all\"\nforce = [{force}, 0.0, 0.0]\nstart = 1.0e-4\n")
+}
+
+/// The fault in the exchange after the one that ran the pass: the right sphere, pulled
+/// off the left one, outruns the contact margin, found when the parts' moves meet (the
+/// Halo exchange).
 #[test]
 fn a_fault_after_a_split_groups_contact_pass_keeps_the_rows_of_every_step_before() {
-    let f = rows_kept_at_fault("1.0e5");
+    let f = rows_kept_at_fault(&pull_right("1.0e5"));
     assert!(
         matches!(f, crash_core::Fault::Tunnelling { step, .. } if step > 20),
         "{f}"
@@ -248,13 +252,35 @@ fn a_fault_after_a_split_groups_contact_pass_keeps_the_rows_of_every_step_before
 }
 
 /// The fault in the exchange that runs the pass (a Step): a load beyond any finite
-/// acceleration gives the left sphere non-finite velocities in its integration; the
-/// holders' shares of the pass come back with the fault and the other's report.
+/// acceleration gives the right sphere non-finite velocities in its parts'
+/// integration; the holders' shares of the pass come back with the fault and the
+/// other's report.
 #[test]
 fn a_fault_in_the_step_that_runs_a_split_groups_contact_pass_keeps_the_rows_before() {
-    let f = rows_kept_at_fault("1.0e308");
+    let f = rows_kept_at_fault(&pull_right("1.0e308"));
     assert!(
-        matches!(f, crash_core::Fault::NonFinite { step, .. } if step > 20),
+        matches!(f, crash_core::Fault::NonFinite { body: 1, step, .. } if step > 20),
+        "{f}"
+    );
+}
+
+/// The fault in a whole group in the Step that runs the split group's pass: a third
+/// sphere resting on a fixed plate (a group with a read-only copy, never split) is
+/// pushed beyond any finite acceleration; the worker runs its split groups' pending
+/// passes before it answers with the fault. The plate lies 1.005 mm below the sphere
+/// (1 mm of thickness between them): close enough to pair them from the start, so the
+/// sphere's group holds the plate's copy and stays whole (it names the driver's node).
+#[test]
+fn a_fault_in_a_whole_group_keeps_the_split_groups_rows_before() {
+    let third = "\n[[bodies]]\nname = \"third\"\nmaterial = \"steel\"\nthickness = 1.0e-3\n\
+        sphere = { radius = 0.05, level = 2 }\nposition = [0.0, 0.3, 0.0]\n\
+        [[bodies.load]]\nselect = \"all\"\nforce = [0.0, 0.0, -1.0e308]\nstart = 1.0e-4\n\
+        [[bodies]]\nname = \"floor\"\nmaterial = \"steel\"\nthickness = 1.0e-3\n\
+        plate = { size = [0.2, 0.2], cells = [4, 4] }\nposition = [0.0, 0.3, -0.051005]\n\
+        [[bodies.fix]]\nselect = \"all\"\n";
+    let f = rows_kept_at_fault(third);
+    assert!(
+        matches!(f, crash_core::Fault::NonFinite { body: 2, step, .. } if step > 20),
         "{f}"
     );
 }
