@@ -285,6 +285,24 @@ fn a_fault_in_a_whole_group_keeps_the_split_groups_rows_before() {
     );
 }
 
+/// A body split into parts over two workers names the non-finite node one process
+/// names (the lowest of the whole body): every part is stepped and the first fault in
+/// `Fault::order` kept, on each holder and over the holders. Here a third sphere, alone
+/// and so split too, is pushed beyond any finite acceleration: every node goes
+/// non-finite at once, so the name shows the rule (node 0; the part that found its
+/// fault first named node 19 before).
+#[test]
+fn a_split_body_names_the_non_finite_node_one_process_names() {
+    let third = "\n[[bodies]]\nname = \"third\"\nmaterial = \"steel\"\nthickness = 1.0e-3\n\
+        sphere = { radius = 0.05, level = 2 }\nposition = [0.0, 0.3, 0.0]\n\
+        [[bodies.load]]\nselect = \"all\"\nforce = [0.0, 0.0, -1.0e308]\nstart = 1.0e-4\n";
+    let f = rows_kept_at_fault(third);
+    assert!(
+        matches!(&f, crash_core::Fault::NonFinite { body: 2, place, .. } if place == "node 0"),
+        "{f}"
+    );
+}
+
 /// A sink that checks the order of the contact rows against the checkpoints: one
 /// `contact_stats` call per step, in step order, and every checkpoint handed over
 /// after its step's rows (a split group's rows wait for its pending contact pass:

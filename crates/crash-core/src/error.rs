@@ -111,3 +111,95 @@ pub enum Fault {
         closing_speed: f64,
     },
 }
+
+impl Fault {
+    /// Where the fault sits in the order in which one process finds faults: its step,
+    /// its body, then its node or element (a body's nodes and elements are stepped in
+    /// index order, so the lowest comes first). A body split into parts finds its
+    /// faults part by part, possibly on several workers: the first of them in this
+    /// order is the one process's fault (`partition`, crash-master's barrier).
+    pub fn order(&self) -> (u64, u32, usize) {
+        let index = |place: &str| {
+            place
+                .split_once(' ')
+                .and_then(|(_, n)| n.parse::<usize>().ok())
+                .unwrap_or(0)
+        };
+        match self {
+            Fault::NonFinite {
+                step, body, place, ..
+            } => (*step, *body, index(place)),
+            Fault::Collapsed {
+                step,
+                body,
+                element,
+                ..
+            }
+            | Fault::Inverted {
+                step,
+                body,
+                element,
+                ..
+            }
+            | Fault::EnergyRunaway {
+                step,
+                body,
+                element,
+                ..
+            }
+            | Fault::DtCollapse {
+                step,
+                body,
+                element,
+                ..
+            } => (*step, *body, *element),
+            Fault::Tunnelling {
+                step, body, node, ..
+            }
+            | Fault::PassThrough {
+                step, body, node, ..
+            } => (*step, *body, *node),
+        }
+    }
+
+    /// The one of `a` and `b` that comes first in `order` (`a` on a tie).
+    pub fn first_of(a: Option<Fault>, b: Fault) -> Fault {
+        match a {
+            Some(a) if a.order() <= b.order() => a,
+            _ => b,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn non_finite(step: u64, body: u32, place: &str) -> Fault {
+        Fault::NonFinite {
+            step,
+            body,
+            place: place.into(),
+            what: "velocity or position",
+        }
+    }
+
+    #[test]
+    fn the_first_fault_is_the_earliest_step_then_the_lowest_body_then_the_lowest_index() {
+        let node19 = non_finite(66, 2, "node 19");
+        let node0 = non_finite(66, 2, "node 0");
+        assert_eq!(Fault::first_of(Some(node19.clone()), node0.clone()), node0);
+        assert_eq!(Fault::first_of(Some(node0.clone()), node19.clone()), node0);
+        assert_eq!(Fault::first_of(None, node19.clone()), node19);
+        let body1 = non_finite(66, 1, "node 300");
+        assert_eq!(Fault::first_of(Some(node0.clone()), body1.clone()), body1);
+        let earlier = Fault::Collapsed {
+            step: 65,
+            body: 3,
+            element: 7,
+            ratio: 1e-3,
+        };
+        assert_eq!(Fault::first_of(Some(node0), earlier.clone()), earlier);
+        assert_eq!(non_finite(1, 0, "element 12").order(), (1, 0, 12));
+    }
+}

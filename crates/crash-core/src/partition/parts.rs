@@ -9,11 +9,11 @@
 //! after every update the driver copies their x, v, w (all the element kernels read of
 //! a node) from their owners (`Split::exchange`), which is what would cross the wire.
 
+use super::report::{element_in_whole, node_in_whole};
 use super::Partition;
 use crate::body::{Body, BodyState};
 use crate::clock::Clock;
 use crate::error::{CoreError, Fault};
-use crate::forces::ForceSums;
 use crate::integrate::NodeSums;
 use crate::mesh::Mesh;
 use crate::Vec3;
@@ -172,21 +172,30 @@ impl Split {
         gravity: Vec3,
     ) -> Result<Vec<NodeSums>, Fault> {
         let sc = clock.step_of(h);
-        self.parts
-            .iter_mut()
-            .map(|p| p.body.integrate(&sc, gravity))
-            .collect()
+        // every part, then the fault one process would name (`Fault::order`)
+        let mut fault = None;
+        let mut sums = Vec::with_capacity(self.parts.len());
+        for p in &mut self.parts {
+            match p.body.integrate(&sc, gravity) {
+                Ok(s) => sums.push(s),
+                Err(f) => fault = Some(Fault::first_of(fault, node_in_whole(f, &p.node))),
+            }
+        }
+        fault.map_or(Ok(sums), Err)
     }
 
     /// Element forces of every part (the step that led here: h, step); returns the
     /// smallest element critical step.
     pub fn forces(&mut self, h: f64, step: u64) -> Result<f64, Fault> {
         let mut dt = f64::INFINITY;
+        let mut fault = None;
         for p in &mut self.parts {
-            let f: ForceSums = p.body.internal_forces(h, step)?;
-            dt = dt.min(f.dt);
+            match p.body.internal_forces(h, step) {
+                Ok(f) => dt = dt.min(f.dt),
+                Err(f) => fault = Some(Fault::first_of(fault, element_in_whole(f, &p.element))),
+            }
         }
-        Ok(dt)
+        fault.map_or(Ok(dt), Err)
     }
 
     /// One step of length h from `clock`: integrate, exchange the halos, element forces

@@ -244,16 +244,21 @@ impl SharedGroup {
             let closing = contact
                 && self.split.contact.enabled
                 && self.split.contact.speed_rule == crate::contact::SpeedRule::LimitDt;
+            // every part of the body, then the fault one process would name
+            let mut fault = None;
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
                 self.figures[i][q] = None;
                 if !self.split.mine[i][q] {
                     continue;
                 }
-                let n = p
-                    .body
-                    .integrate(&sc, gravity)
-                    .map_err(|f| node_in_whole(f, &p.node))?;
+                let n = match p.body.integrate(&sc, gravity) {
+                    Ok(n) => n,
+                    Err(f) => {
+                        fault = Some(Fault::first_of(fault, node_in_whole(f, &p.node)));
+                        continue;
+                    }
+                };
                 let st = &p.body.state;
                 let o = p.owned;
                 // the integration's box is the owned nodes' (it skips the halo)
@@ -314,6 +319,9 @@ impl SharedGroup {
                 });
                 self.figures[i][q] = Some(fig);
                 self.sums[i][q] = Some(n);
+            }
+            if let Some(f) = fault {
+                return Err(f);
             }
         }
         self.sent_full = full;
@@ -434,15 +442,19 @@ impl SharedGroup {
                     s.exchange_into(q);
                 }
             }
+            let mut fault = None;
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.forces[i][q] = None;
                 if !self.split.mine[i][q] {
                     continue;
                 }
-                let f = p
-                    .body
-                    .internal_forces(h, step)
-                    .map_err(|f| element_in_whole(f, &p.element))?;
+                let f = match p.body.internal_forces(h, step) {
+                    Ok(f) => f,
+                    Err(f) => {
+                        fault = Some(Fault::first_of(fault, element_in_whole(f, &p.element)));
+                        continue;
+                    }
+                };
                 let d = PartDt {
                     id: self.ids[i],
                     dt: f.dt,
@@ -450,6 +462,9 @@ impl SharedGroup {
                 };
                 out[i] = Some(out[i].map_or(d, |o: PartDt| o.min(d)));
                 self.forces[i][q] = Some(f);
+            }
+            if let Some(f) = fault {
+                return Err(f.into());
             }
         }
         let local: Vec<f64> = out

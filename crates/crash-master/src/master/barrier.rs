@@ -86,7 +86,11 @@ impl<L: WorkerLink> Master<'_, L> {
                                 failed[w] = Some(LinkError::Implausible(escape_peer(&what)));
                                 break;
                             }
-                            if fault.as_ref().is_none_or(|(g, _, _)| group_first < *g) {
+                            // the group with the smallest body first, then the fault
+                            // one process would name (a split group's holders each
+                            // report the first of their own parts')
+                            let key = (group_first, f.order());
+                            if fault.as_ref().is_none_or(|(g, p, _)| key < (*g, p.order())) {
                                 fault = Some((group_first, f, w));
                             }
                         }
