@@ -492,12 +492,12 @@ impl<L: WorkerLink> Master<'_, L> {
         self.take_split_stats(&mut reps)
     }
 
-    /// Worker `w` computes parts of a split group holding body `id`.
     /// Whether worker `w` holds parts of a split group.
     pub(super) fn holds_parts(&self, w: usize) -> bool {
         self.splits.iter().any(|s| s.workers.contains(&w))
     }
 
+    /// Worker `w` computes parts of a split group holding body `id`.
     pub(super) fn holds_part(&self, w: usize, id: u32) -> bool {
         self.splits
             .iter()
