@@ -112,6 +112,12 @@ pub enum Fault {
     },
 }
 
+/// The number in a `NonFinite` fault's place of `kind` ("node" or "element"), e.g.
+/// 12 of "node 12"; None for another kind.
+pub fn place_index(place: &str, kind: &str) -> Option<usize> {
+    place.strip_prefix(kind)?.strip_prefix(' ')?.parse().ok()
+}
+
 impl Fault {
     /// Where the fault sits in the order in which one process finds faults: its step,
     /// its body, then its node or element (a body's nodes and elements are stepped in
@@ -119,16 +125,13 @@ impl Fault {
     /// faults part by part, possibly on several workers: the first of them in this
     /// order is the one process's fault (`partition`, crash-master's barrier).
     pub fn order(&self) -> (u64, u32, usize) {
-        let index = |place: &str| {
-            place
-                .split_once(' ')
-                .and_then(|(_, n)| n.parse::<usize>().ok())
-                .unwrap_or(0)
-        };
         match self {
             Fault::NonFinite {
                 step, body, place, ..
-            } => (*step, *body, index(place)),
+            } => {
+                let i = place_index(place, "node").or_else(|| place_index(place, "element"));
+                (*step, *body, i.unwrap_or(0))
+            }
             Fault::Collapsed {
                 step,
                 body,

@@ -3,7 +3,7 @@
 //! body's numbers.
 
 use crate::body::BodyEnergy;
-use crate::error::Fault;
+use crate::error::{place_index, Fault};
 use crate::group::{BodyReport, Reaction};
 
 /// Join two holders' shares of one body's report: energies summed (another order than
@@ -64,10 +64,7 @@ pub(super) fn add_reaction(a: Reaction, b: Reaction) -> Reaction {
 /// A fault of a part's integration with the whole body's node number.
 pub(super) fn node_in_whole(mut f: Fault, node: &[u32]) -> Fault {
     if let Fault::NonFinite { place, .. } = &mut f {
-        if let Some(n) = place
-            .strip_prefix("node ")
-            .and_then(|n| n.parse::<usize>().ok())
-        {
+        if let Some(n) = place_index(place, "node") {
             if let Some(&g) = node.get(n) {
                 *place = format!("node {g}");
             }
@@ -86,10 +83,7 @@ pub(super) fn element_in_whole(mut f: Fault, element: &[u32]) -> Fault {
     match &mut f {
         Fault::Collapsed { element: e, .. } | Fault::Inverted { element: e, .. } => map(e),
         Fault::NonFinite { place, .. } => {
-            if let Some(n) = place
-                .strip_prefix("element ")
-                .and_then(|n| n.parse::<usize>().ok())
-            {
+            if let Some(n) = place_index(place, "element") {
                 if let Some(&g) = element.get(n) {
                     *place = format!("element {g}");
                 }

@@ -59,8 +59,7 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let mut out = Vec::with_capacity(counts.len());
         let mut fault: Option<(u32, Fault, usize)> = None;
-        // each worker's share of a pending split contact pass, in case a fault ends
-        // the run here (held.rs: `rows_after_fault`)
+        // each fault's share of a pending split contact pass (held.rs: `rows_after_fault`)
         let mut shares: Vec<Option<Vec<PairStats>>> = vec![None; counts.len()];
         let mut refused: Option<(usize, String)> = None;
         for (w, &count) in counts.iter().enumerate() {
@@ -94,12 +93,7 @@ impl<L: WorkerLink> Master<'_, L> {
                                 fault = Some((group_first, f, w));
                             }
                         }
-                        Ok(r) => {
-                            if let Reply::Report(rep) = &r {
-                                shares[w] = Some(rep.split_contacts.clone());
-                            }
-                            replies.push(r);
-                        }
+                        Ok(r) => replies.push(r),
                     }
                 }
             }
@@ -122,6 +116,12 @@ impl<L: WorkerLink> Master<'_, L> {
             return Err(self.worker_error(w, LinkError::Refused(reason)));
         }
         if let Some((_, f, w)) = fault {
+            // the others' shares are in their reports (the replies are dropped here)
+            for (s, replies) in shares.iter_mut().zip(&mut out) {
+                if let Some(Reply::Report(rep)) = replies.first_mut() {
+                    *s = Some(std::mem::take(&mut rep.split_contacts));
+                }
+            }
             self.fault_shares = Some(shares);
             // confirm.rs: replayed elsewhere before it is believed (with checkpoints)
             return Err(self.on_fault(w, f));

@@ -51,9 +51,19 @@ impl<L: WorkerLink> Master<'_, L> {
     /// exactly while a pass is pending, so replies that come while rows are held are
     /// the ones that ran it.
     pub(super) fn take_split_stats(&mut self, reps: &mut [StepReport]) -> Result<(), MasterError> {
+        let shares = reps
+            .iter_mut()
+            .map(|r| std::mem::take(&mut r.split_contacts));
+        self.merge_split_shares(shares.enumerate())
+    }
+
+    /// `take_split_stats` of the shares by worker.
+    fn merge_split_shares(
+        &mut self,
+        shares: impl Iterator<Item = (usize, Vec<PairStats>)>,
+    ) -> Result<(), MasterError> {
         let mut merged: Vec<PairStats> = Vec::new();
-        for (w, rep) in reps.iter_mut().enumerate() {
-            let share = std::mem::take(&mut rep.split_contacts);
+        for (w, share) in shares {
             for c in &share {
                 // a split group holds no kinematic body: no loads on one
                 let no_kin = c.kin_a.is_empty() && c.kin_b.is_empty();
@@ -109,14 +119,8 @@ impl<L: WorkerLink> Master<'_, L> {
             if (0..shares.len()).any(|w| self.holds_parts(w) && shares[w].is_none()) {
                 return Ok(());
             }
-            let mut reps: Vec<StepReport> = shares
-                .into_iter()
-                .map(|s| StepReport {
-                    split_contacts: s.unwrap_or_default(),
-                    ..StepReport::default()
-                })
-                .collect();
-            self.take_split_stats(&mut reps)?;
+            let shares = shares.into_iter().map(Option::unwrap_or_default);
+            self.merge_split_shares(shares.enumerate())?;
         }
         self.release_rows(sink)
     }
