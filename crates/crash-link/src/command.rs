@@ -104,13 +104,17 @@ pub enum Command {
     /// result rows follow this step. `contact`: every split body's element step over
     /// all its parts in the last step and every pair's closing-speed figures (the
     /// `StepReport::part_dts` merged), for the contact pass that step left pending
-    /// (empty when none is: no split group, or a `Contact` ran it).
+    /// (empty when none is: no split group, or a `Contact` ran it). `direct`: the
+    /// holders of split groups exchange their part states with each other (at the
+    /// addresses of `SplitSpec::peers`) instead of through the master's `Halo`, and
+    /// answer with the halo's outcome in `StepReport::halo`.
     Step {
         at: Clock,
         dt: f64,
         kin_nodes: bool,
         due: Due,
         contact: SplitFigures,
+        direct: bool,
     },
     /// What an output frame shows of these bodies (held by the worker).
     Frame(Vec<u32>),
@@ -166,12 +170,16 @@ impl Command {
 /// A group split over workers: its bodies (sorted), each body's part count, the
 /// worker slot computing each part (`holder[i][q]`), and the receiving worker's slot.
 /// Every holder cuts the bodies the same way (`partition_body` is deterministic).
+/// `workers[slot]`: the worker index of each slot; `peers[slot]`: where it takes
+/// direct halo connections (host:port; empty where it takes none).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SplitSpec {
     pub ids: Vec<u32>,
     pub parts: Vec<u32>,
     pub holder: Vec<Vec<u32>>,
     pub slot: u32,
+    pub workers: Vec<u32>,
+    pub peers: Vec<String>,
 }
 
 /// Compute time of one group in one step.
@@ -208,6 +216,68 @@ pub struct StepReport {
     /// each push booked by the holder owning its slave node, so the master's merge
     /// per pair (`PairStats::merge`) gives one process's figures.
     pub split_contacts: Vec<PairStats>,
+    /// A Step with `direct`: the second half of the split groups' step, after the
+    /// holders exchanged their part states with each other (None when no split group
+    /// is held here, or another holder's fault stopped the exchange).
+    pub halo: Option<Halo>,
+}
+
+/// The outcome of a split step's second half when the holders exchange their part
+/// states directly: what a `Halo` command would have been answered.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Halo {
+    /// The report a Halo command gets.
+    Report(Box<StepReport>),
+    /// A physical fault of a split group (as `Reply::Fault`).
+    Fault {
+        group_first: u32,
+        fault: Fault,
+        split_contacts: Option<Vec<PairStats>>,
+    },
+    /// The worker could not carry out the halo (as `Reply::Error`).
+    Error(String),
+    /// The direct exchange with another holder failed (unreachable, closed, silent,
+    /// garbled): the master rolls back and relays the part states from then on.
+    Lost(String),
+}
+
+impl Halo {
+    /// The reply a `Halo` command would have got (Err: the direct exchange failed).
+    pub fn into_reply(self) -> Result<Reply, String> {
+        match self {
+            Halo::Report(r) => Ok(Reply::Report(*r)),
+            Halo::Fault {
+                group_first,
+                fault,
+                split_contacts,
+            } => Ok(Reply::Fault {
+                group_first,
+                fault,
+                split_contacts,
+            }),
+            Halo::Error(e) => Ok(Reply::Error(e)),
+            Halo::Lost(e) => Err(e),
+        }
+    }
+
+    /// The halo outcome of a reply (a Report, a Fault or an Error; anything else is
+    /// an error of the worker).
+    pub fn from_reply(r: Reply) -> Self {
+        match r {
+            Reply::Report(rep) => Halo::Report(Box::new(rep)),
+            Reply::Fault {
+                group_first,
+                fault,
+                split_contacts,
+            } => Halo::Fault {
+                group_first,
+                fault,
+                split_contacts,
+            },
+            Reply::Error(e) => Halo::Error(e),
+            _ => Halo::Error("the halo gave an unexpected reply".into()),
+        }
+    }
 }
 
 #[derive(Debug, Clone)]

@@ -13,13 +13,14 @@ pub mod auth;
 pub mod command;
 pub mod lane;
 pub mod link;
+pub mod peer;
 pub mod spin;
 pub mod text;
 pub mod version;
 pub mod wire;
 
 pub use auth::{HelloFields, Secret, SecretError, SECRET_ENV};
-pub use command::{BodyLoad, Command, GroupTime, Reply, Setup, SplitSpec, StepReport};
+pub use command::{BodyLoad, Command, GroupTime, Halo, Reply, Setup, SplitSpec, StepReport};
 pub use link::{LinkError, WorkerLink};
 pub use spin::IdleSpinner;
 pub use text::escape_peer;

@@ -35,7 +35,10 @@ use thiserror::Error;
 /// the Step that runs the pending contact pass, and Contact is answered by a Report.
 /// v17: a Fault reply carries the worker's share of that pass when it ran
 /// (Failure.split_contacts), so the step before a fault keeps its contact rows.
-pub const PROTOCOL_VERSION: u32 = 17;
+/// v18: the holders of split groups exchange their part states directly (Hello's
+/// peer port, Welcome's peer key, SplitSpec's workers and peers, Step's direct,
+/// Report's halo, PeerHalo frames between workers).
+pub const PROTOCOL_VERSION: u32 = 18;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

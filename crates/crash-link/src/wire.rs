@@ -2,7 +2,7 @@
 //! as a state plus, when the receiver lacks it, a definition (crash-proto's body
 //! conversions); the clock travels in Step and Load.
 
-use crate::command::{BodyLoad, Command, GroupTime, Reply, Setup, SplitSpec, StepReport};
+use crate::command::{BodyLoad, Command, GroupTime, Halo, Reply, Setup, SplitSpec, StepReport};
 use crash_core::contact::sweep::Momentum;
 use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SpeedRule};
 use crash_core::partition::{PairSpeed, PartDt, PartState, SplitFigures};
@@ -283,6 +283,7 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
             kin_nodes,
             due,
             contact,
+            direct,
         } => PbCommand::Step(pb::Step {
             at: Some(clock_to_pb(at)),
             dt: *dt,
@@ -290,6 +291,7 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
             reactions: due.reactions,
             probes: due.probes,
             contact: (!contact.is_empty()).then(|| part_dts_to_pb(contact)),
+            direct: *direct,
         }),
         Command::Frame(ids) => PbCommand::Frame(pb::FrameRequest { ids: ids.clone() }),
         Command::States(ids) => PbCommand::States(pb::StatesRequest { ids: ids.clone() }),
@@ -320,6 +322,8 @@ fn spec_to_pb(s: &SplitSpec) -> pb::SplitSpec {
         parts: s.parts.clone(),
         holder: s.holder.iter().flatten().copied().collect(),
         slot: s.slot,
+        workers: s.workers.clone(),
+        peers: s.peers.clone(),
     }
 }
 
@@ -330,11 +334,18 @@ fn spec_from_pb(s: Option<&pb::SplitSpec>) -> Result<SplitSpec, ProtoError> {
             "split: ids and part counts differ in length".into(),
         ));
     }
+    if s.workers.len() != s.peers.len() {
+        return Err(ProtoError::Invalid(
+            "split: workers and peer addresses differ in length".into(),
+        ));
+    }
     Ok(SplitSpec {
         ids: s.ids.clone(),
         parts: s.parts.clone(),
         holder: split_sizes(&s.holder, &s.parts, "part holders")?,
         slot: s.slot,
+        workers: s.workers.clone(),
+        peers: s.peers.clone(),
     })
 }
 
@@ -576,6 +587,7 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
                     Some(d) => part_dts_from_pb(d)?,
                     None => SplitFigures::default(),
                 },
+                direct: s.direct,
             },
             PbCommand::Frame(f) => Command::Frame(f.ids.clone()),
             PbCommand::States(s) => Command::States(s.ids.clone()),
@@ -602,22 +614,64 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
 
 /// Encode a worker's reply. Unloaded bodies carry a definition only where the master
 /// asked for it (the engine leaves the others out).
+fn report_to_pb(rep: &StepReport) -> pb::Report {
+    pb::Report {
+        bodies: Some(reports_to_pb(&rep.bodies)),
+        group_first: rep.groups.iter().map(|g| g.first).collect(),
+        group_nanos: rep.groups.iter().map(|g| g.nanos).collect(),
+        compute_nanos: rep.compute_ns,
+        contacts: Some(contacts_to_pb(&rep.contacts)),
+        codec_nanos: rep.codec_ns,
+        probes: (!rep.probes.is_empty()).then(|| probes_to_pb(&rep.probes)),
+        parts: (!rep.parts.is_empty()).then(|| part_states_to_pb(&rep.parts)),
+        part_dts: (!rep.part_dts.is_empty()).then(|| part_dts_to_pb(&rep.part_dts)),
+        split_contacts: (!rep.split_contacts.is_empty())
+            .then(|| contacts_to_pb(&rep.split_contacts)),
+        halo: rep.halo.as_ref().map(|h| {
+            Box::new(pb::Halo {
+                outcome: Some(match h {
+                    Halo::Report(r) => pb::halo::Outcome::Report(Box::new(report_to_pb(r))),
+                    Halo::Fault {
+                        group_first,
+                        fault,
+                        split_contacts,
+                    } => pb::halo::Outcome::Failure(fault_failure(
+                        *group_first,
+                        fault,
+                        split_contacts.as_deref(),
+                    )),
+                    Halo::Error(e) => pb::halo::Outcome::Failure(error_failure(e)),
+                    Halo::Lost(e) => pb::halo::Outcome::Lost(e.clone()),
+                }),
+            })
+        }),
+    }
+}
+
+fn fault_failure(
+    group_first: u32,
+    fault: &crash_core::Fault,
+    split_contacts: Option<&[crash_core::contact::PairStats]>,
+) -> pb::Failure {
+    pb::Failure {
+        kind: Some(pb::failure::Kind::Fault(fault_to_pb(fault))),
+        group_first,
+        split_contacts: split_contacts.map(contacts_to_pb),
+    }
+}
+
+fn error_failure(e: &str) -> pb::Failure {
+    pb::Failure {
+        kind: Some(pb::failure::Kind::Error(e.to_string())),
+        group_first: 0,
+        split_contacts: None,
+    }
+}
+
 pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
     let reply = match r {
         Reply::Ack => PbReply::Ack(pb::Ack {}),
-        Reply::Report(rep) => PbReply::Report(pb::Report {
-            bodies: Some(reports_to_pb(&rep.bodies)),
-            group_first: rep.groups.iter().map(|g| g.first).collect(),
-            group_nanos: rep.groups.iter().map(|g| g.nanos).collect(),
-            compute_nanos: rep.compute_ns,
-            contacts: Some(contacts_to_pb(&rep.contacts)),
-            codec_nanos: rep.codec_ns,
-            probes: (!rep.probes.is_empty()).then(|| probes_to_pb(&rep.probes)),
-            parts: (!rep.parts.is_empty()).then(|| part_states_to_pb(&rep.parts)),
-            part_dts: (!rep.part_dts.is_empty()).then(|| part_dts_to_pb(&rep.part_dts)),
-            split_contacts: (!rep.split_contacts.is_empty())
-                .then(|| contacts_to_pb(&rep.split_contacts)),
-        }),
+        Reply::Report(rep) => PbReply::Report(report_to_pb(rep)),
         Reply::Parts(p) => PbReply::Parts(part_bodies_to_pb(p)),
         Reply::Unloaded(bodies) => PbReply::Unloaded(pb::BodyLoads {
             bodies: bodies.iter().map(|b| load_to_pb(b, true)).collect(),
@@ -632,16 +686,12 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
             group_first,
             fault,
             split_contacts,
-        } => PbReply::Failure(pb::Failure {
-            kind: Some(pb::failure::Kind::Fault(fault_to_pb(fault))),
-            group_first: *group_first,
-            split_contacts: split_contacts.as_deref().map(contacts_to_pb),
-        }),
-        Reply::Error(e) => PbReply::Failure(pb::Failure {
-            kind: Some(pb::failure::Kind::Error(e.clone())),
-            group_first: 0,
-            split_contacts: None,
-        }),
+        } => PbReply::Failure(fault_failure(
+            *group_first,
+            fault,
+            split_contacts.as_deref(),
+        )),
+        Reply::Error(e) => PbReply::Failure(error_failure(e)),
     };
     pb::WorkerMessage { reply: Some(reply) }
 }
@@ -674,24 +724,56 @@ pub fn reply_from_pb(msg: &pb::WorkerMessage) -> Result<Reply, ProtoError> {
                     .map(|p| Ok((p.id, state_from_pb(p)?)))
                     .collect::<Result<_, ProtoError>>()?,
             ),
-            PbReply::Failure(f) => {
-                match f.kind.as_ref().ok_or(ProtoError::Missing("failure.kind"))? {
-                    pb::failure::Kind::Fault(fault) => Reply::Fault {
-                        group_first: f.group_first,
-                        fault: fault_from_pb(fault)?,
-                        split_contacts: f
-                            .split_contacts
-                            .as_ref()
-                            .map(contacts_from_pb)
-                            .transpose()?,
-                    },
-                    pb::failure::Kind::Error(e) => Reply::Error(e.clone()),
-                }
-            }
+            PbReply::Failure(f) => failure_from_pb(f)?,
             PbReply::Parts(p) => Reply::Parts(part_bodies_from_pb(p)?),
             PbReply::Hello(_) => return Err(ProtoError::Invalid("a second Hello".into())),
         },
     )
+}
+
+fn failure_from_pb(f: &pb::Failure) -> Result<Reply, ProtoError> {
+    Ok(
+        match f.kind.as_ref().ok_or(ProtoError::Missing("failure.kind"))? {
+            pb::failure::Kind::Fault(fault) => Reply::Fault {
+                group_first: f.group_first,
+                fault: fault_from_pb(fault)?,
+                split_contacts: f
+                    .split_contacts
+                    .as_ref()
+                    .map(contacts_from_pb)
+                    .transpose()?,
+            },
+            pb::failure::Kind::Error(e) => Reply::Error(e.clone()),
+        },
+    )
+}
+
+fn halo_from_pb(h: &pb::Halo) -> Result<Halo, ProtoError> {
+    Ok(
+        match h.outcome.as_ref().ok_or(ProtoError::Missing("halo.outcome"))? {
+            pb::halo::Outcome::Report(r) => Halo::Report(Box::new(report_from_pb(r)?)),
+            pb::halo::Outcome::Failure(f) => Halo::from_reply(failure_from_pb(f)?),
+            pb::halo::Outcome::Lost(e) => Halo::Lost(e.clone()),
+        },
+    )
+}
+
+/// One frame between two holders (`PeerHalo`): the sender's part states for the
+/// receiver at step `step`, or None: the sender stopped (a fault or an error).
+pub fn peer_halo_to_pb(step: u64, parts: Option<&[PartState]>) -> pb::PeerHalo {
+    pb::PeerHalo {
+        step,
+        abort: parts.is_none(),
+        parts: parts.map(part_states_to_pb),
+    }
+}
+
+/// A `PeerHalo` frame: its step and its part states (None: the sender stopped).
+pub fn peer_halo_from_pb(p: &pb::PeerHalo) -> Result<(u64, Option<Vec<PartState>>), ProtoError> {
+    if p.abort {
+        return Ok((p.step, None));
+    }
+    Ok((p.step, Some(part_states_from_pb(p.parts.as_ref())?)))
 }
 
 /// Decode a step report.
@@ -732,5 +814,6 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
             Some(c) => contacts_from_pb(c)?,
             None => Vec::new(),
         },
+        halo: r.halo.as_deref().map(halo_from_pb).transpose()?,
     })
 }
