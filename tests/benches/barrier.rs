@@ -104,6 +104,8 @@ fn echo_worker(url: String) {
                 host: "echo".into(),
                 pid: 0,
                 proof: Vec::new(),
+                peer_port: 0,
+                peer_host: String::new(),
             })),
         })
         .unwrap();
@@ -137,6 +139,7 @@ fn echo(c: &mut Criterion) {
                 kin_nodes: false,
                 due: crash_core::Due::ALL,
                 contact: Default::default(),
+                direct: false,
             })
             .unwrap();
             let Reply::Report(_) = l.recv().unwrap() else {
@@ -164,6 +167,7 @@ fn barrier(c: &mut Criterion) {
                             kin_nodes: false,
                             due: crash_core::Due::ALL,
                             contact: Default::default(),
+                            direct: false,
                         })
                         .unwrap();
                     }
@@ -200,6 +204,7 @@ fn loaded(c: &mut Criterion) {
                 kin_nodes: false,
                 due: crash_core::Due::ALL,
                 contact: Default::default(),
+                direct: false,
             })
             .unwrap();
             let Reply::Report(r) = l.recv().unwrap() else {

@@ -79,6 +79,7 @@ fn valid_commands() -> Vec<Vec<u8>> {
             kin_nodes: true,
             due: crash_core::Due::ALL,
             contact: Default::default(),
+            direct: false,
         },
         Command::Frame(vec![0, 1]),
         Command::States(vec![1]),
@@ -98,6 +99,7 @@ fn valid_replies() -> Vec<Vec<u8>> {
         kin_nodes: true,
         due: crash_core::Due::ALL,
         contact: Default::default(),
+        direct: false,
     })];
     out.push(e.handle(Command::Frame(vec![0])));
     let at = e.clock().unwrap();
@@ -109,6 +111,7 @@ fn valid_replies() -> Vec<Vec<u8>> {
         kin_nodes: false,
         due: crash_core::Due::ALL,
         contact: Default::default(),
+        direct: false,
     }));
     out.iter()
         .map(|r| reply_to_pb(r).encode_to_vec())
@@ -255,6 +258,7 @@ fn command(e: &Engine, op: Op) -> Option<Command> {
             kin_nodes,
             due: crash_core::Due::ALL,
             contact: Default::default(),
+            direct: false,
         },
         Op::Frame(ids) => Command::Frame(ids),
         Op::States(ids) => Command::States(ids),

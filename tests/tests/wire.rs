@@ -293,6 +293,7 @@ fn step_report_round_trips_bit_exact() {
             kin_a: Default::default(),
             kin_b: Default::default(),
         }],
+        halo: None,
     };
     let msg = reply_to_pb(&Reply::Report(rep.clone()));
     let bytes = msg.encode_to_vec();
@@ -370,6 +371,7 @@ fn commands_round_trip() {
                 probes: false,
             },
             contact: Default::default(),
+            direct: false,
         },
         Command::Unload {
             ids: vec![5, 2],
@@ -493,6 +495,8 @@ fn split_group_commands_and_replies_round_trip_bit_exact() {
         parts: vec![2, 1, 2],
         holder: vec![vec![0, 1], vec![1], vec![0, 1]],
         slot: 1,
+        workers: vec![0, 1],
+        peers: vec!["127.0.0.1:4000".into(), String::new()],
     };
     let bodies = evolved_bodies();
     let dts = SplitFigures {
@@ -535,6 +539,7 @@ fn split_group_commands_and_replies_round_trip_bit_exact() {
             kin_nodes: false,
             due: crash_core::Due::ALL,
             contact: dts.clone(),
+            direct: false,
         },
         Command::Parts,
         Command::Assemble(states.clone()),

@@ -39,6 +39,11 @@ pub trait WorkerLink {
     /// Whether the worker holds the definition of body `id` (a body moving there then
     /// travels as its state only).
     fn has_definition(&self, id: u32) -> bool;
+    /// Where the worker takes direct halo connections from the other workers
+    /// (host:port; None: nowhere, its part states are relayed by the master).
+    fn halo_address(&self) -> Option<String> {
+        None
+    }
     /// Time this link spent encoding commands and decoding replies since the last call
     /// [ns] (a part of the barrier; 0 for in-process links).
     fn take_codec_ns(&mut self) -> u64 {

@@ -37,6 +37,14 @@ pub enum MasterError {
         margin: f64,
         factor: f64,
     },
+    /// The holders of a split group could not exchange their part states directly:
+    /// the run goes back to its last checkpoint and relays them through the master.
+    #[error("step {step}: worker {worker} could not exchange halos with the other workers directly ({reason}); relaying them through the master from now on")]
+    DirectHalo {
+        step: u64,
+        worker: usize,
+        reason: String,
+    },
     /// Every worker was lost: the run cannot continue here.
     #[error("step {step}: every worker was lost; the run stopped and its last checkpoint (step {checkpoint}) was kept (crash-master: OUT/restart.ckp): continue with --resume and new workers")]
     NoWorkers { step: u64, checkpoint: u64 },

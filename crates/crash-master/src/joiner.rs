@@ -17,6 +17,23 @@ use tokio::runtime::Runtime;
 use tokio::sync::mpsc;
 use tonic::Status;
 
+/// Where a worker takes direct halo connections: the host it names (else the address
+/// the master sees it at, `peer` as ip:port) and the port it names (None: 0, or no
+/// address to give).
+fn halo_address(peer: &str, host: &str, port: u32) -> Option<String> {
+    let port = u16::try_from(port).ok().filter(|&p| p != 0)?;
+    if host.is_empty() {
+        let ip = peer.parse::<std::net::SocketAddr>().ok()?.ip();
+        return Some(std::net::SocketAddr::new(ip, port).to_string());
+    }
+    // an IPv6 literal needs brackets before its port
+    if host.contains(':') && !host.starts_with('[') {
+        Some(format!("[{host}]:{port}"))
+    } else {
+        Some(format!("{host}:{port}"))
+    }
+}
+
 /// Workers admitted while the run goes on: the same handshake (secret, TLS, version,
 /// guard limits) as those of the start; the master takes them at step boundaries
 /// (`join::Newcomers`).
@@ -27,6 +44,9 @@ pub struct Joiner {
     opts: RemoteOptions,
     /// The step lane's listener (None: commands on the gRPC streams).
     desk: Option<Arc<Desk>>,
+    /// The key workers prove to each other on direct halo connections, one per run
+    /// (None: not offered, with TLS or `direct_halo` off).
+    peer_key: Option<[u8; crash_link::auth::NONCE_LEN]>,
 }
 
 impl std::fmt::Debug for Joiner {
@@ -45,12 +65,20 @@ impl Joiner {
         opts: RemoteOptions,
         desk: Option<Arc<Desk>>,
     ) -> Self {
+        let peer_key = if opts.direct_halo && opts.tls.is_none() {
+            crash_link::auth::nonce()
+                .inspect_err(|e| tracing::warn!("no direct halo exchange: {e}"))
+                .ok()
+        } else {
+            None
+        };
         Self {
             rt,
             rx: Some(rx),
             beats,
             opts,
             desk,
+            peer_key,
         }
     }
 
@@ -84,8 +112,12 @@ impl Joiner {
                 session_token: token,
                 heartbeat_interval_ms: every.as_millis().clamp(1, 60_000) as u32,
                 lane_port: self.desk.as_ref().map_or(0, |d| u32::from(d.port())),
+                peer_key: self.peer_key.map_or_else(Vec::new, |k| k.to_vec()),
             })),
         };
+        let halo_addr = self
+            .peer_key
+            .and_then(|_| halo_address(&a.peer, &a.hello.peer_host, a.hello.peer_port));
         if a.outbound.send(Ok(welcome)).is_err() {
             self.beats.revoke(index as u32);
             return Err(format!("worker {index} at {} left before Welcome", a.peer));
@@ -115,6 +147,7 @@ impl Joiner {
                 None => Lane::Off,
             },
             limit: self.opts.max_message,
+            halo_addr,
         })
     }
 

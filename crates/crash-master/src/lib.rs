@@ -117,6 +117,8 @@ fn drive<'a, L: WorkerLink>(
                 // a worker gone or frozen: drop it, go back to the last checkpoint on
                 // the others, replay
                 (Err(_), Some(state)) if s.has_lost() => (state, false),
+                // the workers could not exchange halos directly: go back and relay
+                (Err(MasterError::DirectHalo { .. }), Some(state)) => (state, false),
                 // a fault: replayed on the other workers before it is believed
                 (Err(MasterError::Fault(_)), Some(state)) if s.can_replay_fault() => (state, true),
                 _ => break r,

@@ -111,6 +111,12 @@ struct Args {
     /// is never offered.
     #[arg(long)]
     no_step_lane: bool,
+    /// Relay the part states of groups split over workers through the master instead
+    /// of letting the workers exchange them directly (one message each way between
+    /// them per step, on ports they announce; plain TCP only: with TLS they are always
+    /// relayed).
+    #[arg(long)]
+    no_direct_halo: bool,
     /// The step lane's port (0: any free port, announced to each worker in its
     /// Welcome); set it when a firewall must let the lane through. A worker that cannot
     /// reach the lane keeps its commands on gRPC.
@@ -274,6 +280,7 @@ fn run(args: Args) -> anyhow::Result<()> {
             tls,
             step_lane: !args.no_step_lane,
             step_lane_port: args.step_lane_port,
+            direct_halo: !args.no_direct_halo,
         },
     )?;
     // Tests and scripts read this line to learn the port (the address ends it).

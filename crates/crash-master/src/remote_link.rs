@@ -43,6 +43,8 @@ pub struct RemoteWorker {
     pub(crate) lane: Lane,
     /// Largest reply accepted on the lane [bytes] (`RemoteOptions::max_message`).
     pub(crate) limit: usize,
+    /// Where the worker takes direct halo connections (None: nowhere).
+    pub(crate) halo_addr: Option<String>,
 }
 
 /// Where a worker's commands travel.
@@ -245,6 +247,10 @@ impl WorkerLink for RemoteWorker {
 
     fn has_definition(&self, id: u32) -> bool {
         self.sent.contains(&id)
+    }
+
+    fn halo_address(&self) -> Option<String> {
+        self.halo_addr.clone()
     }
 
     fn take_codec_ns(&mut self) -> u64 {

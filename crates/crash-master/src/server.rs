@@ -69,6 +69,9 @@ pub struct RemoteOptions {
     pub step_lane: bool,
     /// The step lane's port (0: any free port; it is announced in each Welcome).
     pub step_lane_port: u16,
+    /// Let the holders of split groups exchange their part states directly (a peer
+    /// key in each Welcome; plain TCP only: with TLS the master relays them).
+    pub direct_halo: bool,
 }
 
 /// The master's TLS certificate chain and key, PEM (from `--tls-cert`, `--tls-key`).
@@ -101,6 +104,7 @@ impl Default for RemoteOptions {
             tls: None,
             step_lane: true,
             step_lane_port: 0,
+            direct_halo: true,
         }
     }
 }

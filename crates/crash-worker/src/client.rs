@@ -8,6 +8,7 @@
 //! long step cannot silence them (`heartbeat`).
 
 use crate::engine::Engine;
+use crash_link::peer::Peers;
 use crash_link::wire::{command_from_pb, reply_to_pb};
 use crash_link::{
     check_version, escape_peer, Command, HelloFields, Reply, Secret, MAX_MESSAGE_CAP,
@@ -47,6 +48,13 @@ pub struct WorkerOptions {
     /// TLS: the certificate (PEM) that signed the master's (`--tls-ca`); the master's
     /// URL is then https://. None: plain TCP (http://).
     pub tls_ca: Option<Vec<u8>>,
+    /// Take the other workers' direct halo connections on this port (0: any free
+    /// port; None: none, the master then relays this worker's part states).
+    pub peer_port: Option<u16>,
+    /// The host other workers dial for it (empty: the address the master sees).
+    pub peer_host: String,
+    /// How long to wait for the other holders' part states in a split step.
+    pub peer_timeout: Duration,
 }
 
 impl WorkerOptions {
@@ -61,6 +69,9 @@ impl WorkerOptions {
             step_delay: Duration::ZERO,
             tamper: None,
             tls_ca: None,
+            peer_port: Some(0),
+            peer_host: String::new(),
+            peer_timeout: crash_link::peer::DEFAULT_TIMEOUT,
         }
     }
 }
@@ -103,11 +114,27 @@ pub fn run(opts: &WorkerOptions) -> Result<String, WorkerError> {
         .thread_name(|i| format!("crash-compute-{i}"))
         .build()
         .map_err(|e| WorkerError::Start(format!("compute pool: {e}")))?;
-    let (tx, inbound, welcome) = rt.block_on(attach(opts))?;
+    // the port goes into the Hello; a worker that cannot listen has its states relayed
+    let mut peers = opts.peer_port.and_then(|port| {
+        Peers::bind(port, opts.peer_timeout)
+            .inspect_err(|e| {
+                tracing::warn!(
+                    "cannot listen for direct halo connections on port {port}: {e}; the master will relay this worker's part states"
+                )
+            })
+            .ok()
+    });
+    let (tx, inbound, welcome) = rt.block_on(attach(opts, peers.as_ref().map(Peers::port)))?;
+    if let Some(p) = peers.as_mut() {
+        p.join(welcome.worker_index, welcome.peer_key.clone());
+        if p.offered() {
+            tracing::debug!("direct halo connections on port {}", p.port());
+        }
+    }
     let alive = Arc::new(AtomicBool::new(true));
     heartbeat(opts, &welcome, alive.clone())?;
     let lane = crate::lane::open(opts, &welcome)?;
-    let result = serve(opts, &rt, &pool, tx, inbound, lane);
+    let result = serve(opts, &rt, &pool, tx, inbound, lane, peers);
     alive.store(false, Ordering::Relaxed);
     result
 }
@@ -248,7 +275,7 @@ fn error_chain(e: &dyn std::error::Error) -> String {
     s
 }
 
-fn hello(opts: &WorkerOptions, nonce: &[u8]) -> pb::WorkerMessage {
+fn hello(opts: &WorkerOptions, nonce: &[u8], peer_port: Option<u16>) -> pb::WorkerMessage {
     let (protocol_version, threads, pid) = (
         opts.protocol_version,
         opts.threads as u32,
@@ -272,6 +299,8 @@ fn hello(opts: &WorkerOptions, nonce: &[u8]) -> pb::WorkerMessage {
             host: opts.host.clone(),
             pid,
             proof,
+            peer_port: peer_port.map_or(0, u32::from),
+            peer_host: opts.peer_host.clone(),
         })),
     }
 }
@@ -297,6 +326,7 @@ fn refused_or_lost(url: &str, s: &tonic::Status) -> WorkerError {
 /// Dial the master, answer its Challenge with Hello, check its Welcome.
 async fn attach(
     opts: &WorkerOptions,
+    peer_port: Option<u16>,
 ) -> Result<
     (
         mpsc::UnboundedSender<pb::WorkerMessage>,
@@ -372,7 +402,7 @@ async fn attach(
             "the master requires a shared secret and this worker has none (--secret-file or CRASH_SECRET)"
         );
     }
-    tx.send(hello(opts, &challenge.nonce))
+    tx.send(hello(opts, &challenge.nonce, peer_port))
         .map_err(|_| WorkerError::Start("outbound stream closed".into()))?;
     let welcome = match inbound.message().await {
         Ok(Some(pb::MasterMessage {
@@ -413,13 +443,17 @@ fn serve(
     tx: mpsc::UnboundedSender<pb::WorkerMessage>,
     mut inbound: Streaming<pb::MasterMessage>,
     mut lane: Option<crate::lane::WorkerLane>,
+    peers: Option<Peers>,
 ) -> Result<String, WorkerError> {
     let url = opts.master.as_str();
     let lost = |reason: String| WorkerError::Lost {
         url: url.into(),
         reason,
     };
-    let mut engine = Engine::new();
+    let mut engine = match peers {
+        Some(p) => Engine::new().with_peers(p),
+        None => Engine::new(),
+    };
     // encoding time of the previous reply, reported with the next one
     let mut last_encode_ns = 0u64;
     loop {

@@ -20,6 +20,7 @@
 //! clock; the engine only remembers the clock its bodies are at, to refuse a command
 //! meant for another moment (so a resumed run continues on any set of workers).
 
+mod direct;
 mod split;
 
 use crate::error::EngineError;
@@ -56,6 +57,9 @@ pub struct Engine {
     /// The step in flight for the split groups: its clock, length and what is due
     /// (set by Step, read by Halo).
     pending: Option<(Clock, f64, crash_core::Due)>,
+    /// This worker's side of the direct halo exchange with the other holders of its
+    /// split groups (a worker process; None in process: the master relays).
+    peers: Option<crash_link::peer::Peers>,
 }
 
 impl Engine {
@@ -139,29 +143,41 @@ impl Engine {
                 kin_nodes,
                 due,
                 contact,
+                direct,
             } => {
-                if let Err(e) = self.check_clock(&at) {
-                    Err(e)
+                let reply = if let Err(e) = self.check_clock(&at) {
+                    Reply::Error(e.to_string())
                 } else if !(dt.is_finite() && dt > 0.0) {
-                    Err(EngineError::Step { step: at.step, dt })
+                    Reply::Error(EngineError::Step { step: at.step, dt }.to_string())
                 } else {
                     let mut reply = self.run(|g| g.advance_with(&at, dt, due), kin_nodes);
                     match &mut reply {
                         Reply::Report(rep) => {
                             if let Some(fault) = self.step_shared(&at, dt, due, &contact, rep) {
-                                return fault;
+                                reply = fault;
+                            } else {
+                                if direct {
+                                    self.direct_halo(&at, rep);
+                                }
+                                self.at = Some(at.after(dt));
+                                return reply;
                             }
                         }
                         // a whole group faulted: the split groups' pending passes
                         // still give the step before its contact rows
                         Reply::Fault { split_contacts, .. } => {
                             *split_contacts = self.share_after_fault(0, &contact, Vec::new());
+                            self.at = Some(at.after(dt));
                         }
-                        _ => {}
+                        _ => self.at = Some(at.after(dt)),
                     }
-                    self.at = Some(at.after(dt));
-                    return reply;
+                    reply
+                };
+                // the other holders wait for this worker's part states: tell them
+                if direct {
+                    self.abort_peers(&at);
                 }
+                return reply;
             }
             Command::Frame(ids) => self.frame(&ids).map(Reply::Frame),
             Command::States(ids) if ids.is_empty() => self
@@ -494,6 +510,7 @@ impl Engine {
             parts: Vec::new(),
             part_dts: Default::default(),
             split_contacts: Vec::new(),
+            halo: None,
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {
             let first = g.first();

@@ -47,6 +47,21 @@ struct Args {
     /// time. Linux only.
     #[arg(long)]
     idle_spin: bool,
+    /// Take the other workers' direct halo connections on this TCP port (0: any free
+    /// port). Holders of a group split over workers send each other their part states
+    /// there, one message each way per step, instead of through the master.
+    #[arg(long, default_value_t = 0, value_name = "PORT")]
+    peer_port: u16,
+    /// The host other workers dial for that port (default: the address the master
+    /// sees this worker at; set it behind NAT or a published container port).
+    #[arg(long, value_name = "HOST")]
+    peer_host: Option<String>,
+    /// Take no direct halo connections: the master relays this worker's part states.
+    #[arg(long)]
+    no_peer: bool,
+    /// How long to wait for the other holders' part states in a split step [s].
+    #[arg(long, default_value_t = 30.0, value_name = "SECS")]
+    peer_timeout: f64,
     /// Sleep this long before each step [ms] (tests of a slow but alive worker).
     #[arg(long, hide = true, default_value_t = 0)]
     step_delay_ms: u64,
@@ -133,6 +148,9 @@ fn main() -> ExitCode {
         opts.protocol_version = v;
     }
     opts.step_delay = Duration::from_millis(args.step_delay_ms);
+    opts.peer_port = (!args.no_peer).then_some(args.peer_port);
+    opts.peer_host = args.peer_host.unwrap_or_default();
+    opts.peer_timeout = Duration::from_secs_f64(args.peer_timeout.clamp(0.01, 3600.0));
     match crash_worker::run(&opts) {
         Ok(reason) => {
             eprintln!("crash-worker: done ({reason})");

@@ -83,6 +83,7 @@ fn steps_give_the_core_groups_bits() {
             kin_nodes: false,
             due: crash_core::Due::ALL,
             contact: Default::default(),
+            direct: false,
         }) else {
             panic!("no report")
         };
@@ -116,6 +117,7 @@ fn a_step_for_another_moment_is_refused() {
         kin_nodes: false,
         due: crash_core::Due::ALL,
         contact: Default::default(),
+        direct: false,
     }));
     assert!(msg.contains("step 3") && msg.contains("step 0"), "{msg}");
     let msg = error(e.handle(Command::Step {
@@ -124,6 +126,7 @@ fn a_step_for_another_moment_is_refused() {
         kin_nodes: false,
         due: crash_core::Due::ALL,
         contact: Default::default(),
+        direct: false,
     }));
     assert!(msg.contains("invalid time step"), "{msg}");
 }
@@ -286,6 +289,7 @@ fn kinematic_copies_stay_bit_identical_to_the_owner() {
                 kin_nodes: true,
                 due: crash_core::Due::ALL,
                 contact: Default::default(),
+                direct: false,
             }) else {
                 panic!("no step report")
             };
@@ -356,6 +360,7 @@ fn reactions_and_history_nodes_are_reported_only_on_due_steps() {
             kin_nodes: false,
             due,
             contact: Default::default(),
+            direct: false,
         }) else {
             panic!("no report")
         };

@@ -42,8 +42,6 @@ impl<L: WorkerLink> Master<'_, L> {
         &mut self,
         cmds: Vec<Vec<Command>>,
     ) -> Result<Vec<Vec<Reply>>, MasterError> {
-        self.faulted = None;
-        self.fault_shares = None;
         let counts: Vec<usize> = cmds.iter().map(Vec::len).collect();
         let mut failed: Vec<Option<LinkError>> = vec![None; counts.len()];
         for (w, list) in cmds.into_iter().enumerate() {
@@ -57,6 +55,19 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
+        self.settle(&counts, failed, |m, w| m.links[w].recv())
+    }
+
+    /// The replies of an exchange, `counts[w]` from worker w by `next` (unless
+    /// `failed[w]`), judged as `exchange` says.
+    pub(super) fn settle(
+        &mut self,
+        counts: &[usize],
+        mut failed: Vec<Option<LinkError>>,
+        mut next: impl FnMut(&mut Self, usize) -> Result<Reply, LinkError>,
+    ) -> Result<Vec<Vec<Reply>>, MasterError> {
+        self.faulted = None;
+        self.fault_shares = None;
         let mut out = Vec::with_capacity(counts.len());
         let mut fault: Option<(u32, Fault, usize)> = None;
         // each fault's share of a pending split contact pass (held.rs: `rows_after_fault`)
@@ -66,7 +77,7 @@ impl<L: WorkerLink> Master<'_, L> {
             let mut replies = Vec::with_capacity(count);
             if self.live[w] && failed[w].is_none() {
                 for _ in 0..count {
-                    match self.links[w].recv() {
+                    match next(self, w) {
                         Err(e) => {
                             failed[w] = Some(e);
                             break;

@@ -117,6 +117,9 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     skin: f64,
     /// Workers dropped so far (each followed by a rollback).
     recoveries: u64,
+    /// A direct halo exchange between workers failed: split steps relay through the
+    /// master for the rest of the run (`split.rs`).
+    direct_failed: bool,
     opts: RunOptions,
     cfg: RunConfig,
     contact: ContactConfig,
@@ -244,6 +247,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             source: None,
             skin,
             recoveries: 0,
+            direct_failed: false,
             opts,
             cfg: input.config,
             contact: c,

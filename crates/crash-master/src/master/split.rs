@@ -26,7 +26,9 @@ use crash_core::contact::ContactPass;
 use crash_core::partition::{longest_axis, merge_report, partition_body, PartState, SplitFigures};
 use crash_core::{BodyReport, Vec3};
 use crash_io::PartCells;
-use crash_link::{BodyLoad, Command, Reply, SplitSpec, StepReport, WorkerLink};
+use crash_link::{
+    escape_peer, BodyLoad, Command, Halo, LinkError, Reply, SplitSpec, StepReport, WorkerLink,
+};
 use std::collections::BTreeMap;
 
 /// How far above its share a slot of a split group may be loaded by a body placed
@@ -78,6 +80,8 @@ pub(crate) struct SplitGroup {
     holder: Vec<Vec<u32>>,
     /// Worker of each slot; slot 0 is the home.
     workers: Vec<usize>,
+    /// Where each slot's worker takes direct halo connections (empty: nowhere).
+    peers: Vec<String>,
     /// The worker and part of each element of each body (the frames' cell fields).
     cells: BTreeMap<u32, PartCells>,
 }
@@ -89,7 +93,14 @@ impl SplitGroup {
             parts: self.parts.clone(),
             holder: self.holder.clone(),
             slot: slot as u32,
+            workers: self.workers.iter().map(|&w| w as u32).collect(),
+            peers: self.peers.clone(),
         }
+    }
+
+    /// Every holder takes direct halo connections.
+    pub(super) fn direct(&self) -> bool {
+        self.peers.iter().all(|p| !p.is_empty())
     }
 
     /// The group's bodies, in MEIM order.
@@ -262,6 +273,10 @@ impl<L: WorkerLink> Master<'_, L> {
             ids: ids.to_vec(),
             parts,
             holder,
+            peers: workers
+                .iter()
+                .map(|&w| self.links[w].halo_address().unwrap_or_default())
+                .collect(),
             workers,
             cells: BTreeMap::new(),
         })
@@ -321,24 +336,21 @@ impl<L: WorkerLink> Master<'_, L> {
     /// body's report merged into its home's report (the element step and its element
     /// from the minimum over the holders), the element steps kept for the contact pass
     /// the next Step (or an assembly) runs.
-    pub(super) fn relay_split(&mut self, reps: &mut [StepReport]) -> Result<(), MasterError> {
+    pub(super) fn relay_split(
+        &mut self,
+        reps: &mut [StepReport],
+        direct: bool,
+    ) -> Result<(), MasterError> {
         if self.splits.is_empty() {
             return Ok(());
         }
         let nw = self.links.len();
-        let from: Vec<Vec<PartState>> = reps
-            .iter_mut()
-            .map(|r| std::mem::take(&mut r.parts))
-            .collect();
         let group_of: BTreeMap<u32, usize> = self
             .splits
             .iter()
             .enumerate()
             .flat_map(|(k, s)| s.ids.iter().map(move |&id| (id, k)))
             .collect();
-        // each holder gets the other holders' parts of its groups, in sender order; a
-        // part moves to its last recipient (with two workers, its only one) and is
-        // cloned for the others
         let holds: Vec<Vec<usize>> = (0..nw)
             .map(|w| {
                 (0..self.splits.len())
@@ -346,6 +358,66 @@ impl<L: WorkerLink> Master<'_, L> {
                     .collect()
             })
             .collect();
+        let replies = if direct {
+            self.halos(reps, &holds)?
+        } else {
+            self.relay(reps, &holds, &group_of)?
+        };
+        self.merge_halos(reps, replies, &group_of)
+    }
+
+    /// The halo replies of a step whose holders exchanged their part states directly
+    /// (`StepReport::halo`). A direct exchange that failed turns it off for the rest
+    /// of the run: the master rolls back to its last checkpoint (lib.rs) and relays.
+    fn halos(
+        &mut self,
+        reps: &mut [StepReport],
+        holds: &[Vec<usize>],
+    ) -> Result<Vec<Vec<Reply>>, MasterError> {
+        let nw = self.links.len();
+        let mut counts = vec![0; nw];
+        let mut got: Vec<Option<Reply>> = vec![None; nw];
+        let mut lost = None;
+        for w in (0..nw).filter(|&w| self.live[w] && !holds[w].is_empty()) {
+            counts[w] = 1;
+            match reps.get_mut(w).and_then(|r| r.halo.take()).map(Halo::into_reply) {
+                Some(Ok(r)) => got[w] = Some(r),
+                Some(Err(e)) => {
+                    lost.get_or_insert((w, e));
+                }
+                None => return Err(self.bad_reply(w, "Step (no halo)")),
+            }
+        }
+        if let Some((worker, reason)) = lost {
+            self.direct_failed = true;
+            return Err(MasterError::DirectHalo {
+                step: self.clock.step,
+                worker,
+                reason: escape_peer(&reason),
+            });
+        }
+        self.settle(&counts, vec![None; nw], |_, w| {
+            got[w]
+                .take()
+                .ok_or_else(|| LinkError::Protocol("no halo".into()))
+        })
+    }
+
+    /// The part states of the Step's reports relayed in a `Halo` to the other holders.
+    fn relay(
+        &mut self,
+        reps: &mut [StepReport],
+        holds: &[Vec<usize>],
+        group_of: &BTreeMap<u32, usize>,
+    ) -> Result<Vec<Vec<Reply>>, MasterError> {
+        let nw = self.links.len();
+        let from: Vec<Vec<PartState>> = reps
+            .iter_mut()
+            .map(|r| std::mem::take(&mut r.parts))
+            .collect();
+        // each holder gets the other holders' parts of its groups, in sender order; a
+        // part moves to its last recipient (with two workers, its only one) and is
+        // cloned for the others
         let mut imports: Vec<Vec<PartState>> = vec![Vec::new(); nw];
         for (v, parts) in from.into_iter().enumerate() {
             for p in parts {
@@ -365,7 +437,7 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let cmds: Vec<Vec<Command>> = imports
             .into_iter()
-            .zip(&holds)
+            .zip(holds)
             .map(|(i, h)| {
                 if h.is_empty() {
                     Vec::new()
@@ -374,7 +446,18 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             })
             .collect();
-        let replies = self.exchange(cmds)?;
+        self.exchange(cmds)
+    }
+
+    /// Every holder's share of each split body's report merged into its home's report
+    /// (the element step and its element from the minimum over the holders), the
+    /// element steps kept for the contact pass the next Step (or an assembly) runs.
+    fn merge_halos(
+        &mut self,
+        reps: &mut [StepReport],
+        replies: Vec<Vec<Reply>>,
+        group_of: &BTreeMap<u32, usize>,
+    ) -> Result<(), MasterError> {
         self.split_ns.clear();
         let mut figures = SplitFigures::default();
         let mut merged: BTreeMap<u32, BodyReport> = BTreeMap::new();

@@ -107,6 +107,10 @@ impl<L: WorkerLink> Master<'_, L> {
         };
         // split groups: the element steps for the contact pass the last step left
         let contact = std::mem::take(&mut self.split_contact);
+        // split groups whose holders all take direct halo connections skip the relay
+        let direct = !self.direct_failed
+            && !self.splits.is_empty()
+            && self.splits.iter().all(|s| s.direct());
         let reps = {
             let _s = tracing::debug_span!("barrier").entered();
             let mut reps = self.reports_of(
@@ -116,13 +120,14 @@ impl<L: WorkerLink> Master<'_, L> {
                     kin_nodes,
                     due,
                     contact: contact.clone(),
+                    direct,
                 },
                 "Step",
             )?;
             // the split groups' contact statistics of the pass this Step ran first
             self.take_split_stats(&mut reps)?;
             // split groups: one more exchange (split.rs)
-            self.relay_split(&mut reps)?;
+            self.relay_split(&mut reps, direct)?;
             reps
         };
         let wall = ns(t0);

@@ -30,9 +30,31 @@ pub(crate) struct Shared {
     assembled: Option<Clock>,
     /// Compute time of the step in flight [ns].
     nanos: u64,
+    /// This worker's slot, the worker of each slot and where it takes direct halo
+    /// connections (the split's spec).
+    pub(super) slot: u32,
+    pub(super) workers: Vec<u32>,
+    pub(super) peers: Vec<String>,
 }
 
 impl Shared {
+    fn new(g: SharedGroup, home: bool, whole: Vec<Body>, assembled: Option<Clock>, spec: SplitSpec) -> Self {
+        Self {
+            g,
+            home,
+            whole,
+            assembled,
+            nanos: 0,
+            slot: spec.slot,
+            workers: spec.workers,
+            peers: spec.peers,
+        }
+    }
+
+    pub(super) fn ids(&self) -> &[u32] {
+        &self.g.ids
+    }
+
     fn first(&self) -> u32 {
         self.g.ids.first().copied().unwrap_or(0)
     }
@@ -136,13 +158,7 @@ impl Engine {
             .with_holders(spec.holder.clone());
         self.groups.remove(at);
         let out = bodies.iter().cloned().map(BodyLoad::whole).collect();
-        self.shared.push(Shared {
-            g,
-            home: true,
-            whole: bodies,
-            assembled: self.at,
-            nanos: 0,
-        });
+        self.shared.push(Shared::new(g, true, bodies, self.at, spec));
         Ok(Reply::Unloaded(out))
     }
 
@@ -170,13 +186,7 @@ impl Engine {
         let setup = self.setup_of()?;
         let g = SharedGroup::new(&whole, &parts, mine, setup.contact, setup.gravity)?
             .with_holders(spec.holder.clone());
-        self.shared.push(Shared {
-            g,
-            home: false,
-            whole: Vec::new(),
-            assembled: None,
-            nanos: 0,
-        });
+        self.shared.push(Shared::new(g, false, Vec::new(), None, spec));
         self.at = Some(at);
         Ok(Reply::Ack)
     }
