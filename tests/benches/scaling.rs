@@ -1,16 +1,20 @@
-//! The scaling benchmark (issue 16, point 6): one scene in seven modes, timed in one
+//! The scaling benchmark (issue 16, point 6): one scene in eight modes, timed in one
 //! sitting with the repetitions interleaved (mode A, B, C, D, then again), so machine
 //! load affects every mode alike:
 //!
 //! - `crash run --threads 1` and `crash run --threads 2` (one process),
 //! - `crash-master` + 1 and + 2 `crash-worker` processes x 1 thread (gRPC on loopback),
 //! - `crash-master --split auto` + 2 workers: a group above its fair share is split
-//!   over both workers by elements (two exchanges per step instead of one),
+//!   over both workers by elements (the holders send each other their part states
+//!   directly: one exchange with the master per step and one message each way between
+//!   the workers),
 //! - `crash-master` + 2 workers x 1 thread, all with `--idle-spin` (a SCHED_IDLE
 //!   spinner per process keeps vCPUs from halting between messages),
 //! - `crash run --workers 2 --split auto --threads 1`: the split in one process, whose
 //!   two workers run one after the other: its worker compute column is what the split costs
-//!   free of any network or of processes sharing the cores.
+//!   free of any network or of processes sharing the cores,
+//! - `crash-master --split auto --no-direct-halo` + 2 workers: the split with the part
+//!   states relayed through the master (two exchanges per step).
 //!
 //! Prints, per mode, the median wall time of the run (summary.json `wall_time_s`: from
 //! the first command to the last frame), ns per element-cycle, the speed-up over
@@ -41,6 +45,8 @@ enum Mode {
         workers: usize,
         split: bool,
         spin: bool,
+        /// `--no-direct-halo`: the master relays the part states.
+        relay: bool,
     },
 }
 
@@ -58,13 +64,15 @@ impl Mode {
                 workers,
                 split,
                 spin,
+                relay,
             } => format!(
-                "master{} + {workers} worker(s) x 1 thread{}",
+                "master{}{} + {workers} worker(s) x 1 thread{}",
                 if split {
                     " --split auto"
                 } else {
                     " --split off"
                 },
+                if relay { " --no-direct-halo" } else { "" },
                 if spin { ", --idle-spin" } else { "" }
             ),
         }
@@ -98,11 +106,14 @@ fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
             workers,
             split,
             spin,
+            relay,
         } => {
             let spin_arg: &[&str] = if spin { &["--idle-spin"] } else { &[] };
+            let relay_arg: &[&str] = if relay { &["--no-direct-halo"] } else { &[] };
             let mut m = Command::new(master_bin())
                 .args([scene_s, "--listen", "127.0.0.1:0"])
                 .args(spin_arg)
+                .args(relay_arg)
                 .args(["--split", if split { "auto" } else { "off" }])
                 .args(["--workers", &workers.to_string(), "--out", out_s])
                 .args(["--end-time", end, "--output-interval", end])
@@ -182,25 +193,35 @@ fn main() {
             workers: 1,
             split: false,
             spin: false,
+            relay: false,
         },
         Mode::Cluster {
             workers: 2,
             split: false,
             spin: false,
+            relay: false,
         },
         Mode::Cluster {
             workers: 2,
             split: true,
             spin: false,
+            relay: false,
         },
         Mode::Cluster {
             workers: 2,
             split: false,
             spin: true,
+            relay: false,
         },
         Mode::Local {
             threads: 1,
             workers: 2,
+        },
+        Mode::Cluster {
+            workers: 2,
+            split: true,
+            spin: false,
+            relay: true,
         },
     ];
     let modes: Vec<Mode> = match args.get(3) {
