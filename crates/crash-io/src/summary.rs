@@ -281,6 +281,12 @@ pub struct ClusterSummary {
     /// Groups split over workers, each time a split was made.
     #[serde(default)]
     pub splits: u64,
+    /// Steps of split groups whose holders exchanged their part states directly
+    /// (protocol v18), and steps whose part states the master relayed.
+    #[serde(default)]
+    pub halo_direct_steps: u64,
+    #[serde(default)]
+    pub halo_relayed_steps: u64,
     pub max_groups: usize,
     /// The groups at the end: smallest body id, member ids, worker.
     pub final_groups: Vec<GroupSummary>,

@@ -123,6 +123,8 @@ fn summary_json_round_trips_and_has_the_documented_fields() {
             group_changes: 4,
             splits_kept: 1,
             splits: 2,
+            halo_direct_steps: 5,
+            halo_relayed_steps: 6,
             max_groups: 13,
             final_groups: vec![crash_io::summary::GroupSummary {
                 group: 0,

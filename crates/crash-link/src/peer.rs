@@ -178,7 +178,8 @@ impl Peers {
         // the higher index dials
         for s in slots.iter().filter(|s| s.w < me) {
             if !self.conns.contains_key(&s.w) {
-                let c = dial(&s.addr, me, &key).map_err(|e| link(s, format!("cannot connect: {e}")))?;
+                let c =
+                    dial(&s.addr, me, &key).map_err(|e| link(s, format!("cannot connect: {e}")))?;
                 self.conns.insert(s.w, c);
             }
         }
@@ -208,7 +209,9 @@ impl Peers {
                     match c.reader.take() {
                         Ok(Some(r)) => {
                             let m = <pb::PeerHalo as prost::Message>::decode(c.reader.body(r))
-                                .map_err(|e| link(s, format!("a frame that does not decode: {e}")))?;
+                                .map_err(|e| {
+                                    link(s, format!("a frame that does not decode: {e}"))
+                                })?;
                             s.got = Some(m);
                         }
                         Ok(None) => match c.reader.fill(&mut c.s) {
@@ -224,7 +227,8 @@ impl Peers {
                 let (w, r) = (s.sent < s.frame.len(), s.got.is_none());
                 if w || r {
                     done = false;
-                    let events = if w { libc::POLLOUT } else { 0 } | if r { libc::POLLIN } else { 0 };
+                    let events =
+                        if w { libc::POLLOUT } else { 0 } | if r { libc::POLLIN } else { 0 };
                     fds.push(libc::pollfd {
                         fd: c.s.as_raw_fd(),
                         events,
@@ -373,7 +377,10 @@ mod tests {
         let mut b = Peers::bind(0, timeout).unwrap();
         a.join(0, key.clone());
         b.join(1, key);
-        let (pa, pb) = (format!("127.0.0.1:{}", a.port()), format!("127.0.0.1:{}", b.port()));
+        let (pa, pb) = (
+            format!("127.0.0.1:{}", a.port()),
+            format!("127.0.0.1:{}", b.port()),
+        );
         (a, b, pa, pb)
     }
 
@@ -385,18 +392,36 @@ mod tests {
         let t = std::thread::spawn(move || {
             let mut got = Vec::new();
             for step in 0..3 {
-                let r = b.exchange(vec![(0, pa.clone(), frame(step, 8 << 20))]).unwrap();
-                got.push((r[0].0, r[0].1.step, r[0].1.parts.as_ref().unwrap().parts[0].xvw.len()));
+                let r = b
+                    .exchange(vec![(0, pa.clone(), frame(step, 8 << 20))])
+                    .unwrap();
+                got.push((
+                    r[0].0,
+                    r[0].1.step,
+                    r[0].1.parts.as_ref().unwrap().parts[0].xvw.len(),
+                ));
             }
             got
         });
         let mut mine = Vec::new();
         for step in 0..3 {
-            let r = a.exchange(vec![(1, pb.clone(), frame(step, 3 << 20))]).unwrap();
-            mine.push((r[0].0, r[0].1.step, r[0].1.parts.as_ref().unwrap().parts[0].xvw.len()));
+            let r = a
+                .exchange(vec![(1, pb.clone(), frame(step, 3 << 20))])
+                .unwrap();
+            mine.push((
+                r[0].0,
+                r[0].1.step,
+                r[0].1.parts.as_ref().unwrap().parts[0].xvw.len(),
+            ));
         }
-        assert_eq!(mine, vec![(1, 0, 8 << 20), (1, 1, 8 << 20), (1, 2, 8 << 20)]);
-        assert_eq!(t.join().unwrap(), vec![(0, 0, 3 << 20), (0, 1, 3 << 20), (0, 2, 3 << 20)]);
+        assert_eq!(
+            mine,
+            vec![(1, 0, 8 << 20), (1, 1, 8 << 20), (1, 2, 8 << 20)]
+        );
+        assert_eq!(
+            t.join().unwrap(),
+            vec![(0, 0, 3 << 20), (0, 1, 3 << 20), (0, 2, 3 << 20)]
+        );
     }
 
     /// A connection without the run's key is closed; the rightful peer still gets in.
@@ -404,7 +429,9 @@ mod tests {
     fn a_peer_without_the_runs_key_is_refused() {
         let (mut a, mut b, pa, pb) = pair(Duration::from_secs(10));
         let mut intruder = TcpStream::connect(&pa).unwrap();
-        intruder.write_all(&opening(1, &[6u8; 32]).unwrap()).unwrap();
+        intruder
+            .write_all(&opening(1, &[6u8; 32]).unwrap())
+            .unwrap();
         let t = std::thread::spawn(move || {
             std::thread::sleep(Duration::from_millis(100));
             b.exchange(vec![(0, pa, frame(4, 10))]).unwrap()[0].1.step
@@ -414,7 +441,9 @@ mod tests {
         assert_eq!(t.join().unwrap(), 4);
         // the intruder's connection was closed without a byte
         let mut buf = [0u8; 1];
-        intruder.set_read_timeout(Some(Duration::from_secs(2))).unwrap();
+        intruder
+            .set_read_timeout(Some(Duration::from_secs(2)))
+            .unwrap();
         assert!(matches!(intruder.read(&mut buf), Ok(0) | Err(_)));
     }
 
@@ -423,13 +452,22 @@ mod tests {
     #[test]
     fn a_silent_or_unreachable_peer_is_an_error_that_names_it() {
         let (mut a, _b, _pa, pb) = pair(Duration::from_millis(300));
-        let e = a.exchange(vec![(1, pb, frame(0, 10))]).unwrap_err().to_string();
+        let e = a
+            .exchange(vec![(1, pb, frame(0, 10))])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("no halo from worker 1"), "{e}");
         let (_a, mut b, _pa, _pb) = pair(Duration::from_millis(300));
         let closed = TcpListener::bind("127.0.0.1:0").unwrap();
         let addr = closed.local_addr().unwrap().to_string();
         drop(closed);
-        let e = b.exchange(vec![(0, addr, frame(0, 10))]).unwrap_err().to_string();
-        assert!(e.contains("worker 0") && e.contains("cannot connect"), "{e}");
+        let e = b
+            .exchange(vec![(0, addr, frame(0, 10))])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("worker 0") && e.contains("cannot connect"),
+            "{e}"
+        );
     }
 }

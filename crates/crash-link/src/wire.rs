@@ -750,7 +750,11 @@ fn failure_from_pb(f: &pb::Failure) -> Result<Reply, ProtoError> {
 
 fn halo_from_pb(h: &pb::Halo) -> Result<Halo, ProtoError> {
     Ok(
-        match h.outcome.as_ref().ok_or(ProtoError::Missing("halo.outcome"))? {
+        match h
+            .outcome
+            .as_ref()
+            .ok_or(ProtoError::Missing("halo.outcome"))?
+        {
             pb::halo::Outcome::Report(r) => Halo::Report(Box::new(report_from_pb(r)?)),
             pb::halo::Outcome::Failure(f) => Halo::from_reply(failure_from_pb(f)?),
             pb::halo::Outcome::Lost(e) => Halo::Lost(e.clone()),

@@ -517,6 +517,8 @@ impl Sink for FileSink {
             group_changes: stats.group_changes,
             splits_kept: stats.splits_kept,
             splits: stats.splits,
+            halo_direct_steps: stats.halo_direct_steps,
+            halo_relayed_steps: stats.halo_relayed_steps,
             max_groups: stats.max_groups,
             final_groups: stats
                 .final_groups

@@ -108,6 +108,12 @@ pub struct RunStats {
     /// Groups split over workers (each time a split is made).
     #[serde(default)]
     pub splits: u64,
+    /// Steps of split groups whose holders exchanged their part states directly, and
+    /// those the master relayed.
+    #[serde(default)]
+    pub halo_direct_steps: u64,
+    #[serde(default)]
+    pub halo_relayed_steps: u64,
     pub max_groups: usize,
     /// Groups (body ids) and their worker at the end.
     pub final_groups: Vec<(Vec<u32>, usize)>,

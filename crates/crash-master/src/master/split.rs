@@ -319,11 +319,16 @@ impl<L: WorkerLink> Master<'_, L> {
                 .map(|(&id, &p)| format!("{} in {p}", self.name(id)))
                 .collect();
             tracing::info!(
-                "step {}: group of {} bodies split over workers {:?}: {}",
+                "step {}: group of {} bodies split over workers {:?}: {}; {}",
                 self.clock.step,
                 plan.ids.len(),
                 plan.workers,
-                cut.join(", ")
+                cut.join(", "),
+                if plan.direct() && !self.direct_failed {
+                    "the workers exchange its halos directly"
+                } else {
+                    "the master relays its halos"
+                }
             );
             self.stats.splits += 1;
             self.splits.push(plan);
@@ -359,8 +364,10 @@ impl<L: WorkerLink> Master<'_, L> {
             })
             .collect();
         let replies = if direct {
+            self.stats.halo_direct_steps += 1;
             self.halos(reps, &holds)?
         } else {
+            self.stats.halo_relayed_steps += 1;
             self.relay(reps, &holds, &group_of)?
         };
         self.merge_halos(reps, replies, &group_of)
@@ -380,7 +387,11 @@ impl<L: WorkerLink> Master<'_, L> {
         let mut lost = None;
         for w in (0..nw).filter(|&w| self.live[w] && !holds[w].is_empty()) {
             counts[w] = 1;
-            match reps.get_mut(w).and_then(|r| r.halo.take()).map(Halo::into_reply) {
+            match reps
+                .get_mut(w)
+                .and_then(|r| r.halo.take())
+                .map(Halo::into_reply)
+            {
                 Some(Ok(r)) => got[w] = Some(r),
                 Some(Err(e)) => {
                     lost.get_or_insert((w, e));

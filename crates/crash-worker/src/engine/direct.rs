@@ -88,7 +88,10 @@ impl Engine {
             return;
         }
         if let Err(e) = self.exchange_with_peers(at.step, None) {
-            tracing::warn!("step {}: telling the other holders of the stop: {e}", at.step);
+            tracing::warn!(
+                "step {}: telling the other holders of the stop: {e}",
+                at.step
+            );
         }
     }
 
@@ -111,7 +114,9 @@ impl Engine {
             match peer_halo_from_pb(&f) {
                 Ok((s, _)) if s != step => {
                     peers.close_all();
-                    return Err(format!("worker {w} sent the halo of step {s} in step {step}"));
+                    return Err(format!(
+                        "worker {w} sent the halo of step {s} in step {step}"
+                    ));
                 }
                 Ok((_, Some(p))) => all.extend(p),
                 Ok((_, None)) => aborted = true,

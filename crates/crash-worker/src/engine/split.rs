@@ -38,7 +38,13 @@ pub(crate) struct Shared {
 }
 
 impl Shared {
-    fn new(g: SharedGroup, home: bool, whole: Vec<Body>, assembled: Option<Clock>, spec: SplitSpec) -> Self {
+    fn new(
+        g: SharedGroup,
+        home: bool,
+        whole: Vec<Body>,
+        assembled: Option<Clock>,
+        spec: SplitSpec,
+    ) -> Self {
         Self {
             g,
             home,
@@ -158,7 +164,8 @@ impl Engine {
             .with_holders(spec.holder.clone());
         self.groups.remove(at);
         let out = bodies.iter().cloned().map(BodyLoad::whole).collect();
-        self.shared.push(Shared::new(g, true, bodies, self.at, spec));
+        self.shared
+            .push(Shared::new(g, true, bodies, self.at, spec));
         Ok(Reply::Unloaded(out))
     }
 
@@ -186,7 +193,8 @@ impl Engine {
         let setup = self.setup_of()?;
         let g = SharedGroup::new(&whole, &parts, mine, setup.contact, setup.gravity)?
             .with_holders(spec.holder.clone());
-        self.shared.push(Shared::new(g, false, Vec::new(), None, spec));
+        self.shared
+            .push(Shared::new(g, false, Vec::new(), None, spec));
         self.at = Some(at);
         Ok(Reply::Ack)
     }
