@@ -329,6 +329,36 @@ fn step_report_round_trips_bit_exact() {
         };
         assert_eq!(split_contacts, share);
     }
+    // a Step's report carries the outcome of a direct halo: a report, a fault, an
+    // error or why the direct exchange failed
+    let halo_fault = Reply::Fault {
+        group_first: 3,
+        fault: Fault::DtCollapse {
+            step: 9,
+            dt: 1e-12,
+            floor: 1e-10,
+            body: 3,
+            element: 1,
+        },
+        split_contacts: Some(rep.split_contacts.clone()),
+    };
+    for halo in [
+        crash_link::Halo::Report(Box::new(rep.clone())),
+        crash_link::Halo::from_reply(halo_fault),
+        crash_link::Halo::Error("no step in flight".into()),
+        crash_link::Halo::Lost("worker 1 (10.0.0.2:4000): the connection closed".into()),
+    ] {
+        let with = StepReport {
+            halo: Some(halo),
+            ..StepReport::default()
+        };
+        let bytes = reply_to_pb(&Reply::Report(with.clone())).encode_to_vec();
+        let back = crash_proto::pb::WorkerMessage::decode(bytes.as_slice()).unwrap();
+        let Some(PbReply::Report(r)) = back.reply else {
+            panic!("not a report")
+        };
+        assert_eq!(report_from_pb(&r).unwrap(), with);
+    }
 }
 
 #[test]
@@ -371,7 +401,7 @@ fn commands_round_trip() {
                 probes: false,
             },
             contact: Default::default(),
-            direct: false,
+            direct: true,
         },
         Command::Unload {
             ids: vec![5, 2],
@@ -581,4 +611,20 @@ fn a_part_state_whose_points_do_not_match_their_counts_is_refused() {
         let e = command_from_pb(&m).expect_err("refused");
         assert!(e.to_string().contains("part 1 of body 3"), "{e}");
     }
+}
+
+/// A frame between two holders (protocol v18) carries the step and the part states
+/// bit for bit, or the sender's stop.
+#[test]
+fn a_peer_halo_frame_round_trips_its_step_and_parts_or_its_stop() {
+    use crash_link::wire::{peer_halo_from_pb, peer_halo_to_pb};
+    let parts = vec![part_state(), part_state()];
+    let bytes = peer_halo_to_pb(77, Some(&parts)).encode_to_vec();
+    let back = crash_proto::pb::PeerHalo::decode(bytes.as_slice()).unwrap();
+    let (step, got) = peer_halo_from_pb(&back).unwrap();
+    assert_eq!(step, 77);
+    assert_eq!(format!("{got:?}"), format!("{:?}", Some(parts)));
+    let stop = peer_halo_to_pb(78, None).encode_to_vec();
+    let back = crash_proto::pb::PeerHalo::decode(stop.as_slice()).unwrap();
+    assert!(matches!(peer_halo_from_pb(&back), Ok((78, None))));
 }
