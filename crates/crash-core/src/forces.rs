@@ -159,11 +159,49 @@ impl Body {
     /// every slot into the second half of `slots` (`BodyDef::slot_count`), which the
     /// integration books as dissipation.
     pub fn internal_forces(&mut self, h: f64, step: u64) -> Result<ForceSums, Fault> {
+        let done = self.no_chunks();
+        self.finish_forces(h, done, step)
+    }
+
+    /// Chunks of the element loop (triangles', then quads'), none computed yet.
+    pub fn no_chunks(&self) -> Vec<Option<ChunkResult>> {
+        let chunks = |n: usize| n.div_ceil(CHUNK);
+        let n = if self.def.kinematic {
+            0
+        } else {
+            chunks(self.def.tris.len()) + chunks(self.def.quads.len())
+        };
+        (0..n).map(|_| None).collect()
+    }
+
+    /// Which chunks read only the first `owned` nodes (a part's owned nodes): they can
+    /// be computed before the halo nodes are current.
+    pub fn chunks_within(&self, owned: usize) -> Vec<bool> {
+        let inside = |nodes: &[u32]| nodes.iter().all(|&n| (n as usize) < owned);
         if self.def.kinematic {
-            self.state.internal_now = 0.0;
-            self.state.hourglass_now = 0.0;
-            return Ok(ForceSums::default());
+            return Vec::new();
         }
+        let tris = self.def.tris.chunks(CHUNK);
+        let quads = self.def.quads.chunks(CHUNK);
+        tris.map(|c| c.iter().all(|e| inside(&e.nodes)))
+            .chain(quads.map(|c| c.iter().all(|e| inside(&e.nodes))))
+            .collect()
+    }
+
+    /// Compute the element chunks not yet in `done` (`None`) and, if given, marked in
+    /// `only`, in parallel, into it. Each chunk writes only its own elements' states and
+    /// slots, so chunks may be computed at different times (a part's inner chunks while
+    /// its halo travels).
+    pub fn element_chunks(
+        &mut self,
+        h: f64,
+        done: &mut [Option<ChunkResult>],
+        only: Option<&[bool]>,
+    ) {
+        if self.def.kinematic {
+            return;
+        }
+        let wanted = |k: usize| only.is_none_or(|m| m.get(k).copied().unwrap_or(false));
         let (sec, stab) = (self.def.section, self.def.stab);
         let nt = self.def.tris.len();
         let ns = self.def.gather_slot.len();
@@ -209,25 +247,32 @@ impl Body {
                 stream,
             })
         };
+        let n_tri = nt.div_ceil(CHUNK);
+        let (tri_done, quad_done) = done.split_at_mut(n_tri);
         let tri_base = self
             .def
             .tris
             .par_chunks(CHUNK)
             .zip(tri_state.par_chunks_mut(CHUNK))
             .zip(tri_slots.par_chunks_mut(3 * CHUNK))
+            .zip(tri_done.par_iter_mut())
             .enumerate();
-        let tri_chunks: Vec<ChunkResult> = if tri_kelvin.is_empty() {
+        if tri_kelvin.is_empty() {
             tri_base
                 .with_max_len(1)
-                .map(|(ci, ((els, states), slots))| tri(ci, els, states, slots, &mut []))
-                .collect()
+                .filter(|(ci, (_, d))| d.is_none() && wanted(*ci))
+                .for_each(|(ci, (((els, states), slots), d))| {
+                    *d = Some(tri(ci, els, states, slots, &mut []));
+                });
         } else {
             tri_base
                 .zip(tri_kelvin.par_chunks_mut(3 * CHUNK))
                 .with_max_len(1)
-                .map(|((ci, ((els, states), slots)), d)| tri(ci, els, states, slots, d))
-                .collect()
-        };
+                .filter(|((ci, (_, d)), _)| d.is_none() && wanted(*ci))
+                .for_each(|((ci, (((els, states), slots), d)), k)| {
+                    *d = Some(tri(ci, els, states, slots, k));
+                });
+        }
 
         let quad = |ci: usize,
                     els: &[QuadElem],
@@ -257,22 +302,43 @@ impl Body {
             .zip(quad_state.par_chunks_mut(CHUNK))
             .zip(self.state.hourglass.par_chunks_mut(CHUNK))
             .zip(quad_slots.par_chunks_mut(4 * CHUNK))
+            .zip(quad_done.par_iter_mut())
             .enumerate();
-        let quad_chunks: Vec<ChunkResult> = if quad_kelvin.is_empty() {
+        if quad_kelvin.is_empty() {
             quad_base
                 .with_max_len(1)
-                .map(|(ci, (((els, states), hg), slots))| quad(ci, els, states, hg, slots, &mut []))
-                .collect()
+                .filter(|(ci, (_, d))| d.is_none() && wanted(n_tri + *ci))
+                .for_each(|(ci, ((((els, states), hg), slots), d))| {
+                    *d = Some(quad(ci, els, states, hg, slots, &mut []));
+                });
         } else {
             quad_base
                 .zip(quad_kelvin.par_chunks_mut(4 * CHUNK))
                 .with_max_len(1)
-                .map(|((ci, (((els, states), hg), slots)), d)| quad(ci, els, states, hg, slots, d))
-                .collect()
-        };
+                .filter(|((ci, (_, d)), _)| d.is_none() && wanted(n_tri + *ci))
+                .for_each(|((ci, ((((els, states), hg), slots), d)), k)| {
+                    *d = Some(quad(ci, els, states, hg, slots, k));
+                });
+        }
+    }
 
+    /// The element loop: the chunks not yet in `done`, then the sums of every chunk's
+    /// result in chunk order (so the same bits whenever each chunk was computed); the
+    /// first failing chunk's fault.
+    pub fn finish_forces(
+        &mut self,
+        h: f64,
+        mut done: Vec<Option<ChunkResult>>,
+        step: u64,
+    ) -> Result<ForceSums, Fault> {
+        if self.def.kinematic {
+            self.state.internal_now = 0.0;
+            self.state.hourglass_now = 0.0;
+            return Ok(ForceSums::default());
+        }
+        self.element_chunks(h, &mut done, None);
         let mut total = ForceSums::default();
-        for r in tri_chunks.iter().chain(quad_chunks.iter()) {
+        for r in done.iter().flatten() {
             match r {
                 Ok(s) => total = total.merge(s),
                 Err((e, f)) => return Err(to_fault(self.def.id, step, *e, *f)),

@@ -57,6 +57,62 @@ struct Conn {
     reader: FrameReader,
 }
 
+/// One peer's frames of the exchange in flight.
+#[derive(Debug)]
+struct Slot {
+    w: u32,
+    addr: String,
+    frame: Vec<u8>,
+    sent: usize,
+    got: Option<pb::PeerHalo>,
+}
+
+impl Slot {
+    fn link(&self, what: String) -> PeerError {
+        PeerError::Link {
+            worker: self.w,
+            addr: self.addr.clone(),
+            what,
+        }
+    }
+
+    /// Write what the socket takes now.
+    fn write(&mut self, c: &mut Conn) -> Result<(), PeerError> {
+        while self.sent < self.frame.len() {
+            match c.s.write(&self.frame[self.sent..]) {
+                Ok(0) => return Err(self.link("the connection closed".into())),
+                Ok(n) => self.sent += n,
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => return Err(self.link(format!("write: {e}"))),
+            }
+        }
+        Ok(())
+    }
+
+    /// Read what has arrived, until the frame is complete.
+    fn read(&mut self, c: &mut Conn) -> Result<(), PeerError> {
+        while self.got.is_none() {
+            match c.reader.take() {
+                Ok(Some(r)) => {
+                    let m = <pb::PeerHalo as prost::Message>::decode(c.reader.body(r))
+                        .map_err(|e| self.link(format!("a frame that does not decode: {e}")))?;
+                    self.got = Some(m);
+                }
+                Ok(None) => match c.reader.fill(&mut c.s) {
+                    Ok(0) => return Err(self.link("the connection closed".into())),
+                    Ok(_) => {}
+                    Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                    Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e) => return Err(self.link(format!("read: {e}"))),
+                },
+                Err(e) => return Err(self.link(e.to_string())),
+            }
+        }
+        Ok(())
+    }
+}
+
 /// This worker's side of the direct halo exchange.
 #[derive(Debug)]
 pub struct Peers {
@@ -66,6 +122,9 @@ pub struct Peers {
     me: Option<(u32, Vec<u8>)>,
     conns: BTreeMap<u32, Conn>,
     timeout: Duration,
+    /// The exchange in flight (`send` to `receive`) and when it gives up.
+    slots: Vec<Slot>,
+    deadline: Instant,
 }
 
 /// Equal in constant time (keys).
@@ -100,6 +159,8 @@ impl Peers {
             me: None,
             conns: BTreeMap::new(),
             timeout,
+            slots: Vec::new(),
+            deadline: Instant::now(),
         })
     }
 
@@ -123,6 +184,7 @@ impl Peers {
     /// Close every connection (after a failure: whatever was in flight is dropped).
     pub fn close_all(&mut self) {
         self.conns.clear();
+        self.slots.clear();
     }
 
     /// Send each peer `(worker, address, frame)` its frame and read one frame from
@@ -131,37 +193,44 @@ impl Peers {
         &mut self,
         out: Vec<(u32, String, pb::PeerHalo)>,
     ) -> Result<Vec<(u32, pb::PeerHalo)>, PeerError> {
-        let r = self.exchange_inner(out);
+        self.send(out)?;
+        self.receive()
+    }
+
+    /// Start an exchange: connect where needed and write what the sockets take now;
+    /// `receive` finishes it (the caller computes meanwhile).
+    pub fn send(&mut self, out: Vec<(u32, String, pb::PeerHalo)>) -> Result<(), PeerError> {
+        let r = self.send_inner(out);
         if r.is_err() {
             self.close_all();
         }
         r
     }
 
-    fn exchange_inner(
-        &mut self,
-        out: Vec<(u32, String, pb::PeerHalo)>,
-    ) -> Result<Vec<(u32, pb::PeerHalo)>, PeerError> {
+    /// Finish the exchange `send` started: the rest of the frames out, one frame in
+    /// from each peer, in worker order.
+    pub fn receive(&mut self) -> Result<Vec<(u32, pb::PeerHalo)>, PeerError> {
+        let r = self.receive_inner();
+        if r.is_err() {
+            self.close_all();
+        }
+        r
+    }
+
+    fn send_inner(&mut self, out: Vec<(u32, String, pb::PeerHalo)>) -> Result<(), PeerError> {
         let (me, key) = self
             .me
             .clone()
             .ok_or_else(|| PeerError::Setup("the master offered no direct exchange".into()))?;
-        let deadline = Instant::now() + self.timeout;
-        struct Slot {
-            w: u32,
-            addr: String,
-            frame: Vec<u8>,
-            sent: usize,
-            got: Option<pb::PeerHalo>,
-        }
-        let mut slots = Vec::with_capacity(out.len());
+        self.deadline = Instant::now() + self.timeout;
+        self.slots.clear();
         for (w, addr, msg) in out {
             if w == me {
                 return Err(PeerError::Setup(format!("worker {w} is this worker")));
             }
             let mut frame = Vec::new();
             encode_frame(&mut frame, &msg).map_err(|e| PeerError::Setup(e.to_string()))?;
-            slots.push(Slot {
+            self.slots.push(Slot {
                 w,
                 addr,
                 frame,
@@ -169,66 +238,46 @@ impl Peers {
                 got: None,
             });
         }
-        slots.sort_by_key(|s| s.w);
-        let link = |s: &Slot, what: String| PeerError::Link {
-            worker: s.w,
-            addr: s.addr.clone(),
-            what,
-        };
+        self.slots.sort_by_key(|s| s.w);
         // the higher index dials
-        for s in slots.iter().filter(|s| s.w < me) {
+        for s in self.slots.iter().filter(|s| s.w < me) {
             if !self.conns.contains_key(&s.w) {
-                let c =
-                    dial(&s.addr, me, &key).map_err(|e| link(s, format!("cannot connect: {e}")))?;
+                let c = dial(&s.addr, me, &key).map_err(|e| s.link(format!("cannot connect: {e}")))?;
                 self.conns.insert(s.w, c);
             }
         }
+        for s in &mut self.slots {
+            if let Some(c) = self.conns.get_mut(&s.w) {
+                s.write(c)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn receive_inner(&mut self) -> Result<Vec<(u32, pb::PeerHalo)>, PeerError> {
+        let (me, key) = self
+            .me
+            .clone()
+            .ok_or_else(|| PeerError::Setup("the master offered no direct exchange".into()))?;
         loop {
             // accept the lower-indexed peers' connections still missing
-            let waiting = slots.iter().any(|s| !self.conns.contains_key(&s.w));
+            let waiting = self.slots.iter().any(|s| !self.conns.contains_key(&s.w));
             if waiting {
                 self.accept_ready(me, &key)?;
             }
             let mut done = true;
-            let mut fds = Vec::with_capacity(slots.len() + 1);
-            for s in &mut slots {
+            let mut fds = Vec::with_capacity(self.slots.len() + 1);
+            for s in &mut self.slots {
                 let Some(c) = self.conns.get_mut(&s.w) else {
                     done = false;
                     continue;
                 };
-                while s.sent < s.frame.len() {
-                    match c.s.write(&s.frame[s.sent..]) {
-                        Ok(0) => return Err(link(s, "the connection closed".into())),
-                        Ok(n) => s.sent += n,
-                        Err(e) if e.kind() == ErrorKind::WouldBlock => break,
-                        Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                        Err(e) => return Err(link(s, format!("write: {e}"))),
-                    }
-                }
-                while s.got.is_none() {
-                    match c.reader.take() {
-                        Ok(Some(r)) => {
-                            let m = <pb::PeerHalo as prost::Message>::decode(c.reader.body(r))
-                                .map_err(|e| {
-                                    link(s, format!("a frame that does not decode: {e}"))
-                                })?;
-                            s.got = Some(m);
-                        }
-                        Ok(None) => match c.reader.fill(&mut c.s) {
-                            Ok(0) => return Err(link(s, "the connection closed".into())),
-                            Ok(_) => {}
-                            Err(e) if e.kind() == ErrorKind::WouldBlock => break,
-                            Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                            Err(e) => return Err(link(s, format!("read: {e}"))),
-                        },
-                        Err(e) => return Err(link(s, e.to_string())),
-                    }
-                }
+                s.write(c)?;
+                s.read(c)?;
                 let (w, r) = (s.sent < s.frame.len(), s.got.is_none());
                 if w || r {
                     done = false;
-                    let events =
-                        if w { libc::POLLOUT } else { 0 } | if r { libc::POLLIN } else { 0 };
+                    let events = if w { libc::POLLOUT } else { 0 } | if r { libc::POLLIN } else { 0 };
                     fds.push(libc::pollfd {
                         fd: c.s.as_raw_fd(),
                         events,
@@ -246,9 +295,10 @@ impl Peers {
                     revents: 0,
                 });
             }
-            let left = deadline.saturating_duration_since(Instant::now());
+            let left = self.deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
-                let silent: Vec<String> = slots
+                let silent: Vec<String> = self
+                    .slots
                     .iter()
                     .filter(|s| s.got.is_none())
                     .map(|s| format!("worker {} ({})", s.w, s.addr))
@@ -266,7 +316,7 @@ impl Peers {
                 }
             }
         }
-        Ok(slots
+        Ok(std::mem::take(&mut self.slots)
             .into_iter()
             .filter_map(|s| s.got.map(|g| (s.w, g)))
             .collect())

@@ -157,7 +157,7 @@ impl Engine {
                                 reply = fault;
                             } else {
                                 if direct {
-                                    self.direct_halo(&at, rep);
+                                    self.direct_halo(&at, dt, rep);
                                 }
                                 self.at = Some(at.after(dt));
                                 return reply;

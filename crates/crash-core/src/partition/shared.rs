@@ -42,6 +42,7 @@ use crate::body::Body;
 use crate::clock::Clock;
 use crate::contact::sweep::Momentum;
 use crate::contact::{check_moves, ContactConfig};
+use crate::element::batch::ChunkResult;
 use crate::error::{CoreError, Fault};
 use crate::forces::ForceSums;
 use crate::group::{BodyReport, Reaction};
@@ -122,6 +123,10 @@ pub struct SharedGroup {
     /// since), and the view build it is for (`GroupSplit::builds`).
     far_bound: Vec<Vec<f64>>,
     bound_build: u64,
+    /// Per body and part (own parts): the element chunks that read only owned nodes,
+    /// and those computed early for the step in flight (`inner_forces`: its number).
+    inner: Vec<Vec<Vec<bool>>>,
+    early: Vec<Vec<Option<(u64, Vec<Option<ChunkResult>>)>>>,
 }
 
 /// The fraction of the view-rebuild trigger below which a part sends its bound on
@@ -183,6 +188,16 @@ impl SharedGroup {
         // 1 % below the exact bound: the distances are rounded
         let trigger = 0.99 * (split.skin - budget);
         let export = exports(&split);
+        let inner = split
+            .splits
+            .iter()
+            .map(|s| {
+                s.parts
+                    .iter()
+                    .map(|p| p.body.chunks_within(p.owned))
+                    .collect()
+            })
+            .collect();
         Ok(Self {
             split,
             ids,
@@ -204,6 +219,8 @@ impl SharedGroup {
                 .collect(),
             far_bound: parts.iter().map(|&k| vec![0.0; k]).collect(),
             bound_build: 0,
+            inner,
+            early: parts.iter().map(|&k| (0..k).map(|_| None).collect()).collect(),
         })
     }
 
@@ -225,10 +242,36 @@ impl SharedGroup {
         self
     }
 
+    /// Between phases 1 and 2, while the other holders' states travel (the direct halo
+    /// exchange): the element chunks of the parts computed here that read only their
+    /// owned nodes, for the step of length h from `clock`. `forces` computes the rest
+    /// and sums every chunk in order: the same bits as computing them all there.
+    /// Returns how many chunks it computed.
+    pub fn inner_forces(&mut self, clock: &Clock, h: f64) -> usize {
+        let step = clock.after(h).step;
+        let mut count = 0;
+        for (i, s) in self.split.splits.iter_mut().enumerate() {
+            for (q, p) in s.parts.iter_mut().enumerate() {
+                if !self.split.mine[i][q] {
+                    continue;
+                }
+                let mut done = p.body.no_chunks();
+                p.body.element_chunks(h, &mut done, Some(&self.inner[i][q]));
+                count += done.iter().flatten().count();
+                self.early[i][q] = Some((step, done));
+            }
+        }
+        count
+    }
+
     /// Phase 1: integrate the owned nodes of the parts computed here over the step of
     /// length h from `clock`; their states for the other holders. The pending contact
     /// pass, if any, must have run (`contact`).
     pub fn integrate(&mut self, clock: &Clock, h: f64) -> Result<Vec<PartState>, Fault> {
+        // chunks computed early for a step that never got its forces are stale
+        for e in self.early.iter_mut().flatten() {
+            *e = None;
+        }
         let sc = clock.step_of(h);
         let gravity = self.split.gravity;
         let full = self.due;
@@ -448,7 +491,12 @@ impl SharedGroup {
                 if !self.split.mine[i][q] {
                     continue;
                 }
-                let f = match p.body.internal_forces(h, step) {
+                // the chunks computed while the other holders' states travelled
+                let done = match self.early[i][q].take() {
+                    Some((at, done)) if at == step => done,
+                    _ => p.body.no_chunks(),
+                };
+                let f = match p.body.finish_forces(h, done, step) {
                     Ok(f) => f,
                     Err(f) => {
                         fault = Some(Fault::first_of(fault, element_in_whole(f, &p.element)));

@@ -63,12 +63,24 @@ impl Engine {
     /// Exchange the part states of `rep` with the other holders and run the halo:
     /// its outcome into `rep.halo` (None when a holder aborted: its fault is the
     /// step's outcome).
-    pub(super) fn direct_halo(&mut self, at: &Clock, rep: &mut StepReport) {
+    pub(super) fn direct_halo(&mut self, at: &Clock, dt: f64, rep: &mut StepReport) {
         if self.shared.is_empty() {
             return;
         }
         let parts = std::mem::take(&mut rep.parts);
-        let received = match self.exchange_with_peers(at.step, Some(parts)) {
+        let received = match self.send_to_peers(at.step, Some(parts)) {
+            Ok(()) => {
+                // while the states travel: the elements that read no halo node
+                for s in &mut self.shared {
+                    let t = std::time::Instant::now();
+                    s.inner_forces(at, dt);
+                    s.nanos += t.elapsed().as_nanos() as u64;
+                }
+                self.receive_from_peers(at.step)
+            }
+            Err(e) => Err(e),
+        };
+        let received = match received {
             Ok(r) => r,
             Err(e) => {
                 rep.halo = Some(Halo::Lost(e));
@@ -102,12 +114,27 @@ impl Engine {
         step: u64,
         parts: Option<Vec<PartState>>,
     ) -> Result<Option<Vec<PartState>>, String> {
-        let out = self.peer_frames(step, parts)?;
-        let peers = self
-            .peers
+        self.send_to_peers(step, parts)?;
+        self.receive_from_peers(step)
+    }
+
+    fn peers(&mut self) -> Result<&mut Peers, String> {
+        self.peers
             .as_mut()
-            .ok_or("this worker takes no direct halo connections")?;
-        let frames = peers.exchange(out).map_err(|e| e.to_string())?;
+            .ok_or_else(|| "this worker takes no direct halo connections".to_string())
+    }
+
+    /// Start the exchange: `parts` (None: an abort) on their way to the peers.
+    fn send_to_peers(&mut self, step: u64, parts: Option<Vec<PartState>>) -> Result<(), String> {
+        let out = self.peer_frames(step, parts)?;
+        self.peers()?.send(out).map_err(|e| e.to_string())
+    }
+
+    /// Finish the exchange: every peer's frame of step `step`, their part states in
+    /// worker order, or None if one of them aborted.
+    fn receive_from_peers(&mut self, step: u64) -> Result<Option<Vec<PartState>>, String> {
+        let peers = self.peers()?;
+        let frames = peers.receive().map_err(|e| e.to_string())?;
         let mut all = Vec::new();
         let mut aborted = false;
         for (w, f) in frames {

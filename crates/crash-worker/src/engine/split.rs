@@ -29,7 +29,7 @@ pub(crate) struct Shared {
     whole: Vec<Body>,
     assembled: Option<Clock>,
     /// Compute time of the step in flight [ns].
-    nanos: u64,
+    pub(super) nanos: u64,
     /// This worker's slot, the worker of each slot and where it takes direct halo
     /// connections (the split's spec).
     pub(super) slot: u32,
@@ -59,6 +59,12 @@ impl Shared {
 
     pub(super) fn ids(&self) -> &[u32] {
         &self.g.ids
+    }
+
+    /// The element chunks of this holder's parts that read no halo node (while the
+    /// other holders' states travel).
+    pub(super) fn inner_forces(&mut self, at: &Clock, dt: f64) -> usize {
+        self.g.inner_forces(at, dt)
     }
 
     fn first(&self) -> u32 {
