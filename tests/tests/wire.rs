@@ -349,7 +349,7 @@ fn step_report_round_trips_bit_exact() {
         crash_link::Halo::Lost("worker 1 (10.0.0.2:4000): the connection closed".into()),
     ] {
         let with = StepReport {
-            halo: Some(halo),
+            halo: Some(Box::new(halo)),
             ..StepReport::default()
         };
         let bytes = reply_to_pb(&Reply::Report(with.clone())).encode_to_vec();

@@ -282,7 +282,11 @@ fn element_chunks_computed_before_the_halo_keep_the_whole_groups_bits() {
         let r = shared_step(&mut holders, &mut pending, &gclock, h);
         gdt = min_dt(&r);
         gclock = gclock.after(h);
-        assert_eq!(gdt.to_bits(), dt.to_bits(), "stable step after split step {n}");
+        assert_eq!(
+            gdt.to_bits(),
+            dt.to_bits(),
+            "stable step after split step {n}"
+        );
     }
     flush(&mut holders, &mut pending);
     let others: Vec<_> = holders[1..].iter().flat_map(|s| s.own_states()).collect();

@@ -219,7 +219,7 @@ pub struct StepReport {
     /// A Step with `direct`: the second half of the split groups' step, after the
     /// holders exchanged their part states with each other (None when no split group
     /// is held here, or another holder's fault stopped the exchange).
-    pub halo: Option<Halo>,
+    pub halo: Option<Box<Halo>>,
 }
 
 /// The outcome of a split step's second half when the holders exchange their part

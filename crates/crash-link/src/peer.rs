@@ -241,9 +241,10 @@ impl Peers {
         self.slots.sort_by_key(|s| s.w);
         // the higher index dials
         for s in self.slots.iter().filter(|s| s.w < me) {
-            if !self.conns.contains_key(&s.w) {
-                let c = dial(&s.addr, me, &key).map_err(|e| s.link(format!("cannot connect: {e}")))?;
-                self.conns.insert(s.w, c);
+            if let std::collections::btree_map::Entry::Vacant(v) = self.conns.entry(s.w) {
+                v.insert(
+                    dial(&s.addr, me, &key).map_err(|e| s.link(format!("cannot connect: {e}")))?,
+                );
             }
         }
         for s in &mut self.slots {
@@ -277,7 +278,8 @@ impl Peers {
                 let (w, r) = (s.sent < s.frame.len(), s.got.is_none());
                 if w || r {
                     done = false;
-                    let events = if w { libc::POLLOUT } else { 0 } | if r { libc::POLLIN } else { 0 };
+                    let events =
+                        if w { libc::POLLOUT } else { 0 } | if r { libc::POLLIN } else { 0 };
                     fds.push(libc::pollfd {
                         fd: c.s.as_raw_fd(),
                         events,

@@ -627,7 +627,7 @@ fn report_to_pb(rep: &StepReport) -> pb::Report {
         part_dts: (!rep.part_dts.is_empty()).then(|| part_dts_to_pb(&rep.part_dts)),
         split_contacts: (!rep.split_contacts.is_empty())
             .then(|| contacts_to_pb(&rep.split_contacts)),
-        halo: rep.halo.as_ref().map(|h| {
+        halo: rep.halo.as_deref().map(|h| {
             Box::new(pb::Halo {
                 outcome: Some(match h {
                     Halo::Report(r) => pb::halo::Outcome::Report(Box::new(report_to_pb(r))),
@@ -818,6 +818,11 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
             Some(c) => contacts_from_pb(c)?,
             None => Vec::new(),
         },
-        halo: r.halo.as_deref().map(halo_from_pb).transpose()?,
+        halo: r
+            .halo
+            .as_deref()
+            .map(halo_from_pb)
+            .transpose()?
+            .map(Box::new),
     })
 }

@@ -126,8 +126,12 @@ pub struct SharedGroup {
     /// Per body and part (own parts): the element chunks that read only owned nodes,
     /// and those computed early for the step in flight (`inner_forces`: its number).
     inner: Vec<Vec<Vec<bool>>>,
-    early: Vec<Vec<Option<(u64, Vec<Option<ChunkResult>>)>>>,
+    early: Vec<Vec<Option<Early>>>,
 }
+
+/// Element chunks computed before the halo arrived: the step they are for, and each
+/// chunk's result (None: not yet computed).
+type Early = (u64, Vec<Option<ChunkResult>>);
 
 /// The fraction of the view-rebuild trigger below which a part sends its bound on
 /// the distance from the views' positions rather than the distance: the bound's
@@ -220,7 +224,10 @@ impl SharedGroup {
             far_bound: parts.iter().map(|&k| vec![0.0; k]).collect(),
             bound_build: 0,
             inner,
-            early: parts.iter().map(|&k| (0..k).map(|_| None).collect()).collect(),
+            early: parts
+                .iter()
+                .map(|&k| (0..k).map(|_| None).collect())
+                .collect(),
         })
     }
 

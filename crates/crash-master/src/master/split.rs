@@ -27,7 +27,7 @@ use crash_core::partition::{longest_axis, merge_report, partition_body, PartStat
 use crash_core::{BodyReport, Vec3};
 use crash_io::PartCells;
 use crash_link::{
-    escape_peer, BodyLoad, Command, Halo, LinkError, Reply, SplitSpec, StepReport, WorkerLink,
+    escape_peer, BodyLoad, Command, LinkError, Reply, SplitSpec, StepReport, WorkerLink,
 };
 use std::collections::BTreeMap;
 
@@ -390,7 +390,7 @@ impl<L: WorkerLink> Master<'_, L> {
             match reps
                 .get_mut(w)
                 .and_then(|r| r.halo.take())
-                .map(Halo::into_reply)
+                .map(|h| (*h).into_reply())
             {
                 Some(Ok(r)) => got[w] = Some(r),
                 Some(Err(e)) => {

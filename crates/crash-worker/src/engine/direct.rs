@@ -83,14 +83,14 @@ impl Engine {
         let received = match received {
             Ok(r) => r,
             Err(e) => {
-                rep.halo = Some(Halo::Lost(e));
+                rep.halo = Some(Box::new(Halo::Lost(e)));
                 return;
             }
         };
         let Some(parts) = received else {
             return;
         };
-        rep.halo = Some(Halo::from_reply(self.halo(parts)));
+        rep.halo = Some(Box::new(Halo::from_reply(self.halo(parts))));
     }
 
     /// Tell the other holders that this worker stopped (a fault or an error in a Step
