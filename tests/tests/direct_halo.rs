@@ -71,30 +71,11 @@ fn three_holders_exchanging_halos_directly_end_in_the_single_process_state() {
     assert_eq!(r.summary.final_state_hash, format!("{reference:016x}"));
 }
 
-/// Two spheres in contact from the start, as in split.rs, then `extra` (TOML appended:
-/// the right sphere pulled); written next to the runs.
-fn pushed_scene(name: &str, extra: &str) -> PathBuf {
-    let text = std::fs::read_to_string(crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
-        .unwrap()
-        .replace(
-            "penalty_scale = 0.1",
-            "penalty_scale = 0.1\nmargin = 1.0e-5",
-        )
-        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [1.0, 0.0, 0.0]")
-        .replace("velocity = [-5.0, 0.0, 0.0]", "velocity = [-1.0, 0.0, 0.0]")
-        .replace(
-            "position = [-0.0625, 0.0, 0.0]",
-            "position = [-0.0505, 0.0, 0.0]",
-        )
-        .replace(
-            "position = [0.0625, 0.0, 0.0]",
-            "position = [0.0505, 0.0, 0.0]",
-        )
-        + &format!(
-            "\n[[bodies.load]]\nselect = \"all\"\nforce = [{extra}, 0.0, 0.0]\nstart = 1.0e-4\n"
-        );
-    let d = out_dir(name);
-    let p = d.join("pushed.toml");
+/// The split fault tests' scene (two spheres in contact from the start, the right one
+/// pulled with `force` newtons), written next to the runs.
+fn pushed_scene(name: &str, force: &str) -> PathBuf {
+    let text = crash_tests::fixtures::spheres_in_contact(&crash_tests::fixtures::pull_last(force));
+    let p = out_dir(name).join("pushed.toml");
     std::fs::write(&p, text).unwrap();
     p
 }

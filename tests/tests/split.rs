@@ -192,23 +192,7 @@ fn a_fault_in_a_split_group_is_the_drivers_fault() {
 /// spheres in contact from the start, then `extra` (TOML appended to the scene, whose
 /// last body is the right sphere). Returns the fault.
 fn rows_kept_at_fault(extra: &str) -> crash_core::Fault {
-    let text = std::fs::read_to_string(crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
-        .unwrap()
-        .replace(
-            "penalty_scale = 0.1",
-            "penalty_scale = 0.1\nmargin = 1.0e-5",
-        )
-        .replace("velocity = [5.0, 0.0, 0.0]", "velocity = [1.0, 0.0, 0.0]")
-        .replace("velocity = [-5.0, 0.0, 0.0]", "velocity = [-1.0, 0.0, 0.0]")
-        .replace(
-            "position = [-0.0625, 0.0, 0.0]",
-            "position = [-0.0505, 0.0, 0.0]",
-        )
-        .replace(
-            "position = [0.0625, 0.0, 0.0]",
-            "position = [0.0505, 0.0, 0.0]",
-        )
-        + extra;
+    let text = crash_tests::fixtures::spheres_in_contact(extra);
     let scene = crash_scene::parse(&text, "pushed.toml").unwrap();
     let inp = RunInput::from_built(scene.build().unwrap());
     let mut one = RecordSink::default();
@@ -236,7 +220,7 @@ fn rows_kept_at_fault(extra: &str) -> crash_core::Fault {
 
 /// A load of `force` newtons along x on every node of the right sphere from 0.1 ms.
 fn pull_right(force: &str) -> String {
-    format!("\n[[bodies.load]]\nselect = \"all\"\nforce = [{force}, 0.0, 0.0]\nstart = 1.0e-4\n")
+    crash_tests::fixtures::pull_last(force)
 }
 
 /// The fault in the exchange after the one that ran the pass: the right sphere, pulled

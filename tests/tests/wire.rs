@@ -308,18 +308,19 @@ fn step_report_round_trips_bit_exact() {
         assert_eq!(a.energy.kinetic.to_bits(), b.energy.kinetic.to_bits());
     }
     // a fault carries the share of the pass it ran (an empty one is a share too) or none
+    let fault_with = |split_contacts| Reply::Fault {
+        group_first: 3,
+        fault: Fault::DtCollapse {
+            step: 9,
+            dt: 1e-12,
+            floor: 1e-10,
+            body: 3,
+            element: 1,
+        },
+        split_contacts,
+    };
     for share in [Some(rep.split_contacts.clone()), Some(Vec::new()), None] {
-        let fault = Reply::Fault {
-            group_first: 3,
-            fault: Fault::DtCollapse {
-                step: 9,
-                dt: 1e-12,
-                floor: 1e-10,
-                body: 3,
-                element: 1,
-            },
-            split_contacts: share.clone(),
-        };
+        let fault = fault_with(share.clone());
         let bytes = reply_to_pb(&fault).encode_to_vec();
         let back =
             reply_from_pb(&crash_proto::pb::WorkerMessage::decode(bytes.as_slice()).unwrap())
@@ -331,17 +332,7 @@ fn step_report_round_trips_bit_exact() {
     }
     // a Step's report carries the outcome of a direct halo: a report, a fault, an
     // error or why the direct exchange failed
-    let halo_fault = Reply::Fault {
-        group_first: 3,
-        fault: Fault::DtCollapse {
-            step: 9,
-            dt: 1e-12,
-            floor: 1e-10,
-            body: 3,
-            element: 1,
-        },
-        split_contacts: Some(rep.split_contacts.clone()),
-    };
+    let halo_fault = fault_with(Some(rep.split_contacts.clone()));
     for halo in [
         crash_link::Halo::Report(Box::new(rep.clone())),
         crash_link::Halo::from_reply(halo_fault),

@@ -172,6 +172,40 @@ fn holders_of(bodies: &[Body], slot_of: &[u32]) -> Vec<SharedGroup> {
         .collect()
 }
 
+/// The whole group and the split one, side by side.
+struct Pair<'a> {
+    whole: &'a mut Group,
+    clock: &'a mut Clock,
+    dt: &'a mut f64,
+    holders: &'a mut [SharedGroup],
+    pending: &'a mut Option<SplitFigures>,
+    gclock: &'a mut Clock,
+    gdt: &'a mut f64,
+}
+
+impl Pair<'_> {
+    /// One step of each; their stable steps must have the same bits (`what` if not).
+    fn step(&mut self, what: &str) {
+        *self.dt = whole_step(self.whole, self.clock, *self.dt);
+        let h = SAFETY * *self.gdt;
+        let r = shared_step(self.holders, self.pending, self.gclock, h);
+        *self.gdt = min_dt(&r);
+        *self.gclock = self.gclock.after(h);
+        assert_eq!(self.gdt.to_bits(), self.dt.to_bits(), "{what}");
+    }
+
+    /// The split group assembled has the whole group's state (`what` if not).
+    fn same_state(&mut self, what: &str) {
+        flush(self.holders, self.pending);
+        let others: Vec<_> = self.holders[1..]
+            .iter()
+            .flat_map(|s| s.own_states())
+            .collect();
+        let b = self.holders[0].assemble(others).expect("assemble");
+        assert_eq!(state_hash(&b), state_hash(&self.whole.bodies), "{what}");
+    }
+}
+
 fn run(k: usize) {
     run_on(&(0..k as u32).collect::<Vec<_>>());
 }
@@ -192,28 +226,21 @@ fn run_on(slot_of: &[u32]) {
     let mut holders = holders_of(&g.bodies, slot_of);
     let mut pending = None;
     let mut contact_steps = 0;
+    let mut s = Pair {
+        whole: &mut whole,
+        clock: &mut clock,
+        dt: &mut dt,
+        holders: &mut holders,
+        pending: &mut pending,
+        gclock: &mut gclock,
+        gdt: &mut gdt,
+    };
     for n in 0..SPLIT_STEPS {
-        dt = whole_step(&mut whole, &mut clock, dt);
-        let h = SAFETY * gdt;
-        let r = shared_step(&mut holders, &mut pending, &gclock, h);
-        gdt = min_dt(&r);
-        gclock = gclock.after(h);
-        assert_eq!(
-            gdt.to_bits(),
-            dt.to_bits(),
-            "k = {k}: stable step after split step {n}"
-        );
-        let active: usize = whole.contact_stats().iter().map(|s| s.active_nodes).sum();
+        s.step(&format!("k = {k}: stable step after split step {n}"));
+        let active: usize = s.whole.contact_stats().iter().map(|s| s.active_nodes).sum();
         contact_steps += usize::from(active > 0);
         if n % 100 == 99 {
-            flush(&mut holders, &mut pending);
-            let others: Vec<_> = holders[1..].iter().flat_map(|s| s.own_states()).collect();
-            let b = holders[0].assemble(others).expect("assemble");
-            assert_eq!(
-                state_hash(&b),
-                state_hash(&whole.bodies),
-                "k = {k}, split step {n}"
-            );
+            s.same_state(&format!("k = {k}, split step {n}"));
         }
     }
     assert!(
@@ -276,22 +303,19 @@ fn element_chunks_computed_before_the_halo_keep_the_whole_groups_bits() {
     let mut holders = holders_of(&g.bodies, &[0, 1]);
     let (mut pending, mut gdt, mut gclock) = (None, gdt0, Clock::default());
     EARLY.with(|c| c.set(0));
+    let mut s = Pair {
+        whole: &mut whole,
+        clock: &mut clock,
+        dt: &mut dt,
+        holders: &mut holders,
+        pending: &mut pending,
+        gclock: &mut gclock,
+        gdt: &mut gdt,
+    };
     for n in 0..60 {
-        dt = whole_step(&mut whole, &mut clock, dt);
-        let h = SAFETY * gdt;
-        let r = shared_step(&mut holders, &mut pending, &gclock, h);
-        gdt = min_dt(&r);
-        gclock = gclock.after(h);
-        assert_eq!(
-            gdt.to_bits(),
-            dt.to_bits(),
-            "stable step after split step {n}"
-        );
+        s.step(&format!("stable step after split step {n}"));
     }
-    flush(&mut holders, &mut pending);
-    let others: Vec<_> = holders[1..].iter().flat_map(|s| s.own_states()).collect();
-    let b = holders[0].assemble(others).expect("assemble");
-    assert_eq!(state_hash(&b), state_hash(&whole.bodies));
+    s.same_state("after 60 split steps");
     let early = EARLY.with(|c| c.get());
     println!("element chunks computed before the halo: {early} in 60 steps");
     assert!(early >= 60 * 10, "too few chunks computed early: {early}");

@@ -47,11 +47,16 @@ pub fn tune(s: &TcpStream) -> io::Result<()> {
 /// A lane's opening for worker `index` with its session token (None: a token of the
 /// wrong length).
 pub fn opening(index: u32, token: &[u8]) -> Option<[u8; OPENING_LEN]> {
+    opening_with(MAGIC, index, token)
+}
+
+/// An opening of this shape with another magic (the peer connections').
+pub fn opening_with(magic: [u8; 4], index: u32, token: &[u8]) -> Option<[u8; OPENING_LEN]> {
     if token.len() != NONCE_LEN {
         return None;
     }
     let mut b = [0u8; OPENING_LEN];
-    b[..4].copy_from_slice(&MAGIC);
+    b[..4].copy_from_slice(&magic);
     b[4..8].copy_from_slice(&index.to_le_bytes());
     b[8..].copy_from_slice(token);
     Some(b)

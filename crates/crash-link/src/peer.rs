@@ -20,7 +20,7 @@
 //! Plain TCP only, like the step lane: a master serving TLS offers no peer key, and
 //! the part states then go through it.
 
-use crate::lane::{encode_frame, tune, FrameReader, OPENING_LEN};
+use crate::lane::{encode_frame, opening_with, tune, FrameReader, OPENING_LEN};
 use crash_proto::pb;
 use std::collections::BTreeMap;
 use std::io::{self, ErrorKind, Read, Write};
@@ -134,14 +134,7 @@ fn same(a: &[u8], b: &[u8]) -> bool {
 
 /// A peer connection's opening: magic, worker index (u32 LE), the run's peer key.
 fn opening(index: u32, key: &[u8]) -> Option<[u8; OPENING_LEN]> {
-    if key.len() != OPENING_LEN - 8 {
-        return None;
-    }
-    let mut b = [0u8; OPENING_LEN];
-    b[..4].copy_from_slice(&MAGIC);
-    b[4..8].copy_from_slice(&index.to_le_bytes());
-    b[8..].copy_from_slice(key);
-    Some(b)
+    opening_with(MAGIC, index, key)
 }
 
 impl Peers {
