@@ -20,8 +20,8 @@
 //! clock; the engine only remembers the clock its bodies are at, to refuse a command
 //! meant for another moment (so a resumed run continues on any set of workers).
 
-mod direct;
 mod split;
+mod step;
 
 use crate::error::EngineError;
 use crash_core::contact::PairStats;
@@ -145,39 +145,7 @@ impl Engine {
                 contact,
                 direct,
             } => {
-                let reply = if let Err(e) = self.check_clock(&at) {
-                    Reply::Error(e.to_string())
-                } else if !(dt.is_finite() && dt > 0.0) {
-                    Reply::Error(EngineError::Step { step: at.step, dt }.to_string())
-                } else {
-                    let mut reply = self.run(|g| g.advance_with(&at, dt, due), kin_nodes);
-                    match &mut reply {
-                        Reply::Report(rep) => {
-                            if let Some(fault) = self.step_shared(&at, dt, due, &contact, rep) {
-                                reply = fault;
-                            } else {
-                                if direct {
-                                    self.direct_halo(&at, dt, rep);
-                                }
-                                self.at = Some(at.after(dt));
-                                return reply;
-                            }
-                        }
-                        // a whole group faulted: the split groups' pending passes
-                        // still give the step before its contact rows
-                        Reply::Fault { split_contacts, .. } => {
-                            *split_contacts = self.share_after_fault(0, &contact, Vec::new());
-                            self.at = Some(at.after(dt));
-                        }
-                        _ => self.at = Some(at.after(dt)),
-                    }
-                    reply
-                };
-                // the other holders wait for this worker's part states: tell them
-                if direct {
-                    self.abort_peers(&at);
-                }
-                return reply;
+                return self.step(&at, dt, kin_nodes, due, &contact, direct);
             }
             Command::Frame(ids) => self.frame(&ids).map(Reply::Frame),
             Command::States(ids) if ids.is_empty() => self

@@ -10,6 +10,7 @@ mod assemble;
 mod closing;
 mod contact;
 mod export;
+mod inner;
 mod parts;
 mod report;
 mod select;

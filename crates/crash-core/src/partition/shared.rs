@@ -36,13 +36,13 @@
 
 use super::closing::{pair_speeds, SplitFigures};
 use super::export::exports;
+use super::inner::Early;
 use super::report::{add_reaction, element_in_whole, node_in_whole};
 use super::GroupSplit;
 use crate::body::Body;
 use crate::clock::Clock;
 use crate::contact::sweep::Momentum;
 use crate::contact::{check_moves, ContactConfig};
-use crate::element::batch::ChunkResult;
 use crate::error::{CoreError, Fault};
 use crate::forces::ForceSums;
 use crate::group::{BodyReport, Reaction};
@@ -125,13 +125,9 @@ pub struct SharedGroup {
     bound_build: u64,
     /// Per body and part (own parts): the element chunks that read only owned nodes,
     /// and those computed early for the step in flight (`inner_forces`: its number).
-    inner: Vec<Vec<Vec<bool>>>,
-    early: Vec<Vec<Option<Early>>>,
+    pub(super) inner: Vec<Vec<Vec<bool>>>,
+    pub(super) early: Vec<Vec<Option<Early>>>,
 }
-
-/// Element chunks computed before the halo arrived: the step they are for, and each
-/// chunk's result (None: not yet computed).
-type Early = (u64, Vec<Option<ChunkResult>>);
 
 /// The fraction of the view-rebuild trigger below which a part sends its bound on
 /// the distance from the views' positions rather than the distance: the bound's
@@ -247,28 +243,6 @@ impl SharedGroup {
         self.split.holder = holder;
         self.export = exports(&self.split);
         self
-    }
-
-    /// Between phases 1 and 2, while the other holders' states travel (the direct halo
-    /// exchange): the element chunks of the parts computed here that read only their
-    /// owned nodes, for the step of length h from `clock`. `forces` computes the rest
-    /// and sums every chunk in order: the same bits as computing them all there.
-    /// Returns how many chunks it computed.
-    pub fn inner_forces(&mut self, clock: &Clock, h: f64) -> usize {
-        let step = clock.after(h).step;
-        let mut count = 0;
-        for (i, s) in self.split.splits.iter_mut().enumerate() {
-            for (q, p) in s.parts.iter_mut().enumerate() {
-                if !self.split.mine[i][q] {
-                    continue;
-                }
-                let mut done = p.body.no_chunks();
-                p.body.element_chunks(h, &mut done, Some(&self.inner[i][q]));
-                count += done.iter().flatten().count();
-                self.early[i][q] = Some((step, done));
-            }
-        }
-        count
     }
 
     /// Phase 1: integrate the owned nodes of the parts computed here over the step of

@@ -30,6 +30,7 @@ use crash_link::{LinkError, WorkerLink};
 mod barrier;
 mod confirm;
 mod groups;
+mod halo;
 mod held;
 mod newcomers;
 mod output;

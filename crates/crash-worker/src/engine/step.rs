@@ -1,4 +1,5 @@
-//! The split groups' halo exchanged directly with the other holders (protocol v18):
+//! A Step, and the split groups' halo exchanged directly with the other holders
+//! (protocol v18):
 //! after the integration of a Step with `direct`, this worker sends each other holder
 //! of its split groups its part states of the groups they share (what the master
 //! would relay in a Halo) and reads theirs, then computes the Halo's second half here
@@ -7,15 +8,63 @@
 //! will not come. The transport is crash-link's `peer`.
 
 use super::Engine;
-use crash_core::partition::PartState;
-use crash_core::Clock;
+use crate::error::EngineError;
+use crash_core::partition::{PartState, SplitFigures};
+use crash_core::{Clock, Due};
 use crash_link::peer::Peers;
 use crash_link::wire::{peer_halo_from_pb, peer_halo_to_pb};
-use crash_link::{Halo, StepReport};
+use crash_link::{Halo, Reply, StepReport};
 use crash_proto::pb;
 use std::collections::BTreeMap;
 
 impl Engine {
+    /// A Step: the whole groups, then the split groups (their pending contact pass and
+    /// integration); with `direct`, the halo with the other holders (or, after a fault
+    /// or an error, their stop).
+    pub(super) fn step(
+        &mut self,
+        at: &Clock,
+        dt: f64,
+        kin_nodes: bool,
+        due: Due,
+        contact: &SplitFigures,
+        direct: bool,
+    ) -> Reply {
+        let reply = if let Err(e) = self.check_clock(at) {
+            Reply::Error(e.to_string())
+        } else if !(dt.is_finite() && dt > 0.0) {
+            Reply::Error(EngineError::Step { step: at.step, dt }.to_string())
+        } else {
+            let mut reply = self.run(|g| g.advance_with(at, dt, due), kin_nodes);
+            match &mut reply {
+                Reply::Report(rep) => {
+                    if let Some(fault) = self.step_shared(at, dt, due, contact, rep) {
+                        reply = fault;
+                    } else {
+                        if direct {
+                            self.direct_halo(at, dt, rep);
+                        }
+                        self.at = Some(at.after(dt));
+                        return reply;
+                    }
+                }
+                // a whole group faulted: the split groups' pending passes still give
+                // the step before its contact rows
+                Reply::Fault { split_contacts, .. } => {
+                    *split_contacts = self.share_after_fault(0, contact, Vec::new());
+                    self.at = Some(at.after(dt));
+                }
+                _ => self.at = Some(at.after(dt)),
+            }
+            reply
+        };
+        // the other holders wait for this worker's part states: tell them
+        if direct {
+            self.abort_peers(at);
+        }
+        reply
+    }
+
     /// Take part in the direct halo exchange from now on (a worker process).
     pub fn with_peers(mut self, peers: Peers) -> Self {
         self.peers = Some(peers);
