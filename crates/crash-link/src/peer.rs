@@ -125,6 +125,8 @@ pub struct Peers {
     /// The exchange in flight (`send` to `receive`) and when it gives up.
     slots: Vec<Slot>,
     deadline: Instant,
+    /// Accepted connections whose opening has not all come yet.
+    openings: Vec<Opening>,
 }
 
 /// Equal in constant time (keys).
@@ -154,6 +156,7 @@ impl Peers {
             timeout,
             slots: Vec::new(),
             deadline: Instant::now(),
+            openings: Vec::new(),
         })
     }
 
@@ -284,11 +287,14 @@ impl Peers {
                 break;
             }
             if waiting {
-                fds.push(libc::pollfd {
-                    fd: self.listener.as_raw_fd(),
-                    events: libc::POLLIN,
-                    revents: 0,
-                });
+                let pending = self.openings.iter().map(|o| o.s.as_raw_fd());
+                for fd in std::iter::once(self.listener.as_raw_fd()).chain(pending) {
+                    fds.push(libc::pollfd {
+                        fd,
+                        events: libc::POLLIN,
+                        revents: 0,
+                    });
+                }
             }
             let left = self.deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
@@ -317,27 +323,85 @@ impl Peers {
             .collect())
     }
 
-    /// Take every connection waiting on the listener whose opening proves the run's
-    /// key and names a higher index than ours; others are closed with a warning.
+    /// Take every connection waiting on the listener, then read the openings that
+    /// have come (never waiting for one: a stranger that connects and says nothing
+    /// costs no time); keep those that prove the run's key and name a higher index
+    /// than ours. Others, and openings not complete within `CONNECT`, are closed with
+    /// a warning.
     fn accept_ready(&mut self, me: u32, key: &[u8]) -> Result<(), PeerError> {
         loop {
-            let (s, from) = match self.listener.accept() {
-                Ok(a) => a,
-                Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(()),
-                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-                Err(e) => return Err(PeerError::Setup(format!("accept: {e}"))),
-            };
-            match take_opening(&s, key) {
-                Ok(w) if w > me => {
-                    let c = ready(s).map_err(|e| PeerError::Setup(format!("peer socket: {e}")))?;
-                    self.conns.insert(w, c);
+            match self.listener.accept() {
+                Ok((s, from)) => {
+                    s.set_nonblocking(true)
+                        .map_err(|e| PeerError::Setup(format!("peer socket: {e}")))?;
+                    self.openings.push(Opening {
+                        s,
+                        from,
+                        b: [0; OPENING_LEN],
+                        got: 0,
+                        until: Instant::now() + CONNECT,
+                    });
                 }
-                Ok(w) => tracing::warn!(
-                    "closed a peer connection from {from}: worker {w} does not dial worker {me}"
-                ),
-                Err(e) => tracing::warn!("closed a peer connection from {from}: {e}"),
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => return Err(PeerError::Setup(format!("accept: {e}"))),
             }
         }
+        for mut o in std::mem::take(&mut self.openings) {
+            match o.read(key) {
+                Ok(None) if Instant::now() < o.until => self.openings.push(o),
+                Ok(None) => tracing::warn!(
+                    "closed a peer connection from {}: no opening within {:.0} s",
+                    o.from,
+                    CONNECT.as_secs_f64()
+                ),
+                Ok(Some(w)) if w > me => {
+                    let c =
+                        ready(o.s).map_err(|e| PeerError::Setup(format!("peer socket: {e}")))?;
+                    self.conns.insert(w, c);
+                }
+                Ok(Some(w)) => tracing::warn!(
+                    "closed a peer connection from {}: worker {w} does not dial worker {me}",
+                    o.from
+                ),
+                Err(e) => tracing::warn!("closed a peer connection from {}: {e}", o.from),
+            }
+        }
+        Ok(())
+    }
+}
+
+/// An accepted connection whose opening is still being read.
+#[derive(Debug)]
+struct Opening {
+    s: TcpStream,
+    from: SocketAddr,
+    b: [u8; OPENING_LEN],
+    got: usize,
+    until: Instant,
+}
+
+impl Opening {
+    /// Read what has come of the opening: the dialling worker's index once complete
+    /// and proved, None while incomplete.
+    fn read(&mut self, key: &[u8]) -> io::Result<Option<u32>> {
+        while self.got < OPENING_LEN {
+            match self.s.read(&mut self.b[self.got..]) {
+                Ok(0) => return Err(io::Error::new(ErrorKind::UnexpectedEof, "closed")),
+                Ok(n) => self.got += n,
+                Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(None),
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        let b = &self.b;
+        if b[..4] != MAGIC || !same(&b[8..], key) {
+            return Err(io::Error::new(
+                ErrorKind::PermissionDenied,
+                "not a peer opening with this run's key",
+            ));
+        }
+        Ok(Some(u32::from_le_bytes([b[4], b[5], b[6], b[7]])))
     }
 }
 
@@ -352,21 +416,6 @@ fn poll(fds: &mut [libc::pollfd], ms: i32) -> io::Result<()> {
     } else {
         Ok(())
     }
-}
-
-/// Read and check an accepted connection's opening: the dialling worker's index.
-fn take_opening(s: &TcpStream, key: &[u8]) -> io::Result<u32> {
-    s.set_nonblocking(false)?;
-    s.set_read_timeout(Some(CONNECT))?;
-    let mut b = [0u8; OPENING_LEN];
-    (&*s).read_exact(&mut b)?;
-    if b[..4] != MAGIC || !same(&b[8..], key) {
-        return Err(io::Error::new(
-            ErrorKind::PermissionDenied,
-            "not a peer opening with this run's key",
-        ));
-    }
-    Ok(u32::from_le_bytes([b[4], b[5], b[6], b[7]]))
 }
 
 /// A connection ready for frames: no Nagle delay, keepalive, non-blocking.
@@ -490,6 +539,25 @@ mod tests {
             .set_read_timeout(Some(Duration::from_secs(2)))
             .unwrap();
         assert!(matches!(intruder.read(&mut buf), Ok(0) | Err(_)));
+    }
+
+    /// A stranger that connects and says nothing costs the exchange no time: the
+    /// openings are read as they come, not waited for.
+    #[test]
+    fn a_silent_connection_does_not_hold_up_the_exchange() {
+        let (mut a, mut b, pa, pb) = pair(Duration::from_secs(10));
+        let _silent = TcpStream::connect(&pa).unwrap();
+        let t0 = Instant::now();
+        let t = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(50));
+            b.exchange(vec![(0, pa, frame(5, 10))]).unwrap()[0].1.step
+        });
+        assert_eq!(
+            a.exchange(vec![(1, pb, frame(5, 10))]).unwrap()[0].1.step,
+            5
+        );
+        assert_eq!(t.join().unwrap(), 5);
+        assert!(t0.elapsed() < CONNECT / 2, "{:?}", t0.elapsed());
     }
 
     /// A peer that never comes is an error naming it, after the timeout; one whose
