@@ -13,11 +13,11 @@ use crash_link::{escape_peer, Command, LinkError, Reply, StepReport, WorkerLink}
 use std::collections::BTreeMap;
 
 impl<L: WorkerLink> Master<'_, L> {
-    /// The second exchange of a step for the split groups: the part states of phase 1
-    /// (taken out of `reps`) relayed to the other holders, every holder's share of each
-    /// body's report merged into its home's report (the element step and its element
-    /// from the minimum over the holders), the element steps kept for the contact pass
-    /// the next Step (or an assembly) runs.
+    /// The second half of a step for the split groups: the halo replies (from the
+    /// Step's reports when the holders exchanged directly, else from a relayed `Halo`),
+    /// then every holder's share of each body's report merged into its home's report
+    /// and the element steps kept for the contact pass the next Step (or an assembly)
+    /// runs.
     pub(super) fn relay_split(
         &mut self,
         reps: &mut [StepReport],
