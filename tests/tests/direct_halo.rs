@@ -13,12 +13,13 @@ use crash_tests::runs::driver_reference;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-/// A finished cluster run: its summary, contacts.csv, the master's log and whether it
-/// exited 0.
+/// A finished cluster run: its summary, contacts.csv, the master's and the workers'
+/// logs and whether it exited 0.
 struct Ran {
     summary: Summary,
     contacts: String,
     log: String,
+    workers: String,
     ok: bool,
 }
 
@@ -42,6 +43,7 @@ fn cluster(
         summary: crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap(),
         contacts: std::fs::read_to_string(out.join(crash_io::CONTACTS_CSV)).unwrap_or_default(),
         log: m.log(),
+        workers: w.iter().map(|p| p.log()).collect::<Vec<_>>().join("\n"),
         ok,
     }
 }
@@ -104,6 +106,13 @@ fn direct_fault_is_one_workers(name: &str, force: &str) -> String {
         "{}",
         two.log
     );
+    // the holders were told of the stop: none waited for states that never came
+    assert!(
+        !two.workers
+            .contains("direct halo exchange with the other holders failed"),
+        "{}",
+        two.workers
+    );
     assert!(one.contacts.lines().count() > 20, "{}", one.contacts);
     assert_eq!(
         two.contacts, one.contacts,
@@ -121,7 +130,8 @@ fn a_fault_found_in_a_direct_halo_is_one_workers_with_its_rows() {
 }
 
 /// Found in a holder's integration (non-finite velocities): that holder tells its peer
-/// to stop instead of sending its part states, and the run ends as one worker's.
+/// to stop instead of sending its part states (without, the peer would wait out its
+/// `--peer-timeout` and log the failed exchange), and the run ends as one worker's.
 #[test]
 fn a_fault_in_a_holders_integration_stops_its_peer_and_is_one_workers() {
     let f = direct_fault_is_one_workers("direct-nonfinite", "1.0e308");
@@ -148,6 +158,12 @@ fn a_direct_halo_that_cannot_connect_falls_back_to_the_relay_with_the_same_state
             .contains("could not exchange halos with the other workers directly"),
         "{}",
         r.log
+    );
+    assert!(
+        r.workers
+            .contains("direct halo exchange with the other holders failed"),
+        "{}",
+        r.workers
     );
     assert!(
         r.summary.cluster.halo_relayed_steps > 100,

@@ -132,6 +132,10 @@ impl Engine {
         let received = match received {
             Ok(r) => r,
             Err(e) => {
+                tracing::warn!(
+                    "step {}: the direct halo exchange with the other holders failed: {e}",
+                    at.step
+                );
                 rep.halo = Some(Box::new(Halo::Lost(e)));
                 return;
             }
