@@ -51,6 +51,25 @@ pub fn pull_last(force: &str) -> String {
     format!("\n[[bodies.load]]\nselect = \"all\"\nforce = [{force}, 0.0, 0.0]\nstart = 1.0e-4\n")
 }
 
+/// A third sphere, 0.3 m off the two of `spheres_in_contact`, pushed down beyond any
+/// finite acceleration from 0.1 ms.
+pub fn third_sphere() -> String {
+    "\n[[bodies]]\nname = \"third\"\nmaterial = \"steel\"\nthickness = 1.0e-3\n\
+     sphere = { radius = 0.05, level = 2 }\nposition = [0.0, 0.3, 0.0]\n\
+     [[bodies.load]]\nselect = \"all\"\nforce = [0.0, 0.0, -1.0e308]\nstart = 1.0e-4\n"
+        .to_string()
+}
+
+/// `third_sphere` resting on a fixed plate 1.005 mm below it (close enough to pair them
+/// from the start, so its group holds the plate's read-only copy and is never split):
+/// a fault in a whole group.
+pub fn third_sphere_on_a_plate() -> String {
+    third_sphere()
+        + "[[bodies]]\nname = \"floor\"\nmaterial = \"steel\"\nthickness = 1.0e-3\n\
+           plate = { size = [0.2, 0.2], cells = [4, 4] }\nposition = [0.0, 0.3, -0.051005]\n\
+           [[bodies.fix]]\nselect = \"all\"\n"
+}
+
 /// The material of the showcase scenes and of most tests.
 pub fn steel() -> Material {
     Material::steel()

@@ -74,9 +74,10 @@ fn three_holders_exchanging_halos_directly_end_in_the_single_process_state() {
 }
 
 /// The split fault tests' scene (two spheres in contact from the start, the right one
-/// pulled with `force` newtons), written next to the runs.
-fn pushed_scene(name: &str, force: &str) -> PathBuf {
-    let text = crash_tests::fixtures::spheres_in_contact(&crash_tests::fixtures::pull_last(force));
+/// pulled with `force` newtons, then `more` bodies), written next to the runs.
+fn pushed_scene(name: &str, force: &str, more: &str) -> PathBuf {
+    let pull = crash_tests::fixtures::pull_last(force);
+    let text = crash_tests::fixtures::spheres_in_contact(&(pull + more));
     let p = out_dir(name).join("pushed.toml");
     std::fs::write(&p, text).unwrap();
     p
@@ -87,8 +88,8 @@ fn pushed_scene(name: &str, force: &str) -> PathBuf {
 /// byte. Three workers: the master replays a reported fault on the others before it
 /// believes it (docs/reliability.md), here split over the two left, directly again,
 /// and the summary is the replay's. Returns the fault.
-fn direct_fault_is_one_workers(name: &str, force: &str) -> String {
-    let scene = pushed_scene(name, force);
+fn direct_fault_is_one_workers(name: &str, force: &str, more: &str) -> String {
+    let scene = pushed_scene(name, force, more);
     let one = cluster(&format!("{name}-1"), &scene, 1, &[], &[]);
     let two = cluster(&format!("{name}-3"), &scene, 3, &["--split", "always"], &[]);
     assert!(!one.ok && !two.ok, "both runs must stop on the fault");
@@ -125,17 +126,31 @@ fn direct_fault_is_one_workers(name: &str, force: &str) -> String {
 /// left one, outruns the contact margin.
 #[test]
 fn a_fault_found_in_a_direct_halo_is_one_workers_with_its_rows() {
-    let f = direct_fault_is_one_workers("direct-tunnel", "1.0e5");
+    let f = direct_fault_is_one_workers("direct-tunnel", "1.0e5", "");
     assert!(f.contains("tunnel") || f.contains("margin"), "{f}");
 }
 
-/// Found in a holder's integration (non-finite velocities): that holder tells its peer
-/// to stop instead of sending its part states (without, the peer would wait out its
-/// `--peer-timeout` and log the failed exchange), and the run ends as one worker's.
+/// Found in a holder's integration (non-finite velocities in every part of the pulled
+/// sphere, so every holder faults).
 #[test]
-fn a_fault_in_a_holders_integration_stops_its_peer_and_is_one_workers() {
-    let f = direct_fault_is_one_workers("direct-nonfinite", "1.0e308");
+fn a_fault_in_every_holders_integration_is_one_workers() {
+    let f = direct_fault_is_one_workers("direct-nonfinite", "1.0e308", "");
     assert!(f.contains("non-finite"), "{f}");
+}
+
+/// Found in one worker's whole group (a third sphere on a fixed plate, pushed beyond
+/// any finite acceleration) while the split group steps fine: that worker tells the
+/// other holders to stop instead of sending its part states (without, they would wait
+/// out their `--peer-timeout` and log the failed exchange), and the run ends as one
+/// worker's.
+#[test]
+fn a_fault_in_a_whole_group_stops_the_holders_peers_and_is_one_workers() {
+    let f = direct_fault_is_one_workers(
+        "direct-whole",
+        "0.0",
+        &crash_tests::fixtures::third_sphere_on_a_plate(),
+    );
+    assert!(f.contains("non-finite") && f.contains("body 2"), "{f}");
 }
 
 /// Workers that announce a host no peer can reach: the first split step's direct

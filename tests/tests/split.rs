@@ -248,15 +248,6 @@ fn a_fault_in_the_step_that_runs_a_split_groups_contact_pass_keeps_the_rows_befo
     );
 }
 
-/// A third sphere, 0.3 m off the others, pushed down beyond any finite acceleration
-/// from 0.1 ms.
-fn third_sphere() -> String {
-    "\n[[bodies]]\nname = \"third\"\nmaterial = \"steel\"\nthickness = 1.0e-3\n\
-     sphere = { radius = 0.05, level = 2 }\nposition = [0.0, 0.3, 0.0]\n\
-     [[bodies.load]]\nselect = \"all\"\nforce = [0.0, 0.0, -1.0e308]\nstart = 1.0e-4\n"
-        .to_string()
-}
-
 /// The fault in a whole group in the Step that runs the split group's pass: a third
 /// sphere resting on a fixed plate (a group with a read-only copy, never split) is
 /// pushed beyond any finite acceleration; the worker runs its split groups' pending
@@ -265,10 +256,7 @@ fn third_sphere() -> String {
 /// sphere's group holds the plate's copy and stays whole (it names the driver's node).
 #[test]
 fn a_fault_in_a_whole_group_keeps_the_split_groups_rows_before() {
-    let floor = "[[bodies]]\nname = \"floor\"\nmaterial = \"steel\"\nthickness = 1.0e-3\n\
-        plate = { size = [0.2, 0.2], cells = [4, 4] }\nposition = [0.0, 0.3, -0.051005]\n\
-        [[bodies.fix]]\nselect = \"all\"\n";
-    let f = rows_kept_at_fault(&(third_sphere() + floor));
+    let f = rows_kept_at_fault(&crash_tests::fixtures::third_sphere_on_a_plate());
     assert!(
         matches!(f, crash_core::Fault::NonFinite { body: 2, step, .. } if step > 20),
         "{f}"
@@ -283,7 +271,7 @@ fn a_fault_in_a_whole_group_keeps_the_split_groups_rows_before() {
 /// fault first named node 19 before).
 #[test]
 fn a_split_body_names_the_non_finite_node_one_process_names() {
-    let f = rows_kept_at_fault(&third_sphere());
+    let f = rows_kept_at_fault(&crash_tests::fixtures::third_sphere());
     assert!(
         matches!(&f, crash_core::Fault::NonFinite { body: 2, place, .. } if place == "node 0"),
         "{f}"
