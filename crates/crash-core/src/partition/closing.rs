@@ -69,16 +69,36 @@ impl SplitFigures {
     /// lower element), each pair's maxima the larger; bodies and pairs not yet here
     /// are appended. Min and max: the same result in any order.
     pub fn merge(&mut self, o: SplitFigures) {
+        // positions by key, so a floor in a pair with every body on it costs no
+        // quadratic search
+        let mut at: BTreeMap<u32, usize> = self
+            .dts
+            .iter()
+            .enumerate()
+            .map(|(k, d)| (d.id, k))
+            .collect();
         for d in o.dts {
-            match self.dts.iter_mut().find(|a| a.id == d.id) {
-                Some(a) => *a = a.min(d),
-                None => self.dts.push(d),
+            match at.get(&d.id) {
+                Some(&k) => self.dts[k] = self.dts[k].min(d),
+                None => {
+                    at.insert(d.id, self.dts.len());
+                    self.dts.push(d);
+                }
             }
         }
+        let mut at: BTreeMap<(u32, u32), usize> = self
+            .pairs
+            .iter()
+            .enumerate()
+            .map(|(k, p)| ((p.a, p.b), k))
+            .collect();
         for p in o.pairs {
-            match self.pairs.iter_mut().find(|a| (a.a, a.b) == (p.a, p.b)) {
-                Some(a) => *a = a.merge(p),
-                None => self.pairs.push(p),
+            match at.get(&(p.a, p.b)) {
+                Some(&k) => self.pairs[k] = self.pairs[k].merge(p),
+                None => {
+                    at.insert((p.a, p.b), self.pairs.len());
+                    self.pairs.push(p);
+                }
             }
         }
     }
@@ -93,12 +113,12 @@ impl SplitFigures {
     /// steps `dts` (the soft penalty skips a pair without one, as the one-process
     /// stage does).
     pub fn limits(&self, penalty: PenaltyKind) -> Vec<(u32, f64)> {
-        let dt_of = |id: u32| {
-            self.dts
-                .iter()
-                .find(|d| d.id == id)
-                .map_or(f64::INFINITY, |d| d.dt)
-        };
+        // the first of each id, as a search in order would find
+        let mut dts: BTreeMap<u32, f64> = BTreeMap::new();
+        for d in &self.dts {
+            dts.entry(d.id).or_insert(d.dt);
+        }
+        let dt_of = |id: u32| dts.get(&id).copied().unwrap_or(f64::INFINITY);
         let mut out = Vec::new();
         for p in &self.pairs {
             if !has_reference(penalty, dt_of(p.a).min(dt_of(p.b))) {
@@ -221,5 +241,33 @@ mod tests {
         assert!(figs.limits(PenaltyKind::Soft).is_empty());
         let d = closing_dt_of(1e-3, 2.0).unwrap_or(0.0);
         assert_eq!(figs.limits(PenaltyKind::Element), vec![(1, d), (2, d)]);
+    }
+
+    /// The keyed merge keeps what a search in order gave: each key once, at the place
+    /// it first came, the smaller element step (ties: the lower element) and the larger
+    /// maxima; new keys appended in the order they come.
+    #[test]
+    fn merged_figures_keep_each_key_once_in_order_of_arrival() {
+        let d = |id, dt, element| PartDt { id, dt, element };
+        let p = |a, b, m| PairSpeed {
+            a,
+            b,
+            c: 1e-3,
+            max: [m; 4],
+        };
+        let mut m = SplitFigures {
+            dts: vec![d(5, 2.0, 9), d(3, 1.0, 4)],
+            pairs: vec![p(3, 5, 1.0)],
+        };
+        m.merge(SplitFigures {
+            dts: vec![d(7, 3.0, 1), d(3, 1.0, 2), d(5, 2.5, 0)],
+            pairs: vec![p(5, 7, 2.0), p(3, 5, 4.0)],
+        });
+        m.merge(SplitFigures {
+            dts: vec![d(7, 0.5, 8), d(7, 0.5, 6)],
+            pairs: vec![p(3, 5, 0.5), p(3, 7, 1.0)],
+        });
+        assert_eq!(m.dts, vec![d(5, 2.0, 9), d(3, 1.0, 2), d(7, 0.5, 6)]);
+        assert_eq!(m.pairs, vec![p(3, 5, 4.0), p(5, 7, 2.0), p(3, 7, 1.0)]);
     }
 }

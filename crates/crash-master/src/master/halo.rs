@@ -7,10 +7,9 @@
 
 use super::Master;
 use crate::error::MasterError;
-use crash_core::partition::{merge_report, PartState, SplitFigures};
+use crash_core::partition::{merge_report, PartDt, PartState, SplitFigures};
 use crash_core::BodyReport;
 use crash_link::{escape_peer, Command, LinkError, Reply, StepReport, WorkerLink};
-use std::collections::BTreeMap;
 
 impl<L: WorkerLink> Master<'_, L> {
     /// The second half of a step for the split groups: the halo replies (from the
@@ -27,12 +26,7 @@ impl<L: WorkerLink> Master<'_, L> {
             return Ok(());
         }
         let nw = self.links.len();
-        let group_of: BTreeMap<u32, usize> = self
-            .splits
-            .iter()
-            .enumerate()
-            .flat_map(|(k, s)| s.ids.iter().map(move |&id| (id, k)))
-            .collect();
+        let group_of = SplitIndex::of(self.splits.iter().map(|s| &s.ids[..]));
         let holds: Vec<Vec<usize>> = (0..nw)
             .map(|w| {
                 (0..self.splits.len())
@@ -96,7 +90,7 @@ impl<L: WorkerLink> Master<'_, L> {
         &mut self,
         reps: &mut [StepReport],
         holds: &[Vec<usize>],
-        group_of: &BTreeMap<u32, usize>,
+        group_of: &SplitIndex,
     ) -> Result<Vec<Vec<Reply>>, MasterError> {
         let nw = self.links.len();
         let from: Vec<Vec<PartState>> = reps
@@ -109,11 +103,11 @@ impl<L: WorkerLink> Master<'_, L> {
         let mut imports: Vec<Vec<PartState>> = vec![Vec::new(); nw];
         for (v, parts) in from.into_iter().enumerate() {
             for p in parts {
-                let Some(k) = group_of.get(&p.id) else {
+                let Some(k) = group_of.group(p.id) else {
                     continue;
                 };
                 let to: Vec<usize> = (0..nw)
-                    .filter(|&w| w != v && holds[w].contains(k))
+                    .filter(|&w| w != v && holds[w].contains(&k))
                     .collect();
                 if let Some((&last, rest)) = to.split_last() {
                     for &w in rest {
@@ -144,41 +138,39 @@ impl<L: WorkerLink> Master<'_, L> {
         &mut self,
         reps: &mut [StepReport],
         replies: Vec<Vec<Reply>>,
-        group_of: &BTreeMap<u32, usize>,
+        group_of: &SplitIndex,
     ) -> Result<(), MasterError> {
         self.split_ns.clear();
         let mut figures = SplitFigures::default();
-        let mut merged: BTreeMap<u32, BodyReport> = BTreeMap::new();
+        // each body's merged report at its place in the groups' body order
+        let mut merged: Vec<Option<BodyReport>> = vec![None; group_of.len()];
         for (w, r) in replies.into_iter().enumerate() {
             for reply in r {
                 let Reply::Report(rep) = reply else {
                     return Err(self.bad_reply(w, "Halo"));
                 };
                 for d in &rep.part_dts.dts {
-                    if !group_of.contains_key(&d.id) || d.dt.is_nan() {
+                    if group_of.group(d.id).is_none() || d.dt.is_nan() {
                         return Err(
                             self.implausible(w, &format!("an element step of body {}", d.id))
                         );
                     }
                 }
                 for p in &rep.part_dts.pairs {
-                    let same = |k: Option<&usize>| k.is_some() && k == group_of.get(&p.b);
                     let sane = p.c.is_finite() && p.c > 0.0 && p.max.iter().all(|m| *m >= 0.0);
-                    if !same(group_of.get(&p.a)) || !sane {
+                    let ka = group_of.group(p.a);
+                    if ka.is_none() || ka != group_of.group(p.b) || !sane {
                         let what = format!("closing-speed figures of bodies {} and {}", p.a, p.b);
                         return Err(self.implausible(w, &what));
                     }
                 }
                 figures.merge(rep.part_dts);
                 for b in rep.bodies {
-                    if !group_of.contains_key(&b.id) {
+                    let Some(at) = group_of.place(b.id) else {
                         return Err(self.implausible(w, &format!("a share of body {}", b.id)));
-                    }
-                    let m = match merged.remove(&b.id) {
-                        Some(a) => merge_report(a, b),
-                        None => b,
                     };
-                    merged.insert(m.id, m);
+                    let m = &mut merged[at];
+                    *m = Some(m.map_or(b, |a| merge_report(a, b)));
                 }
                 if let Some(r) = reps.get_mut(w) {
                     r.compute_ns += rep.compute_ns;
@@ -187,9 +179,7 @@ impl<L: WorkerLink> Master<'_, L> {
                     // each holder's time for groups.csv; the cost model takes the
                     // first holder's, under the home's report
                     self.split_ns.push((w, g.first, g.nanos));
-                    let home = self
-                        .splits
-                        .get(group_of.get(&g.first).copied().unwrap_or(0));
+                    let home = self.splits.get(group_of.group(g.first).unwrap_or(0));
                     if let Some(r) = home.and_then(|s| reps.get_mut(s.home())) {
                         if r.groups.iter().all(|x| x.first != g.first) {
                             r.groups.push(g);
@@ -201,31 +191,110 @@ impl<L: WorkerLink> Master<'_, L> {
         // the closing-speed steps over all holders limit the merged stable steps (min:
         // the bits of one process's stage)
         for (id, limit) in figures.limits(self.contact.penalty) {
-            if let Some(b) = merged.get_mut(&id) {
+            if let Some(b) = group_of.place(id).and_then(|at| merged[at].as_mut()) {
                 b.stable_dt = b.stable_dt.min(limit);
             }
         }
         // the element steps in the groups' body order (the holders check it)
+        let mut dts: Vec<Option<PartDt>> = vec![None; group_of.len()];
+        for d in std::mem::take(&mut figures.dts) {
+            if let Some(at) = group_of.place(d.id) {
+                dts[at] = Some(d);
+            }
+        }
         let mut pending = SplitFigures {
-            dts: Vec::with_capacity(figures.dts.len()),
+            dts: Vec::with_capacity(dts.len()),
             pairs: std::mem::take(&mut figures.pairs),
         };
+        let mut at = 0;
         for s in &self.splits {
             let home = s.home();
             for id in &s.ids {
-                let Some(d) = figures.dts.iter().find(|d| d.id == *id).copied() else {
+                let Some(d) = dts[at] else {
                     return Err(self.implausible(home, &format!("no element step of body {id}")));
                 };
                 pending.dts.push(d);
-                if let (Some(mut b), Some(r)) = (merged.remove(id), reps.get_mut(home)) {
+                if let (Some(mut b), Some(r)) = (merged[at].take(), reps.get_mut(home)) {
                     // the shares' steps are limited alike by the element-form rule; the
                     // element that sets the element step is the minimum's over all holders
                     b.dt_element = d.element as usize;
                     r.bodies.push(b);
                 }
+                at += 1;
             }
         }
         self.split_contact = pending;
         Ok(())
+    }
+}
+
+/// The split groups' bodies by id: each one's group (its index in `Master::splits`)
+/// and its place in the groups' body order (group by group, each in its own order),
+/// looked up by binary search; built once per step, with no map to allocate.
+pub(super) struct SplitIndex {
+    /// (body id, group, place), sorted by id.
+    by_id: Vec<(u32, usize, usize)>,
+}
+
+impl SplitIndex {
+    pub(super) fn of<'s>(groups: impl Iterator<Item = &'s [u32]>) -> Self {
+        let mut by_id: Vec<(u32, usize, usize)> = Vec::new();
+        for (k, ids) in groups.enumerate() {
+            for &id in ids {
+                by_id.push((id, k, by_id.len()));
+            }
+        }
+        by_id.sort_unstable_by_key(|e| e.0);
+        Self { by_id }
+    }
+
+    /// How many split bodies.
+    pub(super) fn len(&self) -> usize {
+        self.by_id.len()
+    }
+
+    fn find(&self, id: u32) -> Option<&(u32, usize, usize)> {
+        self.by_id
+            .binary_search_by_key(&id, |e| e.0)
+            .ok()
+            .map(|i| &self.by_id[i])
+    }
+
+    /// The group of body `id` (None: in no split group).
+    pub(super) fn group(&self, id: u32) -> Option<usize> {
+        self.find(id).map(|e| e.1)
+    }
+
+    /// The place of body `id` in the groups' body order.
+    pub(super) fn place(&self, id: u32) -> Option<usize> {
+        self.find(id).map(|e| e.2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SplitIndex;
+
+    /// Places run group by group in each group's own body order, whatever the ids.
+    #[test]
+    fn split_index_places_bodies_in_the_groups_order() {
+        let groups: [&[u32]; 2] = [&[9, 2, 40], &[7, 1]];
+        let ix = SplitIndex::of(groups.iter().copied());
+        assert_eq!(ix.len(), 5);
+        let at: Vec<_> = [9, 2, 40, 7, 1]
+            .iter()
+            .map(|&id| (ix.group(id), ix.place(id)))
+            .collect();
+        assert_eq!(
+            at,
+            vec![
+                (Some(0), Some(0)),
+                (Some(0), Some(1)),
+                (Some(0), Some(2)),
+                (Some(1), Some(3)),
+                (Some(1), Some(4))
+            ]
+        );
+        assert_eq!((ix.group(3), ix.place(41)), (None, None));
     }
 }
