@@ -10,6 +10,7 @@ pub mod frame;
 pub mod frame_writer;
 pub mod history;
 pub mod matsum_read;
+pub mod part_frame;
 pub mod render;
 pub mod results;
 pub mod run;
@@ -30,6 +31,7 @@ pub use history::{
     read_contacts_csv, read_energy_csv, ContactHistory, ContactRow, EnergyHistory, EnergyRow,
     CONTACTS_CSV, ENERGY_CSV,
 };
+pub use part_frame::PartFrame;
 pub use render::{
     contact_sheet, energy_plot, loglog_plot, render_frame, Camera, Colouring, Image, LogSeries,
     RenderOptions, View,
