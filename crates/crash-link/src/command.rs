@@ -5,7 +5,7 @@ use crash_core::partition::{PartState, SplitFigures};
 use crash_core::{
     Body, BodyDef, BodyReport, BodyState, Clock, CoreError, Due, Fault, NodeProbe, Vec3,
 };
-use crash_io::FrameBody;
+use crash_io::{FrameBody, PartFrame};
 use std::sync::Arc;
 
 /// Run-wide parameters every group needs.
@@ -154,6 +154,10 @@ pub enum Command {
     /// Merge every split group back: its splitting worker holds it as a group again
     /// (after an `Assemble` at this clock), the others drop their parts.
     Unsplit,
+    /// The frame shares of these split bodies from the parts this worker computes (the
+    /// pending contact pass has run: `Contact`), instead of an assembly. Answered by
+    /// `PartFrames`.
+    PartFrames(Vec<u32>),
     Shutdown(String),
 }
 
@@ -292,6 +296,9 @@ pub enum Reply {
     States(Vec<(u32, BodyState)>),
     /// (body id, part, state) of the parts this worker computes (`Parts`).
     Parts(Vec<(u32, u32, BodyState)>),
+    /// The frame shares of the split bodies asked for, from the parts computed here (in
+    /// body, then part order).
+    PartFrames(Vec<PartFrame>),
     /// A physical fault in the group whose smallest body id is `group_first`, with this
     /// worker's share of the split groups' contact statistics from the pass the last
     /// step left pending (`StepReport::split_contacts`) when it ran to its end before

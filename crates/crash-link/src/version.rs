@@ -38,7 +38,9 @@ use thiserror::Error;
 /// v18: the holders of split groups exchange their part states directly (Hello's
 /// peer port, Welcome's peer key, SplitSpec's workers and peers, Step's direct,
 /// Report's halo, PeerHalo frames between workers).
-pub const PROTOCOL_VERSION: u32 = 18;
+/// v19: a split group's frame comes from its parts (PartFramesRequest -> PartFrames),
+/// with no assembly of whole bodies.
+pub const PROTOCOL_VERSION: u32 = 19;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

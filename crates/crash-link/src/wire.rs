@@ -16,6 +16,7 @@ use crash_proto::report::{
 };
 use crash_proto::{def_from_pb, def_to_pb, state_from_pb, state_to_pb, vec3_to_pb, ProtoError};
 
+mod frames;
 mod parts;
 
 use parts::{
@@ -323,6 +324,9 @@ pub fn command_to_pb(cmd: &Command, has_def: impl Fn(u32) -> bool) -> pb::Master
         Command::Parts => PbCommand::Parts(pb::PartsRequest {}),
         Command::Assemble(parts) => PbCommand::Assemble(part_bodies_to_pb(parts)),
         Command::Unsplit => PbCommand::Unsplit(pb::Unsplit {}),
+        Command::PartFrames(ids) => {
+            PbCommand::PartFrames(pb::PartFramesRequest { ids: ids.clone() })
+        }
     })
 }
 
@@ -432,6 +436,7 @@ pub fn command_from_pb(m: &pb::MasterMessage) -> Result<Command, ProtoError> {
             PbCommand::Parts(_) => Command::Parts,
             PbCommand::Assemble(p) => Command::Assemble(part_bodies_from_pb(p)?),
             PbCommand::Unsplit(_) => Command::Unsplit,
+            PbCommand::PartFrames(f) => Command::PartFrames(f.ids.clone()),
         },
     )
 }
@@ -503,6 +508,9 @@ pub fn reply_to_pb(r: &Reply) -> pb::WorkerMessage {
         Reply::Frame(bodies) => PbReply::Frame(pb::Frame {
             bodies: bodies.iter().map(frame_body_to_pb).collect(),
         }),
+        Reply::PartFrames(parts) => PbReply::PartFrames(pb::PartFrames {
+            parts: parts.iter().map(frames::part_frame_to_pb).collect(),
+        }),
         Reply::States(states) => PbReply::States(pb::States {
             states: states.iter().map(|(id, s)| state_to_pb(*id, s)).collect(),
         }),
@@ -550,6 +558,12 @@ pub fn reply_from_pb(msg: &pb::WorkerMessage) -> Result<Reply, ProtoError> {
             ),
             PbReply::Failure(f) => failure_from_pb(f)?,
             PbReply::Parts(p) => Reply::Parts(part_bodies_from_pb(p)?),
+            PbReply::PartFrames(f) => Reply::PartFrames(
+                f.parts
+                    .iter()
+                    .map(frames::part_frame_from_pb)
+                    .collect::<Result<_, _>>()?,
+            ),
             PbReply::Hello(_) => return Err(ProtoError::Invalid("a second Hello".into())),
         },
     )

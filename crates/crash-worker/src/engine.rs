@@ -170,6 +170,7 @@ impl Engine {
             Command::Parts => Ok(self.parts()),
             Command::Assemble(parts) => self.assemble(parts),
             Command::Unsplit => self.unsplit(),
+            Command::PartFrames(ids) => self.part_frames(&ids).map(Reply::PartFrames),
         };
         res.unwrap_or_else(|e| Reply::Error(e.to_string()))
     }

@@ -34,6 +34,7 @@ mod halo;
 mod held;
 mod newcomers;
 mod output;
+mod part_frames;
 mod placement;
 mod plausible;
 mod recover;
@@ -169,6 +170,10 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     hashed_step: Option<u64>,
     /// Groups split over workers (`split`).
     splits: Vec<split::SplitGroup>,
+    /// The frame of each body split so far as it was when split: what its frames take
+    /// from the definition (initial positions, connectivity), the rest overwritten by
+    /// its parts' shares (`part_frames`).
+    skeletons: std::collections::BTreeMap<u32, crash_io::FrameBody>,
     /// Every split body's element step over all its parts in the last step and every
     /// pair's closing-speed figures, for the contact pass it left pending (empty when
     /// none is): the next Step carries them.
@@ -286,6 +291,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             last_frame_step: None,
             hashed_step: None,
             splits: Vec::new(),
+            skeletons: Default::default(),
             split_contact: Default::default(),
             held: None,
             stats: RunStats::default(),

@@ -8,32 +8,53 @@ use super::{ns, Master, TIME_EPS};
 use crate::error::MasterError;
 use crate::sink::Sink;
 use crash_core::hash::StateHasher;
+use crash_io::FrameBody;
 use crash_link::{Command, LinkError, Reply, WorkerLink};
+use std::collections::BTreeMap;
 use std::time::Instant;
+
+/// A piece of a frame: consecutive bodies asked of one worker, or a split body from
+/// its parts' shares.
+pub(super) enum Piece {
+    Worker(usize, Vec<u32>),
+    Split(u32),
+}
 
 /// Most elements asked for in one frame request (a piece holds at least one body).
 pub const FRAME_PIECE: usize = 100_000;
 
 impl<L: WorkerLink> Master<'_, L> {
     /// Runs of consecutive body indices on one worker, each of at most `FRAME_PIECE`
-    /// elements (or one body).
-    pub(super) fn frame_pieces(&self) -> Vec<(usize, Vec<u32>)> {
-        let mut out: Vec<(usize, Vec<u32>, usize)> = Vec::new();
+    /// elements (or one body); the bodies of `apart` (split bodies whose frames come
+    /// from their parts) each a piece of their own, with no worker.
+    pub(super) fn frame_pieces(&self, apart: &BTreeMap<u32, FrameBody>) -> Vec<Piece> {
+        let mut out: Vec<(Option<usize>, Vec<u32>, usize)> = Vec::new();
         for (i, inf) in self.info.iter().enumerate() {
+            if apart.contains_key(&inf.id) {
+                out.push((None, vec![inf.id], 0));
+                continue;
+            }
             let w = self.worker_of[i].unwrap_or(0);
             match out.last_mut() {
-                Some((lw, ids, n)) if *lw == w && *n + inf.elements <= FRAME_PIECE => {
+                Some((Some(lw), ids, n)) if *lw == w && *n + inf.elements <= FRAME_PIECE => {
                     ids.push(inf.id);
                     *n += inf.elements;
                 }
-                _ => out.push((w, vec![inf.id], inf.elements)),
+                _ => out.push((Some(w), vec![inf.id], inf.elements)),
             }
         }
-        out.into_iter().map(|(w, ids, _)| (w, ids)).collect()
+        out.into_iter()
+            .map(|(w, ids, _)| match w {
+                Some(w) => Piece::Worker(w, ids),
+                None => Piece::Split(ids[0]),
+            })
+            .collect()
     }
 
     /// Stream the frame of every body now to the sink (None: only hash it); returns
-    /// its state hash when `hashed`.
+    /// its state hash when `hashed`. Split bodies come from their parts' shares when
+    /// they can (`frames_from_parts`; their pending contact pass has run), else from
+    /// their home after an assembly.
     fn stream_frame(
         &mut self,
         mut sink: Option<&mut dyn Sink>,
@@ -45,18 +66,39 @@ impl<L: WorkerLink> Master<'_, L> {
             sink.frame_begin(step, time).map_err(MasterError::sink)?;
         }
         let mut hash = StateHasher::default();
-        for (w, ids) in self.frame_pieces() {
-            let mut cmds = vec![Vec::new(); nw];
-            cmds[w].push(Command::Frame(ids.clone()));
-            let Some(Reply::Frame(bodies)) = self.exchange(cmds)?.swap_remove(w).pop() else {
-                return Err(self.bad_reply(w, "Frame"));
+        let mut split = if self.frames_from_parts() {
+            self.part_frames()?
+        } else {
+            BTreeMap::new()
+        };
+        for piece in self.frame_pieces(&split) {
+            let (w, bodies) = match piece {
+                Piece::Worker(w, ids) => {
+                    let mut cmds = vec![Vec::new(); nw];
+                    cmds[w].push(Command::Frame(ids.clone()));
+                    let Some(Reply::Frame(bodies)) = self.exchange(cmds)?.swap_remove(w).pop()
+                    else {
+                        return Err(self.bad_reply(w, "Frame"));
+                    };
+                    if !bodies.iter().map(|b| b.id).eq(ids.iter().copied()) {
+                        return Err(self.worker_error(
+                            w,
+                            LinkError::Protocol(
+                                "a frame piece holds other bodies than asked".into(),
+                            ),
+                        ));
+                    }
+                    (w, bodies)
+                }
+                Piece::Split(id) => {
+                    let home = self.splits.iter().find(|s| s.ids.contains(&id));
+                    let w = home.map_or(0, |s| s.home());
+                    let Some(b) = split.remove(&id) else {
+                        return Err(self.implausible(w, &format!("no frame of body {id}")));
+                    };
+                    (w, vec![b])
+                }
             };
-            if !bodies.iter().map(|b| b.id).eq(ids.iter().copied()) {
-                return Err(self.worker_error(
-                    w,
-                    LinkError::Protocol("a frame piece holds other bodies than asked".into()),
-                ));
-            }
             if let Err(what) = self.check_frame(&bodies) {
                 return Err(self.implausible(w, &what));
             }
@@ -143,8 +185,12 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let t = Instant::now();
         let _s = tracing::debug_span!("output").entered();
-        self.assemble_splits()?;
-        // the assembly ran the split groups' pending contact pass: its rows
+        if self.frames_from_parts() {
+            self.flush_split_contact()?;
+        } else {
+            self.assemble_splits()?;
+        }
+        // the split groups' pending contact pass has run: its rows
         self.release_rows(sink)?;
         // Only the frame the run ends on is hashed (the summary's final state hash): the
         // hash goes byte by byte over every node's x, v, w (FNV-1a, about 1 ms for the

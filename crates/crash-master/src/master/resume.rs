@@ -1,6 +1,7 @@
 //! The loop's state into a checkpoint, and a run continued from one on any set of
 //! workers (the clock travels with the loads and every step).
 
+use super::output::Piece;
 use super::Master;
 use crate::checkpoint::MasterCheckpoint;
 use crate::error::MasterError;
@@ -17,8 +18,11 @@ impl<L: WorkerLink> Master<'_, L> {
         let nw = self.links.len();
         // in the frame's pieces (bounded size: each reply stays under MAX_MESSAGE)
         let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
-        for (w, ids) in self.frame_pieces() {
-            cmds[w].push(Command::States(ids));
+        // (every body from its worker: the split groups were just assembled)
+        for piece in self.frame_pieces(&Default::default()) {
+            if let Piece::Worker(w, ids) = piece {
+                cmds[w].push(Command::States(ids));
+            }
         }
         let replies = self.exchange(cmds)?;
         let mut states = Vec::with_capacity(self.info.len());

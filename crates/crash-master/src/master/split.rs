@@ -297,6 +297,7 @@ impl<L: WorkerLink> Master<'_, L> {
             let Some(Reply::Unloaded(bodies)) = self.exchange(cmds)?.swap_remove(home).pop() else {
                 return Err(self.bad_reply(home, "Split"));
             };
+            self.keep_skeletons(&bodies);
             let mut plan = plan;
             plan.cells = plan.cells_of(&bodies);
             let mut cmds = vec![Vec::new(); nw];

@@ -16,6 +16,7 @@ use crate::error::EngineError;
 use crash_core::contact::PairStats;
 use crash_core::partition::{PartState, SharedGroup, SplitFigures};
 use crash_core::{Body, BodyState, Clock, Due};
+use crash_io::PartFrame;
 use crash_link::{BodyLoad, Reply, SplitSpec, StepReport};
 use std::time::Instant;
 
@@ -403,6 +404,27 @@ impl Engine {
                 .flat_map(|s| s.g.own_states())
                 .collect(),
         )
+    }
+
+    /// The frame shares of the split bodies `ids` from the parts computed here (body
+    /// by body in each group's order, parts in order): no whole body is assembled.
+    pub(super) fn part_frames(&self, ids: &[u32]) -> Result<Vec<PartFrame>, EngineError> {
+        self.check_no_contact_pending()?;
+        let mut out = Vec::new();
+        for s in &self.shared {
+            let split = &s.g.split;
+            for ((&id, body), mine) in s.g.ids.iter().zip(&split.splits).zip(&split.mine) {
+                if !ids.contains(&id) {
+                    continue;
+                }
+                for (p, _) in body.parts.iter().zip(mine).filter(|(_, &m)| m) {
+                    out.push(PartFrame::capture(
+                        id, &p.body, p.owned, &p.node, &p.element,
+                    ));
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// The other holders' parts of the groups split here: assemble the whole bodies.

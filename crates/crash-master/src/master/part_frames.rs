@@ -1,0 +1,105 @@
+//! A split group's frame from its parts (protocol v19): every holder sends the shares
+//! of the parts it computes (`crash_io::PartFrame`: owned nodes, elements held) and the
+//! master scatters them into each body's frame, taken from the body as it was split
+//! (`Master::skeletons`: what the definition gives, the rest overwritten). So a frame
+//! of a split group needs no assembly of whole bodies on their home (the parts' full
+//! states up to the master and down again, then the whole frame on one worker): every
+//! holder computes its share at once. The shares cover every node once and every
+//! element at least once (a cut element is held by two parts, with the same bits),
+//! which is checked, so no value of the split state can stand in a frame.
+
+use super::Master;
+use crate::error::MasterError;
+use crash_io::FrameBody;
+use crash_link::{BodyLoad, Command, Reply, WorkerLink};
+use std::collections::BTreeMap;
+
+impl<L: WorkerLink> Master<'_, L> {
+    /// Keep the frame of each body of a group being split (`bodies`, as the home
+    /// unloaded them): the skeleton of its frames while it is split.
+    pub(super) fn keep_skeletons(&mut self, bodies: &[BodyLoad]) {
+        for b in bodies {
+            if self.skeletons.contains_key(&b.id) {
+                continue;
+            }
+            if let Ok(body) = b.clone().into_body(None) {
+                self.skeletons.insert(b.id, FrameBody::capture(&body));
+            }
+        }
+    }
+
+    /// Whether the split groups' frames come from their parts: every split body has a
+    /// skeleton (a body split before a resume has none until it is split again).
+    pub(super) fn frames_from_parts(&self) -> bool {
+        !self.splits.is_empty()
+            && self
+                .splits
+                .iter()
+                .flat_map(|s| &s.ids)
+                .all(|id| self.skeletons.contains_key(id))
+    }
+
+    /// The frames of every split body from their parts' shares (the pending contact
+    /// passes have run), by body id.
+    pub(super) fn part_frames(&mut self) -> Result<BTreeMap<u32, FrameBody>, MasterError> {
+        let ids: Vec<u32> = self
+            .splits
+            .iter()
+            .flat_map(|s| s.ids.iter().copied())
+            .collect();
+        let nw = self.links.len();
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+        for s in &self.splits {
+            for &w in &s.workers {
+                if cmds[w].is_empty() {
+                    cmds[w].push(Command::PartFrames(ids.clone()));
+                }
+            }
+        }
+        // each body's frame, and which of its nodes and elements a share covered
+        let mut out: BTreeMap<u32, (FrameBody, Vec<bool>, Vec<bool>)> = BTreeMap::new();
+        for id in &ids {
+            if let Some(f) = self.skeletons.get(id) {
+                let (nn, ne) = (f.x.len(), f.von_mises_top.len());
+                out.insert(*id, (f.clone(), vec![false; nn], vec![false; ne]));
+            }
+        }
+        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+            for reply in r {
+                let Reply::PartFrames(shares) = reply else {
+                    return Err(self.bad_reply(w, "PartFrames"));
+                };
+                for p in shares {
+                    let Some((f, nodes, elements)) = out.get_mut(&p.id) else {
+                        return Err(self.implausible(w, &format!("a frame share of body {}", p.id)));
+                    };
+                    if let Err(e) = f.fill_part(&p) {
+                        return Err(self.implausible(w, &format!("body {}: {e}", p.id)));
+                    }
+                    for &k in &p.nodes {
+                        nodes[k as usize] = true;
+                    }
+                    for &e in &p.elements {
+                        elements[e as usize] = true;
+                    }
+                }
+            }
+        }
+        let mut frames = BTreeMap::new();
+        for (id, (f, nodes, elements)) in out {
+            if !(nodes.iter().all(|&c| c) && elements.iter().all(|&c| c)) {
+                let home = self
+                    .splits
+                    .iter()
+                    .find(|s| s.ids.contains(&id))
+                    .map_or(0, |s| s.home());
+                return Err(self.implausible(
+                    home,
+                    &format!("the frame shares of body {id} leave nodes or elements out"),
+                ));
+            }
+            frames.insert(id, f);
+        }
+        Ok(frames)
+    }
+}
