@@ -480,6 +480,32 @@ fn frames_and_states_round_trip_bit_exact() {
     assert_eq!(got, states);
 }
 
+/// A part's frame share (v19) and its request round-trip bit for bit; a share whose
+/// arrays do not match its node and element lists is refused.
+#[test]
+fn part_frame_shares_round_trip_bit_exact_and_inconsistent_ones_are_refused() {
+    let b = &evolved_bodies()[0];
+    let nodes: Vec<u32> = (0..b.state.x.len() as u32).collect();
+    let elements: Vec<u32> = (0..b.def.element_count() as u32).rev().collect();
+    let share = crash_io::PartFrame::capture(b.def.id, b, nodes.len(), &nodes, &elements);
+    let msg = reply_to_pb(&Reply::PartFrames(vec![share.clone()]));
+    let back = reply_from_pb(
+        &crash_proto::pb::WorkerMessage::decode(msg.encode_to_vec().as_slice()).unwrap(),
+    )
+    .unwrap();
+    let Reply::PartFrames(got) = back else {
+        panic!("not frame shares")
+    };
+    assert_eq!(got, vec![share]);
+    let cmd = command_to_pb(&Command::PartFrames(vec![3, 1]), |_| false);
+    assert!(matches!(command_from_pb(&cmd).unwrap(), Command::PartFrames(ids) if ids == [3, 1]));
+    let mut bad = msg;
+    if let Some(crash_proto::pb::worker_message::Reply::PartFrames(f)) = bad.reply.as_mut() {
+        f.parts[0].nodes.pop();
+    }
+    assert!(reply_from_pb(&bad).is_err());
+}
+
 #[test]
 fn regroup_with_inconsistent_sizes_is_refused() {
     let mut m = command_to_pb(&Command::regroup(vec![vec![0, 1], vec![2]]), |_| false);
