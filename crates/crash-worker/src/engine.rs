@@ -534,7 +534,7 @@ impl Engine {
 
     /// What an output frame shows of the bodies `ids` (all held), in that order.
     pub fn frame(&self, ids: &[u32]) -> Result<Vec<FrameBody>, EngineError> {
-        self.check_assembled()?;
+        self.check_assembled_of(Some(ids))?;
         let held: BTreeMap<u32, &Body> = self.held().into_iter().map(|b| (b.def.id, b)).collect();
         ids.iter()
             .map(|id| {
