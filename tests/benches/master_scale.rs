@@ -150,7 +150,8 @@ impl InstantWorker {
             | Command::Contact(_)
             | Command::Parts
             | Command::Assemble(_)
-            | Command::Unsplit => Reply::Error("no split groups in this bench".into()),
+            | Command::Unsplit
+            | Command::PartFrames(_) => Reply::Error("no split groups in this bench".into()),
         }
     }
 }

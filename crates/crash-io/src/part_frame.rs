@@ -114,6 +114,7 @@ impl FrameBody {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)] // a test panics on failure
 mod tests {
     use super::*;
     use crash_core::partition::{Partition, Split};
