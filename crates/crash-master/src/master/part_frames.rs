@@ -47,15 +47,7 @@ impl<L: WorkerLink> Master<'_, L> {
             .iter()
             .flat_map(|s| s.ids.iter().copied())
             .collect();
-        let nw = self.links.len();
-        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
-        for s in &self.splits {
-            for &w in &s.workers {
-                if cmds[w].is_empty() {
-                    cmds[w].push(Command::PartFrames(ids.clone()));
-                }
-            }
-        }
+        let cmds = self.to_holders(|| Command::PartFrames(ids.clone()));
         // each body's frame, and which of its nodes and elements a share covered
         let mut out: BTreeMap<u32, (FrameBody, Vec<bool>, Vec<bool>)> = BTreeMap::new();
         for id in &ids {

@@ -347,14 +347,7 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let dts = std::mem::take(&mut self.split_contact);
         let nw = self.links.len();
-        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
-        for s in &self.splits {
-            for &w in &s.workers {
-                if cmds[w].is_empty() {
-                    cmds[w].push(Command::Contact(dts.clone()));
-                }
-            }
-        }
+        let cmds = self.to_holders(|| Command::Contact(dts.clone()));
         let mut reps = vec![StepReport::default(); nw];
         for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
             for reply in r {
@@ -365,6 +358,20 @@ impl<L: WorkerLink> Master<'_, L> {
             }
         }
         self.take_split_stats(&mut reps)
+    }
+
+    /// One command for every worker holding parts of a split group (none for the
+    /// others).
+    pub(super) fn to_holders(&self, make: impl Fn() -> Command) -> Vec<Vec<Command>> {
+        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); self.links.len()];
+        for s in &self.splits {
+            for &w in &s.workers {
+                if cmds[w].is_empty() {
+                    cmds[w].push(make());
+                }
+            }
+        }
+        cmds
     }
 
     /// Whether worker `w` holds parts of a split group.
@@ -423,15 +430,7 @@ impl<L: WorkerLink> Master<'_, L> {
             return Ok(());
         }
         self.assemble_splits()?;
-        let nw = self.links.len();
-        let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
-        for s in &self.splits {
-            for &w in &s.workers {
-                if cmds[w].is_empty() {
-                    cmds[w].push(Command::Unsplit);
-                }
-            }
-        }
+        let cmds = self.to_holders(|| Command::Unsplit);
         self.expect_acks(cmds, "Unsplit")?;
         tracing::info!("step {}: split groups merged back", self.clock.step);
         self.splits.clear();
