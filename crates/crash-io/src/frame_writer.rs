@@ -85,6 +85,32 @@ impl std::fmt::Debug for BackgroundSeries {
     }
 }
 
+/// The writer thread's nice value: its work is off the step loop's path, so the step
+/// loop's threads (and on a cluster host the workers beside the master) take the CPU
+/// first. With two workers and the master on two cores, a frame every 50 steps cost the
+/// split showcase 2.81-2.88 s at nice 0 and 2.70 s at nice 10 (docs/performance.md,
+/// session 25); one process with a core to spare is unchanged. The queue is bounded:
+/// a writer that falls behind makes the step loop wait, and the log says so.
+pub const WRITER_NICE: i32 = 10;
+
+/// Lower the calling thread's priority to `WRITER_NICE`, or keep it where it is when it
+/// is lower already (a run started under `nice`); Linux, nothing elsewhere.
+#[cfg(target_os = "linux")]
+#[allow(unsafe_code)]
+fn lower_priority() {
+    // SAFETY: gettid takes no arguments and returns the calling thread's id;
+    // getpriority and setpriority with PRIO_PROCESS and a thread id read and set that
+    // thread's nice value only. A refusal leaves the thread as it was, harmless.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let now = libc::getpriority(libc::PRIO_PROCESS, tid);
+        libc::setpriority(libc::PRIO_PROCESS, tid, now.max(WRITER_NICE));
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn lower_priority() {}
+
 impl BackgroundSeries {
     /// Start the writer thread for `series`.
     pub fn start(series: SeriesWriter) -> Result<Self, IoError> {
@@ -99,7 +125,10 @@ impl BackgroundSeries {
         let s = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
             .name("crash-frames".into())
-            .spawn(move || write_loop(&s, series))
+            .spawn(move || {
+                lower_priority();
+                write_loop(&s, series)
+            })
             .map_err(|e| IoError::io(&dir, e))?;
         Ok(Self {
             shared,

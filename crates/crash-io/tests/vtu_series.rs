@@ -333,6 +333,41 @@ fn background_writer_writes_the_same_files_as_the_direct_writer() {
     );
 }
 
+/// The writer thread runs below the step loop's priority (nice `WRITER_NICE` or
+/// lower, read back from /proc for the thread named crash-frames).
+#[cfg(target_os = "linux")]
+#[test]
+fn the_frame_writer_runs_below_the_step_loops_priority() {
+    let dir = test_dir("bg_nice");
+    let bg = BackgroundSeries::start(SeriesWriter::create(&dir).expect("create")).expect("start");
+    let nice = |stat: &str| -> Option<i32> {
+        // the fields after the command's closing parenthesis; nice is field 19 of stat
+        let rest = &stat[stat.rfind(')')? + 2..];
+        rest.split_whitespace().nth(16)?.parse().ok()
+    };
+    let mut found = None;
+    for _ in 0..100 {
+        found = std::fs::read_dir("/proc/self/task")
+            .expect("/proc")
+            .filter_map(|e| e.ok())
+            .map(|e| e.path())
+            .find(|p| {
+                std::fs::read_to_string(p.join("comm")).is_ok_and(|c| c.trim() == "crash-frames")
+            })
+            .and_then(|p| std::fs::read_to_string(p.join("stat")).ok())
+            .and_then(|s| nice(&s));
+        if found.is_some_and(|n| n >= crash_io::frame_writer::WRITER_NICE) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(
+        found.is_some_and(|n| n >= crash_io::frame_writer::WRITER_NICE),
+        "writer thread's nice value: {found:?}"
+    );
+    drop(bg);
+}
+
 #[test]
 fn background_writer_error_names_the_file_and_keeps_the_frames_before() {
     let frame = frame_at(2);
