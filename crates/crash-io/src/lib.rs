@@ -31,7 +31,7 @@ pub use history::{
     read_contacts_csv, read_energy_csv, ContactHistory, ContactRow, EnergyHistory, EnergyRow,
     CONTACTS_CSV, ENERGY_CSV,
 };
-pub use part_frame::PartFrame;
+pub use part_frame::{FrameFromParts, PartFrame};
 pub use render::{
     contact_sheet, energy_plot, loglog_plot, render_frame, Camera, Colouring, Image, LogSeries,
     RenderOptions, View,

@@ -1,7 +1,7 @@
 //! A part's share of a split body's frame (`crash_core::partition`): what the part
 //! alone knows, its owned nodes and the elements it holds, by their indices in the
 //! whole body. The holders of a split group each send theirs and the master scatters
-//! them into the body's frame (`FrameBody::fill_part`), so a frame of a split group
+//! them into the body's frame (`FrameFromParts`), so a frame of a split group
 //! needs no assembly of whole bodies on one worker and is computed by every holder
 //! at once.
 //!
@@ -67,25 +67,44 @@ impl PartFrame {
     }
 }
 
-impl FrameBody {
-    /// Scatter a part's share into this frame of the whole body (its arrays sized for
-    /// the whole body): its owned nodes and its elements. Errors name what does not
-    /// fit (an index out of range, arrays that disagree with the indices).
-    pub fn fill_part(&mut self, p: &PartFrame) -> Result<(), String> {
-        if p.id != self.id {
+/// A split body's frame filled from its parts' shares: a frame of the whole body (its
+/// arrays sized for it, e.g. as it was when split) whose every node and element a share
+/// must cover before it is `finish`ed, so no stale value can stand in a frame.
+#[derive(Debug, Clone)]
+pub struct FrameFromParts {
+    frame: FrameBody,
+    nodes: Vec<bool>,
+    elements: Vec<bool>,
+}
+
+impl FrameFromParts {
+    /// Start from `frame`, a frame of the whole body (every array it will overwrite).
+    pub fn new(frame: FrameBody) -> Self {
+        let (nn, ne) = (frame.x.len(), frame.von_mises_top.len());
+        Self {
+            frame,
+            nodes: vec![false; nn],
+            elements: vec![false; ne],
+        }
+    }
+
+    /// Scatter a part's share in: its owned nodes and its elements. Errors name what
+    /// does not fit (another body, an index out of range, arrays that disagree with the
+    /// indices or a frame that is not whole).
+    pub fn fill(&mut self, p: &PartFrame) -> Result<(), String> {
+        let f = &mut self.frame;
+        if p.id != f.id {
             return Err(format!(
                 "a share of body {} in the frame of body {}",
-                p.id, self.id
+                p.id, f.id
             ));
         }
         if !p.consistent() {
             return Err("a part's arrays do not match its nodes and elements".into());
         }
-        let (nn, ne) = (self.x.len(), self.von_mises_top.len());
-        if [&self.v, &self.w, &self.f_contact]
-            .iter()
-            .any(|a| a.len() != nn)
-            || [self.von_mises_bottom.len(), self.n.len(), self.m.len()]
+        let (nn, ne) = (self.nodes.len(), self.elements.len());
+        if [&f.v, &f.w, &f.f_contact].iter().any(|a| a.len() != nn)
+            || [f.von_mises_bottom.len(), f.n.len(), f.m.len()]
                 .iter()
                 .any(|&l| l != ne)
         {
@@ -97,19 +116,33 @@ impl FrameBody {
         }
         for (k, &i) in p.nodes.iter().enumerate() {
             let i = i as usize;
-            self.x[i] = p.x[k];
-            self.v[i] = p.v[k];
-            self.w[i] = p.w[k];
-            self.f_contact[i] = p.f_contact[k];
+            f.x[i] = p.x[k];
+            f.v[i] = p.v[k];
+            f.w[i] = p.w[k];
+            f.f_contact[i] = p.f_contact[k];
+            self.nodes[i] = true;
         }
         for (k, &e) in p.elements.iter().enumerate() {
             let e = e as usize;
-            self.von_mises_top[e] = p.von_mises_top[k];
-            self.von_mises_bottom[e] = p.von_mises_bottom[k];
-            self.n[e] = p.n[k];
-            self.m[e] = p.m[k];
+            f.von_mises_top[e] = p.von_mises_top[k];
+            f.von_mises_bottom[e] = p.von_mises_bottom[k];
+            f.n[e] = p.n[k];
+            f.m[e] = p.m[k];
+            self.elements[e] = true;
         }
         Ok(())
+    }
+
+    /// The body's frame, once the shares covered every node and every element.
+    pub fn finish(self) -> Result<FrameBody, String> {
+        if self.nodes.iter().all(|&c| c) && self.elements.iter().all(|&c| c) {
+            Ok(self.frame)
+        } else {
+            Err(format!(
+                "the frame shares of body {} leave nodes or elements out",
+                self.frame.id
+            ))
+        }
     }
 }
 
@@ -162,7 +195,8 @@ mod tests {
                 e.m = [9.0; 3];
             }
             stale.state.f_contact.clear();
-            let mut f = FrameBody::capture(&stale);
+            let mut f = FrameFromParts::new(FrameBody::capture(&stale));
+            let mut short = f.clone();
             for p in &split.parts {
                 let mut pb = p.body.clone();
                 // what the part's pass left in its contact forces: the owned nodes'
@@ -172,22 +206,27 @@ mod tests {
                     .map(|&g| b.state.f_contact[g as usize])
                     .collect();
                 let share = PartFrame::capture(7, &pb, p.owned, &p.node, &p.element);
-                f.fill_part(&share).unwrap();
+                f.fill(&share).unwrap();
+                if p.node[0] != 0 {
+                    short.fill(&share).unwrap();
+                }
             }
-            assert_eq!(f, whole, "{kind:?}");
+            assert_eq!(f.finish().unwrap(), whole, "{kind:?}");
+            // without the part owning node 0 the frame is refused
+            assert!(short.finish().is_err(), "{kind:?}");
         }
     }
 
     #[test]
     fn a_share_out_of_range_is_refused() {
-        let mut f = FrameBody {
+        let mut f = FrameFromParts::new(FrameBody {
             id: 1,
             x: vec![Vec3::zeros(); 2],
             v: vec![Vec3::zeros(); 2],
             w: vec![Vec3::zeros(); 2],
             f_contact: vec![Vec3::zeros(); 2],
             ..FrameBody::default()
-        };
+        });
         let p = PartFrame {
             id: 1,
             nodes: vec![2],
@@ -197,12 +236,12 @@ mod tests {
             f_contact: vec![Vec3::zeros()],
             ..PartFrame::default()
         };
-        assert!(f.fill_part(&p).is_err());
+        assert!(f.fill(&p).is_err());
         let q = PartFrame {
             nodes: vec![1],
             ..p.clone()
         };
-        assert!(f.fill_part(&q).is_ok());
-        assert!(f.fill_part(&PartFrame { id: 2, ..q }).is_err());
+        assert!(f.fill(&q).is_ok());
+        assert!(f.fill(&PartFrame { id: 2, ..q }).is_err());
     }
 }

@@ -91,8 +91,7 @@ impl<L: WorkerLink> Master<'_, L> {
                     (w, bodies)
                 }
                 Piece::Split(id) => {
-                    let home = self.splits.iter().find(|s| s.ids.contains(&id));
-                    let w = home.map_or(0, |s| s.home());
+                    let w = self.split_home(id);
                     let Some(b) = split.remove(&id) else {
                         return Err(self.implausible(w, &format!("no frame of body {id}")));
                     };

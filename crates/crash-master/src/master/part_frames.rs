@@ -6,11 +6,11 @@
 //! states up to the master and down again, then the whole frame on one worker): every
 //! holder computes its share at once. The shares cover every node once and every
 //! element at least once (a cut element is held by two parts, with the same bits),
-//! which is checked, so no value of the split state can stand in a frame.
+//! which `FrameFromParts` checks, so no value of the kept frame can stand in a frame.
 
 use super::Master;
 use crate::error::MasterError;
-use crash_io::FrameBody;
+use crash_io::{FrameBody, FrameFromParts};
 use crash_link::{BodyLoad, Command, Reply, WorkerLink};
 use std::collections::BTreeMap;
 
@@ -48,49 +48,31 @@ impl<L: WorkerLink> Master<'_, L> {
             .flat_map(|s| s.ids.iter().copied())
             .collect();
         let cmds = self.to_holders(|| Command::PartFrames(ids.clone()));
-        // each body's frame, and which of its nodes and elements a share covered
-        let mut out: BTreeMap<u32, (FrameBody, Vec<bool>, Vec<bool>)> = BTreeMap::new();
-        for id in &ids {
-            if let Some(f) = self.skeletons.get(id) {
-                let (nn, ne) = (f.x.len(), f.von_mises_top.len());
-                out.insert(*id, (f.clone(), vec![false; nn], vec![false; ne]));
-            }
-        }
+        let mut out: BTreeMap<u32, FrameFromParts> = ids
+            .iter()
+            .filter_map(|id| Some((*id, FrameFromParts::new(self.skeletons.get(id)?.clone()))))
+            .collect();
         for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
             for reply in r {
                 let Reply::PartFrames(shares) = reply else {
                     return Err(self.bad_reply(w, "PartFrames"));
                 };
                 for p in shares {
-                    let Some((f, nodes, elements)) = out.get_mut(&p.id) else {
+                    let Some(f) = out.get_mut(&p.id) else {
                         return Err(self.implausible(w, &format!("a frame share of body {}", p.id)));
                     };
-                    if let Err(e) = f.fill_part(&p) {
+                    if let Err(e) = f.fill(&p) {
                         return Err(self.implausible(w, &format!("body {}: {e}", p.id)));
-                    }
-                    for &k in &p.nodes {
-                        nodes[k as usize] = true;
-                    }
-                    for &e in &p.elements {
-                        elements[e as usize] = true;
                     }
                 }
             }
         }
         let mut frames = BTreeMap::new();
-        for (id, (f, nodes, elements)) in out {
-            if !(nodes.iter().all(|&c| c) && elements.iter().all(|&c| c)) {
-                let home = self
-                    .splits
-                    .iter()
-                    .find(|s| s.ids.contains(&id))
-                    .map_or(0, |s| s.home());
-                return Err(self.implausible(
-                    home,
-                    &format!("the frame shares of body {id} leave nodes or elements out"),
-                ));
-            }
-            frames.insert(id, f);
+        for (id, f) in out {
+            match f.finish() {
+                Ok(f) => frames.insert(id, f),
+                Err(e) => return Err(self.implausible(self.split_home(id), &e)),
+            };
         }
         Ok(frames)
     }

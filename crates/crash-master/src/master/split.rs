@@ -374,6 +374,14 @@ impl<L: WorkerLink> Master<'_, L> {
         cmds
     }
 
+    /// The home worker of split body `id`'s group (0 when it is in none).
+    pub(super) fn split_home(&self, id: u32) -> usize {
+        self.splits
+            .iter()
+            .find(|s| s.ids.contains(&id))
+            .map_or(0, |s| s.home())
+    }
+
     /// Whether worker `w` holds parts of a split group.
     pub(super) fn holds_parts(&self, w: usize) -> bool {
         self.splits.iter().any(|s| s.workers.contains(&w))

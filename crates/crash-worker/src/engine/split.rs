@@ -140,9 +140,7 @@ impl Engine {
     /// bodies' frames do not wait for an assembly of split groups whose frames come
     /// from their parts.
     pub(super) fn check_assembled_of(&self, ids: Option<&[u32]>) -> Result<(), EngineError> {
-        let asked = |s: &&super::split::Shared| {
-            ids.is_none_or(|ids| s.g.ids.iter().any(|id| ids.contains(id)))
-        };
+        let asked = |s: &&Shared| ids.is_none_or(|ids| s.g.ids.iter().any(|id| ids.contains(id)));
         for s in self.shared.iter().filter(|s| s.home).filter(asked) {
             let now = match (s.assembled, self.at) {
                 (Some(a), Some(b)) => a.same_as(&b),
