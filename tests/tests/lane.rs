@@ -23,8 +23,9 @@ fn final_hash(dir: &Path) -> String {
     s.final_state_hash
 }
 
-/// A two-worker run with `extra` master options; its hash and the master's log.
-fn run(tag: &str, extra: &[&str], strangers: bool) -> (String, String) {
+/// A two-worker run with `extra` master options and `worker_extra` worker options; its
+/// hash and the master's log.
+fn run(tag: &str, extra: &[&str], worker_extra: &[&str], strangers: bool) -> (String, String) {
     let out = out_dir(tag);
     let mut args = vec!["--end-time", END_TIME, "--handshake-timeout", "1"];
     args.extend_from_slice(extra);
@@ -50,7 +51,7 @@ fn run(tag: &str, extra: &[&str], strangers: bool) -> (String, String) {
             );
         }
     }
-    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, worker_extra)).collect();
     assert!(m.wait(TIMEOUT).success(), "{}", m.log());
     for w in &mut w {
         assert!(w.wait(Duration::from_secs(30)).success(), "{}", w.log());
@@ -62,9 +63,9 @@ fn run(tag: &str, extra: &[&str], strangers: bool) -> (String, String) {
 
 #[test]
 fn a_run_on_the_step_lane_has_the_hash_of_the_grpc_run_and_strangers_on_its_port_are_refused() {
-    let (grpc, log) = run("lane-off", &["--no-step-lane"], false);
+    let (grpc, log) = run("lane-off", &["--no-step-lane"], &[], false);
     assert!(log.contains("step lane off"), "{log}");
-    let (lane, log) = run("lane-on", &[], true);
+    let (lane, log) = run("lane-on", &[], &[], true);
     assert_eq!(lane, grpc);
     assert!(
         !log.contains("did not open the step lane"),
@@ -77,4 +78,16 @@ fn a_run_on_the_step_lane_has_the_hash_of_the_grpc_run_and_strangers_on_its_port
     ] {
         assert!(log.contains(why), "refused ({why}): {log}");
     }
+}
+
+/// Workers that block at once for each command and halo (`--poll-us 0`) end with the
+/// hash of workers that poll first (the default): how a worker waits changes no bit.
+/// `--split always` so the halo wait between the workers is exercised too.
+#[test]
+fn workers_that_block_at_once_end_with_the_hash_of_polling_workers() {
+    let split = ["--split", "always"];
+    let (polling, _) = run("poll-on", &split, &[], false);
+    let (blocking, log) = run("poll-off", &split, &["--poll-us", "0"], false);
+    assert_eq!(blocking, polling);
+    assert!(log.contains("split over workers"), "the group was split: {log}");
 }

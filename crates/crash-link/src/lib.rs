@@ -14,6 +14,7 @@ pub mod command;
 pub mod lane;
 pub mod link;
 pub mod peer;
+pub mod poll;
 pub mod spin;
 pub mod text;
 pub mod version;

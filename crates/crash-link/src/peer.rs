@@ -125,6 +125,8 @@ pub struct Peers {
     /// The exchange in flight (`send` to `receive`) and when it gives up.
     slots: Vec<Slot>,
     deadline: Instant,
+    /// How long a wait for the peers' frames polls before it blocks (`crate::poll`).
+    poll: Duration,
     /// Accepted connections whose opening has not all come yet.
     openings: Vec<Opening>,
 }
@@ -156,6 +158,7 @@ impl Peers {
             timeout,
             slots: Vec::new(),
             deadline: Instant::now(),
+            poll: Duration::ZERO,
             openings: Vec::new(),
         })
     }
@@ -175,6 +178,12 @@ impl Peers {
     /// Whether the master offered the direct exchange.
     pub fn offered(&self) -> bool {
         self.me.is_some()
+    }
+
+    /// Poll this long for the peers' frames before blocking (`crate::poll`; zero: block
+    /// at once).
+    pub fn set_poll(&mut self, budget: Duration) {
+        self.poll = budget;
     }
 
     /// Close every connection (after a failure: whatever was in flight is dropped).
@@ -256,6 +265,7 @@ impl Peers {
             .me
             .clone()
             .ok_or_else(|| PeerError::Setup("the master offered no direct exchange".into()))?;
+        let poll_until = Instant::now() + self.poll;
         loop {
             // accept the lower-indexed peers' connections still missing
             let waiting = self.slots.iter().any(|s| !self.conns.contains_key(&s.w));
@@ -295,6 +305,11 @@ impl Peers {
                         revents: 0,
                     });
                 }
+            }
+            // a bounded busy wait first (crate::poll): the frames are usually close
+            if Instant::now() < poll_until {
+                std::thread::yield_now();
+                continue;
             }
             let left = self.deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {

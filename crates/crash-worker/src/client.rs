@@ -55,6 +55,9 @@ pub struct WorkerOptions {
     pub peer_host: String,
     /// How long to wait for the other holders' part states in a split step.
     pub peer_timeout: Duration,
+    /// How long a wait for the next command on the step lane, or for the other
+    /// holders' part states, polls before it blocks (crash-link `poll`).
+    pub poll: Duration,
 }
 
 impl WorkerOptions {
@@ -72,6 +75,7 @@ impl WorkerOptions {
             peer_port: Some(0),
             peer_host: String::new(),
             peer_timeout: crash_link::peer::DEFAULT_TIMEOUT,
+            poll: crash_link::poll::DEFAULT_BUDGET,
         }
     }
 }
@@ -117,6 +121,10 @@ pub fn run(opts: &WorkerOptions) -> Result<String, WorkerError> {
     // the port goes into the Hello; a worker that cannot listen has its states relayed
     let mut peers = opts.peer_port.and_then(|port| {
         Peers::bind(port, opts.peer_timeout)
+            .map(|mut p| {
+                p.set_poll(opts.poll);
+                p
+            })
             .inspect_err(|e| {
                 tracing::warn!(
                     "cannot listen for direct halo connections on port {port}: {e}; the master will relay this worker's part states"

@@ -9,6 +9,7 @@
 
 use crate::client::{WorkerError, WorkerOptions};
 use crash_link::lane::{self, FrameReader, TAKEN};
+use crash_link::poll::poll_for;
 use crash_link::MAX_MESSAGE_CAP;
 use crash_proto::pb;
 use std::io::{self, Read, Write};
@@ -25,6 +26,8 @@ pub(crate) struct WorkerLane {
     stream: TcpStream,
     reader: FrameReader,
     out: Vec<u8>,
+    /// How long a wait for the next command polls before it blocks (crash-link `poll`).
+    poll: Duration,
 }
 
 /// The lane's addresses: the host of the master's URL with the lane's port.
@@ -127,6 +130,7 @@ pub(crate) fn open(
         stream,
         reader: FrameReader::new(MAX_MESSAGE_CAP),
         out: Vec::new(),
+        poll: opts.poll,
     }))
 }
 
@@ -134,6 +138,9 @@ impl WorkerLane {
     /// The next command (blocking) and the time spent decoding it [ns]. Err: the
     /// master closed the lane or the frame is not a command.
     pub(crate) fn next(&mut self) -> Result<(pb::MasterMessage, u64), String> {
+        if let Some(got) = self.poll_next()? {
+            return Ok(got);
+        }
         loop {
             let t = Instant::now();
             match self.reader.next_message::<pb::MasterMessage>() {
@@ -148,6 +155,40 @@ impl WorkerLane {
                 Err(e) => return Err(format!("step lane: {e}")),
             }
         }
+    }
+
+    /// The next command if it comes within the poll budget (non-blocking reads,
+    /// crash-link `poll`); None: block for it.
+    fn poll_next(&mut self) -> Result<Option<(pb::MasterMessage, u64)>, String> {
+        if self.poll.is_zero() {
+            return Ok(None);
+        }
+        let err = |e: io::Error| format!("step lane: {e}");
+        self.stream.set_nonblocking(true).map_err(err)?;
+        let (reader, stream) = (&mut self.reader, &mut self.stream);
+        let got = poll_for(self.poll, || {
+            let t = Instant::now();
+            match reader.next_message::<pb::MasterMessage>() {
+                Ok(Some(m)) => return Ok(Some((m, t.elapsed().as_nanos() as u64))),
+                Ok(None) => {}
+                Err(e) => return Err(format!("step lane: {e}")),
+            }
+            match reader.fill(stream) {
+                Ok(0) => Err("the master closed the step lane".to_string()),
+                Ok(_) => Ok(None),
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
+                    ) =>
+                {
+                    Ok(None)
+                }
+                Err(e) => Err(format!("step lane: {e}")),
+            }
+        });
+        self.stream.set_nonblocking(false).map_err(err)?;
+        got
     }
 
     /// Send a reply (one write); the time spent encoding it [ns].

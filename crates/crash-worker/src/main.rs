@@ -62,6 +62,13 @@ struct Args {
     /// How long to wait for the other holders' part states in a split step [s].
     #[arg(long, default_value_t = 30.0, value_name = "SECS")]
     peer_timeout: f64,
+    /// Poll for the next command on the step lane, and for the other holders' part
+    /// states, this long [us] before blocking, giving the CPU away between tries. A
+    /// blocked process is woken through the kernel, which on virtual machines costs
+    /// tens of microseconds a wake-up; a polling one reads the message at once
+    /// (docs/architecture-cluster.md). 0: block at once.
+    #[arg(long, default_value_t = crash_link::poll::DEFAULT_BUDGET.as_micros() as u64, value_name = "US")]
+    poll_us: u64,
     /// Sleep this long before each step [ms] (tests of a slow but alive worker).
     #[arg(long, hide = true, default_value_t = 0)]
     step_delay_ms: u64,
@@ -151,6 +158,7 @@ fn main() -> ExitCode {
     opts.peer_port = (!args.no_peer).then_some(args.peer_port);
     opts.peer_host = args.peer_host.unwrap_or_default();
     opts.peer_timeout = Duration::from_secs_f64(args.peer_timeout.clamp(0.01, 3600.0));
+    opts.poll = Duration::from_micros(args.poll_us.min(1_000_000));
     match crash_worker::run(&opts) {
         Ok(reason) => {
             eprintln!("crash-worker: done ({reason})");
