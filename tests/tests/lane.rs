@@ -89,5 +89,8 @@ fn workers_that_block_at_once_end_with_the_hash_of_polling_workers() {
     let (polling, _) = run("poll-on", &split, &[], false);
     let (blocking, log) = run("poll-off", &split, &["--poll-us", "0"], false);
     assert_eq!(blocking, polling);
-    assert!(log.contains("split over workers"), "the group was split: {log}");
+    assert!(
+        log.contains("split over workers"),
+        "the group was split: {log}"
+    );
 }
