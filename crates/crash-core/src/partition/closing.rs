@@ -69,37 +69,22 @@ impl SplitFigures {
     /// lower element), each pair's maxima the larger; bodies and pairs not yet here
     /// are appended. Min and max: the same result in any order.
     pub fn merge(&mut self, o: SplitFigures) {
-        // positions by key, so a floor in a pair with every body on it costs no
-        // quadratic search
-        let mut at: BTreeMap<u32, usize> = self
-            .dts
-            .iter()
-            .enumerate()
-            .map(|(k, d)| (d.id, k))
-            .collect();
-        for d in o.dts {
-            match at.get(&d.id) {
-                Some(&k) => self.dts[k] = self.dts[k].min(d),
-                None => {
-                    at.insert(d.id, self.dts.len());
-                    self.dts.push(d);
-                }
-            }
+        let me = std::mem::take(self);
+        *self = SplitFigures::merge_all([me, o]);
+    }
+
+    /// Every holder's figures merged as `merge` one after the other would: each body
+    /// and pair once, in the order of first appearance. By sorting positions (no map
+    /// to build per call: the master merges every split step, on its critical path).
+    pub fn merge_all(all: impl IntoIterator<Item = SplitFigures>) -> SplitFigures {
+        let (mut dts, mut pairs) = (Vec::new(), Vec::new());
+        for f in all {
+            dts.extend(f.dts);
+            pairs.extend(f.pairs);
         }
-        let mut at: BTreeMap<(u32, u32), usize> = self
-            .pairs
-            .iter()
-            .enumerate()
-            .map(|(k, p)| ((p.a, p.b), k))
-            .collect();
-        for p in o.pairs {
-            match at.get(&(p.a, p.b)) {
-                Some(&k) => self.pairs[k] = self.pairs[k].merge(p),
-                None => {
-                    at.insert((p.a, p.b), self.pairs.len());
-                    self.pairs.push(p);
-                }
-            }
+        SplitFigures {
+            dts: fold_first_seen(dts, |d| d.id, PartDt::min),
+            pairs: fold_first_seen(pairs, |p| (p.a, p.b), PairSpeed::merge),
         }
     }
 
@@ -113,12 +98,15 @@ impl SplitFigures {
     /// steps `dts` (the soft penalty skips a pair without one, as the one-process
     /// stage does).
     pub fn limits(&self, penalty: PenaltyKind) -> Vec<(u32, f64)> {
-        // the first of each id, as a search in order would find
-        let mut dts: BTreeMap<u32, f64> = BTreeMap::new();
-        for d in &self.dts {
-            dts.entry(d.id).or_insert(d.dt);
-        }
-        let dt_of = |id: u32| dts.get(&id).copied().unwrap_or(f64::INFINITY);
+        // the first of each id, as a search in order would find (a stable sort keeps
+        // each id's entries in order)
+        let mut dts: Vec<(u32, f64)> = self.dts.iter().map(|d| (d.id, d.dt)).collect();
+        dts.sort_by_key(|d| d.0);
+        dts.dedup_by_key(|d| d.0);
+        let dt_of = |id: u32| {
+            dts.binary_search_by_key(&id, |d| d.0)
+                .map_or(f64::INFINITY, |k| dts[k].1)
+        };
         let mut out = Vec::new();
         for p in &self.pairs {
             if !has_reference(penalty, dt_of(p.a).min(dt_of(p.b))) {
@@ -131,6 +119,32 @@ impl SplitFigures {
         }
         out
     }
+}
+
+/// `items` with those of equal key folded by `f` into the first (in order), kept in
+/// the order of each key's first appearance.
+fn fold_first_seen<T: Copy, K: Ord>(
+    items: Vec<T>,
+    key: impl Fn(&T) -> K,
+    f: impl Fn(T, T) -> T,
+) -> Vec<T> {
+    let mut at: Vec<usize> = (0..items.len()).collect();
+    // stable: equal keys keep their order of appearance
+    at.sort_by_key(|&i| key(&items[i]));
+    let mut firsts: Vec<(usize, T)> = Vec::with_capacity(items.len());
+    let mut k = 0;
+    while k < at.len() {
+        let first = at[k];
+        let mut v = items[first];
+        k += 1;
+        while k < at.len() && key(&items[at[k]]) == key(&items[first]) {
+            v = f(v, items[at[k]]);
+            k += 1;
+        }
+        firsts.push((first, v));
+    }
+    firsts.sort_unstable_by_key(|e| e.0);
+    firsts.into_iter().map(|e| e.1).collect()
 }
 
 /// Each pair's closing-speed figures over the owned nodes of the parts computed here
@@ -255,19 +269,31 @@ mod tests {
             c: 1e-3,
             max: [m; 4],
         };
-        let mut m = SplitFigures {
-            dts: vec![d(5, 2.0, 9), d(3, 1.0, 4)],
-            pairs: vec![p(3, 5, 1.0)],
-        };
-        m.merge(SplitFigures {
-            dts: vec![d(7, 3.0, 1), d(3, 1.0, 2), d(5, 2.5, 0)],
-            pairs: vec![p(5, 7, 2.0), p(3, 5, 4.0)],
-        });
-        m.merge(SplitFigures {
-            dts: vec![d(7, 0.5, 8), d(7, 0.5, 6)],
-            pairs: vec![p(3, 5, 0.5), p(3, 7, 1.0)],
-        });
+        let holders = [
+            SplitFigures {
+                dts: vec![d(5, 2.0, 9), d(3, 1.0, 4)],
+                pairs: vec![p(3, 5, 1.0)],
+            },
+            SplitFigures {
+                dts: vec![d(7, 3.0, 1), d(3, 1.0, 2), d(5, 2.5, 0)],
+                pairs: vec![p(5, 7, 2.0), p(3, 5, 4.0)],
+            },
+            SplitFigures {
+                dts: vec![d(7, 0.5, 8), d(7, 0.5, 6)],
+                pairs: vec![p(3, 5, 0.5), p(3, 7, 1.0)],
+            },
+        ];
+        let mut m = holders[0].clone();
+        m.merge(holders[1].clone());
+        m.merge(holders[2].clone());
         assert_eq!(m.dts, vec![d(5, 2.0, 9), d(3, 1.0, 2), d(7, 0.5, 6)]);
         assert_eq!(m.pairs, vec![p(3, 5, 4.0), p(5, 7, 2.0), p(3, 7, 1.0)]);
+        // all at once: the same
+        assert_eq!(SplitFigures::merge_all(holders), m);
+        // the limits read each body's step once, whichever holder sent it first
+        let lim = m.limits(PenaltyKind::Soft);
+        let again = SplitFigures::merge_all([m.clone(), m.clone()]);
+        assert_eq!(again, m);
+        assert_eq!(again.limits(PenaltyKind::Soft), lim);
     }
 }

@@ -141,7 +141,7 @@ impl<L: WorkerLink> Master<'_, L> {
         group_of: &SplitIndex,
     ) -> Result<(), MasterError> {
         self.split_ns.clear();
-        let mut figures = SplitFigures::default();
+        let mut shares = Vec::with_capacity(replies.len());
         // each body's merged report at its place in the groups' body order
         let mut merged: Vec<Option<BodyReport>> = vec![None; group_of.len()];
         for (w, r) in replies.into_iter().enumerate() {
@@ -164,7 +164,7 @@ impl<L: WorkerLink> Master<'_, L> {
                         return Err(self.implausible(w, &what));
                     }
                 }
-                figures.merge(rep.part_dts);
+                shares.push(rep.part_dts);
                 for b in rep.bodies {
                     let Some(at) = group_of.place(b.id) else {
                         return Err(self.implausible(w, &format!("a share of body {}", b.id)));
@@ -188,6 +188,7 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
         }
+        let mut figures = SplitFigures::merge_all(shares);
         // the closing-speed steps over all holders limit the merged stable steps (min:
         // the bits of one process's stage)
         for (id, limit) in figures.limits(self.contact.penalty) {
