@@ -1,4 +1,4 @@
-//! The scaling benchmark (issue 16, point 6): one scene in eight modes, timed in one
+//! The scaling benchmark (issue 16, point 6): one scene in nine modes, timed in one
 //! sitting with the repetitions interleaved (mode A, B, C, D, then again), so machine
 //! load affects every mode alike:
 //!
@@ -14,7 +14,9 @@
 //!   two workers run one after the other: its worker compute column is what the split costs
 //!   free of any network or of processes sharing the cores,
 //! - `crash-master --split auto --no-direct-halo` + 2 workers: the split with the part
-//!   states relayed through the master (two exchanges per step).
+//!   states relayed through the master (two exchanges per step),
+//! - `crash-master --split auto` + 2 workers with `--poll-us 0`: workers that block at
+//!   once for each command and halo instead of polling first (their default).
 //!
 //! Prints, per mode, the median wall time of the run (summary.json `wall_time_s`: from
 //! the first command to the last frame), ns per element-cycle, the speed-up over
@@ -47,6 +49,8 @@ enum Mode {
         spin: bool,
         /// `--no-direct-halo`: the master relays the part states.
         relay: bool,
+        /// Workers with `--poll-us 0`: they block at once.
+        block: bool,
     },
 }
 
@@ -65,15 +69,17 @@ impl Mode {
                 split,
                 spin,
                 relay,
+                block,
             } => format!(
-                "master{}{} + {workers} worker(s) x 1 thread{}",
+                "master{}{} + {workers} worker(s) x 1 thread{}{}",
                 if split {
                     " --split auto"
                 } else {
                     " --split off"
                 },
                 if relay { " --no-direct-halo" } else { "" },
-                if spin { ", --idle-spin" } else { "" }
+                if spin { ", --idle-spin" } else { "" },
+                if block { ", --poll-us 0" } else { "" }
             ),
         }
     }
@@ -107,8 +113,10 @@ fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
             split,
             spin,
             relay,
+            block,
         } => {
             let spin_arg: &[&str] = if spin { &["--idle-spin"] } else { &[] };
+            let block_arg: &[&str] = if block { &["--poll-us", "0"] } else { &[] };
             let relay_arg: &[&str] = if relay { &["--no-direct-halo"] } else { &[] };
             let mut m = Command::new(master_bin())
                 .args([scene_s, "--listen", "127.0.0.1:0"])
@@ -134,6 +142,7 @@ fn run(mode: Mode, scene: &Path, end: &str, out: &Path) -> Summary {
                     Command::new(worker_bin())
                         .args(["--master", &format!("http://{addr}"), "--threads", "1"])
                         .args(spin_arg)
+                        .args(block_arg)
                         .env("RUST_LOG", "warn")
                         .env_remove("CRASH_SECRET")
                         .stderr(Stdio::null())
@@ -194,24 +203,28 @@ fn main() {
             split: false,
             spin: false,
             relay: false,
+            block: false,
         },
         Mode::Cluster {
             workers: 2,
             split: false,
             spin: false,
             relay: false,
+            block: false,
         },
         Mode::Cluster {
             workers: 2,
             split: true,
             spin: false,
             relay: false,
+            block: false,
         },
         Mode::Cluster {
             workers: 2,
             split: false,
             spin: true,
             relay: false,
+            block: false,
         },
         Mode::Local {
             threads: 1,
@@ -222,6 +235,14 @@ fn main() {
             split: true,
             spin: false,
             relay: true,
+            block: false,
+        },
+        Mode::Cluster {
+            workers: 2,
+            split: true,
+            spin: false,
+            relay: false,
+            block: true,
         },
     ];
     let modes: Vec<Mode> = match args.get(3) {
