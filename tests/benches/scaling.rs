@@ -189,6 +189,14 @@ fn main() {
     );
     let end = args.get(1).cloned().unwrap_or_else(|| "1e-3".into());
     let reps: usize = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(3);
+    // (workers, split, spin, relay, block) of a cluster mode
+    let cluster = |workers, split, spin, relay, block| Mode::Cluster {
+        workers,
+        split,
+        spin,
+        relay,
+        block,
+    };
     let modes = [
         Mode::Local {
             threads: 1,
@@ -198,52 +206,16 @@ fn main() {
             threads: 2,
             workers: 1,
         },
-        Mode::Cluster {
-            workers: 1,
-            split: false,
-            spin: false,
-            relay: false,
-            block: false,
-        },
-        Mode::Cluster {
-            workers: 2,
-            split: false,
-            spin: false,
-            relay: false,
-            block: false,
-        },
-        Mode::Cluster {
-            workers: 2,
-            split: true,
-            spin: false,
-            relay: false,
-            block: false,
-        },
-        Mode::Cluster {
-            workers: 2,
-            split: false,
-            spin: true,
-            relay: false,
-            block: false,
-        },
+        cluster(1, false, false, false, false),
+        cluster(2, false, false, false, false),
+        cluster(2, true, false, false, false),
+        cluster(2, false, true, false, false),
         Mode::Local {
             threads: 1,
             workers: 2,
         },
-        Mode::Cluster {
-            workers: 2,
-            split: true,
-            spin: false,
-            relay: true,
-            block: false,
-        },
-        Mode::Cluster {
-            workers: 2,
-            split: true,
-            spin: false,
-            relay: false,
-            block: true,
-        },
+        cluster(2, true, false, true, false),
+        cluster(2, true, false, false, true),
     ];
     let modes: Vec<Mode> = match args.get(3) {
         Some(pick) => pick
