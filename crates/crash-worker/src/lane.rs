@@ -30,6 +30,34 @@ pub(crate) struct WorkerLane {
     poll: Duration,
 }
 
+/// The command already read if there is one (and the time its decoding took [ns]),
+/// else one read from `stream` (blocking or not, as the stream is set): None when no
+/// whole command has come yet.
+fn read_once(
+    reader: &mut FrameReader,
+    stream: &mut TcpStream,
+) -> Result<Option<(pb::MasterMessage, u64)>, String> {
+    let t = Instant::now();
+    match reader.next_message::<pb::MasterMessage>() {
+        Ok(Some(m)) => return Ok(Some((m, t.elapsed().as_nanos() as u64))),
+        Ok(None) => {}
+        Err(e) => return Err(format!("step lane: {e}")),
+    }
+    match reader.fill(stream) {
+        Ok(0) => Err("the master closed the step lane".into()),
+        Ok(_) => Ok(None),
+        Err(e)
+            if matches!(
+                e.kind(),
+                io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
+            ) =>
+        {
+            Ok(None)
+        }
+        Err(e) => Err(format!("step lane: {e}")),
+    }
+}
+
 /// The lane's addresses: the host of the master's URL with the lane's port.
 fn addresses(url: &str, port: u16) -> io::Result<Vec<SocketAddr>> {
     let uri: tonic::transport::Uri = url
@@ -138,57 +166,22 @@ impl WorkerLane {
     /// The next command (blocking) and the time spent decoding it [ns]. Err: the
     /// master closed the lane or the frame is not a command.
     pub(crate) fn next(&mut self) -> Result<(pb::MasterMessage, u64), String> {
-        if let Some(got) = self.poll_next()? {
-            return Ok(got);
+        let (reader, stream) = (&mut self.reader, &mut self.stream);
+        // first a bounded poll with non-blocking reads (crash-link `poll`), then block
+        if !self.poll.is_zero() {
+            let err = |e: io::Error| format!("step lane: {e}");
+            stream.set_nonblocking(true).map_err(err)?;
+            let got = poll_for(self.poll, || read_once(reader, stream));
+            stream.set_nonblocking(false).map_err(err)?;
+            if let Some(got) = got? {
+                return Ok(got);
+            }
         }
         loop {
-            let t = Instant::now();
-            match self.reader.next_message::<pb::MasterMessage>() {
-                Ok(Some(m)) => return Ok((m, t.elapsed().as_nanos() as u64)),
-                Ok(None) => {}
-                Err(e) => return Err(format!("step lane: {e}")),
-            }
-            match self.reader.fill(&mut self.stream) {
-                Ok(0) => return Err("the master closed the step lane".into()),
-                Ok(_) => {}
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(format!("step lane: {e}")),
+            if let Some(got) = read_once(reader, stream)? {
+                return Ok(got);
             }
         }
-    }
-
-    /// The next command if it comes within the poll budget (non-blocking reads,
-    /// crash-link `poll`); None: block for it.
-    fn poll_next(&mut self) -> Result<Option<(pb::MasterMessage, u64)>, String> {
-        if self.poll.is_zero() {
-            return Ok(None);
-        }
-        let err = |e: io::Error| format!("step lane: {e}");
-        self.stream.set_nonblocking(true).map_err(err)?;
-        let (reader, stream) = (&mut self.reader, &mut self.stream);
-        let got = poll_for(self.poll, || {
-            let t = Instant::now();
-            match reader.next_message::<pb::MasterMessage>() {
-                Ok(Some(m)) => return Ok(Some((m, t.elapsed().as_nanos() as u64))),
-                Ok(None) => {}
-                Err(e) => return Err(format!("step lane: {e}")),
-            }
-            match reader.fill(stream) {
-                Ok(0) => Err("the master closed the step lane".to_string()),
-                Ok(_) => Ok(None),
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
-                    ) =>
-                {
-                    Ok(None)
-                }
-                Err(e) => Err(format!("step lane: {e}")),
-            }
-        });
-        self.stream.set_nonblocking(false).map_err(err)?;
-        got
     }
 
     /// Send a reply (one write); the time spent encoding it [ns].
