@@ -6,7 +6,7 @@ use crate::fixtures::test_scene;
 use crash_core::driver::Run;
 use crash_core::{EnergyTotals, Group};
 use crash_master::{MasterError, RecordSink, RunInput, RunOptions, RunStats, Sink};
-use crash_worker::LocalWorker;
+use crash_worker::InProcess;
 use std::path::Path;
 
 /// The run input of a scene file.
@@ -20,14 +20,21 @@ pub fn input(name: &str) -> RunInput {
     input_of(&test_scene(name))
 }
 
-/// The master loop over `workers` in-process workers (local mode, as `crash run`).
+/// The master loop over `workers` in-process workers (local mode, as `crash run`: all
+/// but the last on threads of their own).
 pub fn run_local(
     input: RunInput,
     workers: usize,
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
-    crash_master::run_with(input, &mut LocalWorker::many(workers), sink, opts)
+    crash_master::run_with(input, &mut in_process(workers), sink, opts)
+}
+
+/// `workers` in-process workers as `crash run` starts them (all but the last on
+/// threads of their own), one compute thread each.
+pub fn in_process(workers: usize) -> Vec<InProcess> {
+    InProcess::many(workers, 1).expect("in-process worker threads")
 }
 
 /// Exact bits of an energy row.
@@ -84,5 +91,5 @@ pub fn resume_local(
     sink: &mut dyn Sink,
     opts: &RunOptions,
 ) -> Result<RunStats, MasterError> {
-    crash_master::resume_with(input, state, &mut LocalWorker::many(workers), sink, opts)
+    crash_master::resume_with(input, state, &mut in_process(workers), sink, opts)
 }

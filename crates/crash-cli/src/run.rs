@@ -12,7 +12,7 @@ use crash_master::{
     read_restart_keyed, resume_with, run_with, FileSink, MasterCheckpoint, MasterError, RunInput,
     RunOptions, RunStats, Sink, SinkError, RESTART_FILE,
 };
-use crash_worker::LocalWorker;
+use crash_worker::InProcess;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -23,10 +23,13 @@ pub struct RunArgs {
     /// Run directory [default: out/<scene name>].
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// In-process workers (results are bit-identical for any number).
+    /// In-process workers, each on a thread of its own with its share of the groups
+    /// (and, with --split, of a large group's elements): a shared-memory domain
+    /// decomposition. Results are bit-identical for any number.
     #[arg(long, default_value_t = 1)]
     pub workers: usize,
-    /// Threads for the element and node loops [default: all cores].
+    /// Threads for the element and node loops, per worker [default: the cores shared out
+    /// among the workers].
     #[arg(long)]
     pub threads: Option<usize>,
     /// Replace the scene's end time [s].
@@ -47,7 +50,7 @@ pub struct RunArgs {
     pub checkpoint_every: Option<u64>,
     /// Split a group over several workers by elements (with --workers >= 2): off,
     /// auto (a group above its fair share of the work), always. Same bits either way.
-    #[arg(long, default_value = "off", value_name = "WHEN")]
+    #[arg(long, default_value = "auto", value_name = "WHEN")]
     pub split: crash_master::SplitMode,
     /// Continue the run from this restart file (same scene file; the run directory
     /// defaults to the file's directory and is continued: rows and frames after the
@@ -261,14 +264,21 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         .map(|b| (b.def.id, b.def.name.clone()))
         .collect();
     let input = RunInput::from_built(built);
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = args.threads {
-        pool = pool.num_threads(t.max(1));
-        if let Some(note) = crash_core::threads::oversubscription(t, crash_core::threads::cores()) {
+    // every in-process worker computes on a pool of its own (the last on this one)
+    let cores = crash_core::threads::cores();
+    let workers = args.workers.max(1);
+    let threads = crash_core::threads::per_worker(args.threads, workers, cores);
+    if args.threads.is_some() || workers > 1 {
+        if let Some(note) =
+            crash_core::threads::oversubscription_of_workers(workers, threads, cores)
+        {
             eprintln!("crash: note: {note}");
         }
     }
-    let pool = pool.build().context("cannot start the thread pool")?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("cannot start the thread pool")?;
     let files = match &restart {
         Some((_, r)) => FileSink::reopen(&out, &input.name, input.scene_hash, input.size(), r)
             .map_err(|e| anyhow::anyhow!("{e}"))
@@ -316,7 +326,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         args.workers.max(1),
         out.display()
     );
-    let mut workers = LocalWorker::many(args.workers);
+    let mut workers =
+        InProcess::many(workers, threads).context("cannot start the in-process workers")?;
     let result = pool.install(|| match restart {
         Some((_, r)) => resume_with(input, r.master, &mut workers, &mut sink, &opts),
         None => run_with(input, &mut workers, &mut sink, &opts),

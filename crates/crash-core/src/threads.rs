@@ -20,6 +20,31 @@ pub fn oversubscription(requested: usize, cores: usize) -> Option<String> {
     })
 }
 
+/// Compute threads per in-process worker: `requested`, else the cores shared out among
+/// the `workers` (at least one each).
+pub fn per_worker(requested: Option<usize>, workers: usize, cores: usize) -> usize {
+    requested.unwrap_or(cores / workers.max(1)).max(1)
+}
+
+/// `oversubscription` for `workers` in-process workers of `threads` threads each (they
+/// compute at once, so their threads add up).
+pub fn oversubscription_of_workers(workers: usize, threads: usize, cores: usize) -> Option<String> {
+    if workers <= 1 {
+        return oversubscription(threads, cores);
+    }
+    let total = workers * threads;
+    (total > cores).then(|| {
+        format!(
+            "{workers} workers x {threads} thread{} = {total} threads asked for, but this \
+             machine offers {cores} core{}: threads will share cores and the run will be \
+             slower, not faster (results are the same for any count); keep workers x \
+             threads at {cores} or fewer",
+            if threads == 1 { "" } else { "s" },
+            if cores == 1 { "" } else { "s" }
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -33,5 +58,21 @@ mod tests {
             note.contains("8 threads") && note.contains("2 cores") && note.contains("--threads 2")
         );
         assert!(oversubscription(2, 1).expect("2 on 1").contains("1 core:"));
+    }
+
+    #[test]
+    fn workers_share_the_cores_and_their_threads_add_up() {
+        assert_eq!(per_worker(None, 2, 2), 1);
+        assert_eq!(per_worker(None, 1, 8), 8);
+        assert_eq!(per_worker(None, 3, 2), 1);
+        assert_eq!(per_worker(Some(2), 4, 2), 2);
+        assert_eq!(oversubscription_of_workers(2, 1, 2), None);
+        let note = oversubscription_of_workers(2, 2, 2).expect("4 threads on 2 cores");
+        assert!(note.contains("2 workers x 2 threads = 4 threads"), "{note}");
+        assert_eq!(
+            oversubscription_of_workers(1, 4, 2),
+            oversubscription(4, 2),
+            "one worker: the plain note"
+        );
     }
 }

@@ -12,8 +12,10 @@ pub mod error;
 mod lane;
 pub mod local;
 pub mod probe;
+pub mod threaded;
 
 pub use client::{run, WorkerError, WorkerOptions};
 pub use engine::Engine;
 pub use error::EngineError;
 pub use local::LocalWorker;
+pub use threaded::{InProcess, ThreadedWorker};

@@ -1,0 +1,178 @@
+//! An in-process worker on its own thread: the master's `send` hands the command over
+//! and returns, so several in-process workers compute at once (a shared-memory domain
+//! decomposition: each worker's bodies or parts live in memory its own thread touches).
+//!
+//! Why: with rayon's threads sharing one group, every stage reads what the other
+//! thread wrote; on hosts that put the two vCPUs on different caches that traffic
+//! costs a third of the second thread's gain (docs/performance.md). Workers own their
+//! data and exchange only the halo.
+
+use crate::engine::Engine;
+use crash_link::poll::{poll_for, DEFAULT_BUDGET};
+use crash_link::{Command, LinkError, Reply, WorkerLink};
+use std::sync::mpsc::{channel, Receiver, Sender, TryRecvError};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+
+/// An in-process worker whose engine runs on a thread of its own with a rayon pool of
+/// `threads` threads.
+#[derive(Debug)]
+pub struct ThreadedWorker {
+    index: usize,
+    engine: Arc<Mutex<Engine>>,
+    commands: Sender<Command>,
+    replies: Receiver<Reply>,
+    pending: usize,
+    thread: Option<JoinHandle<()>>,
+}
+
+/// The next message of `rx`: polled for the default budget, then a blocking wait (the
+/// same reason as the workers' lane: a cross-vCPU wake-up costs tens of microseconds).
+fn next<T>(rx: &Receiver<T>) -> Option<T> {
+    let polled = poll_for(DEFAULT_BUDGET, || match rx.try_recv() {
+        Ok(v) => Ok(Some(v)),
+        Err(TryRecvError::Empty) => Ok(None),
+        Err(TryRecvError::Disconnected) => Err(()),
+    });
+    match polled {
+        Ok(Some(v)) => Some(v),
+        Ok(None) => rx.recv().ok(),
+        Err(()) => None,
+    }
+}
+
+impl ThreadedWorker {
+    /// Worker `index` on a new thread with a pool of `threads` compute threads.
+    pub fn spawn(index: usize, threads: usize) -> std::io::Result<Self> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.max(1))
+            .thread_name(move |i| format!("crash-worker-{index}.{i}"))
+            .build()
+            .map_err(std::io::Error::other)?;
+        let engine = Arc::new(Mutex::new(Engine::default()));
+        let (commands, cmd_rx) = channel::<Command>();
+        let (reply_tx, replies) = channel::<Reply>();
+        let shared = Arc::clone(&engine);
+        let thread = std::thread::Builder::new()
+            .name(format!("crash-worker-{index}"))
+            .spawn(move || {
+                // the whole loop on the pool's thread: no hand-over per command
+                pool.install(move || {
+                    while let Some(cmd) = next(&cmd_rx) {
+                        let last = matches!(cmd, Command::Shutdown(_));
+                        let reply = shared
+                            .lock()
+                            .unwrap_or_else(PoisonError::into_inner)
+                            .handle(cmd);
+                        if reply_tx.send(reply).is_err() || last {
+                            break;
+                        }
+                    }
+                });
+            })?;
+        Ok(Self {
+            index,
+            engine,
+            commands,
+            replies,
+            pending: 0,
+            thread: Some(thread),
+        })
+    }
+}
+
+impl Drop for ThreadedWorker {
+    fn drop(&mut self) {
+        // a closed channel ends the thread's loop
+        let (tx, _) = channel();
+        drop(std::mem::replace(&mut self.commands, tx));
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl WorkerLink for ThreadedWorker {
+    fn send(&mut self, cmd: Command) -> Result<(), LinkError> {
+        self.commands
+            .send(cmd)
+            .map_err(|_| LinkError::Lost(format!("in-process worker {} ended", self.index)))?;
+        self.pending += 1;
+        Ok(())
+    }
+
+    fn recv(&mut self) -> Result<Reply, LinkError> {
+        if self.pending == 0 {
+            return Err(LinkError::Protocol("no reply pending".into()));
+        }
+        let r = next(&self.replies)
+            .ok_or_else(|| LinkError::Lost(format!("in-process worker {} ended", self.index)))?;
+        self.pending -= 1;
+        Ok(r)
+    }
+
+    fn peer(&self) -> String {
+        format!("in-process worker {} (own thread)", self.index)
+    }
+
+    fn has_definition(&self, id: u32) -> bool {
+        self.engine
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .has_definition(id)
+    }
+}
+
+/// An in-process worker: inline (it computes inside `send`, on the master's thread and
+/// pool) or on a thread of its own.
+#[derive(Debug)]
+pub enum InProcess {
+    Inline(crate::LocalWorker),
+    Threaded(ThreadedWorker),
+}
+
+impl InProcess {
+    /// `n` workers (at least one): all but the last on threads of their own, with pools
+    /// of `threads` compute threads each; the last inline, so that it computes on the
+    /// master's thread (and pool) while the others do, and no thread waits idle for the
+    /// master. One worker is inline only.
+    pub fn many(n: usize, threads: usize) -> std::io::Result<Vec<Self>> {
+        let n = n.max(1);
+        (0..n)
+            .map(|i| {
+                Ok(if i + 1 < n {
+                    InProcess::Threaded(ThreadedWorker::spawn(i, threads)?)
+                } else {
+                    InProcess::Inline(crate::LocalWorker::new(i))
+                })
+            })
+            .collect()
+    }
+}
+
+impl WorkerLink for InProcess {
+    fn send(&mut self, cmd: Command) -> Result<(), LinkError> {
+        match self {
+            InProcess::Inline(w) => w.send(cmd),
+            InProcess::Threaded(w) => w.send(cmd),
+        }
+    }
+    fn recv(&mut self) -> Result<Reply, LinkError> {
+        match self {
+            InProcess::Inline(w) => w.recv(),
+            InProcess::Threaded(w) => w.recv(),
+        }
+    }
+    fn peer(&self) -> String {
+        match self {
+            InProcess::Inline(w) => w.peer(),
+            InProcess::Threaded(w) => w.peer(),
+        }
+    }
+    fn has_definition(&self, id: u32) -> bool {
+        match self {
+            InProcess::Inline(w) => w.has_definition(id),
+            InProcess::Threaded(w) => w.has_definition(id),
+        }
+    }
+}
