@@ -318,12 +318,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         );
     }
     eprintln!(
-        "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {} worker(s), {simd} element kernels, writing {}",
+        "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {workers} worker(s) x {threads} thread(s), {simd} element kernels, writing {}",
         input.name,
         input.briefs.len(),
         input.size().elements,
         input.config.end_time,
-        args.workers.max(1),
         out.display()
     );
     let mut workers =

@@ -176,3 +176,43 @@ impl WorkerLink for InProcess {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `send` hands the command over and returns; the reply comes from the worker's own
+    /// thread; after Shutdown the thread has ended and a further command says so.
+    #[test]
+    fn a_threaded_worker_answers_from_its_own_thread_and_ends_on_shutdown() {
+        let mut w = ThreadedWorker::spawn(0, 1).expect("spawn");
+        assert!(
+            matches!(w.recv(), Err(LinkError::Protocol(_))),
+            "nothing pending"
+        );
+        w.send(Command::Shutdown("done".into())).expect("send");
+        assert!(matches!(w.recv(), Ok(Reply::Ack)));
+        if let Some(t) = w.thread.take() {
+            t.join().expect("the worker thread ends after Shutdown");
+        }
+        assert!(matches!(
+            w.send(Command::Shutdown("again".into())),
+            Err(LinkError::Lost(_))
+        ));
+    }
+
+    /// Two workers and their last one inline: the first two are threaded.
+    #[test]
+    fn all_but_the_last_in_process_worker_run_on_threads_of_their_own() {
+        let ws = InProcess::many(3, 1).expect("spawn");
+        let kinds: Vec<bool> = ws
+            .iter()
+            .map(|w| matches!(w, InProcess::Threaded(_)))
+            .collect();
+        assert_eq!(kinds, [true, true, false]);
+        assert!(matches!(
+            InProcess::many(0, 1).expect("one").as_slice(),
+            [InProcess::Inline(_)]
+        ));
+    }
+}
