@@ -23,9 +23,9 @@ pub struct RunArgs {
     /// Run directory [default: out/<scene name>].
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// In-process workers, each on a thread of its own with its share of the groups
-    /// (and, with --split, of a large group's elements): a shared-memory domain
-    /// decomposition. Results are bit-identical for any number.
+    /// In-process workers, computing at once, each with its share of the groups (a
+    /// group larger than its share split by elements, see --split): a shared-memory
+    /// domain decomposition. Results are bit-identical for any number.
     #[arg(long, default_value_t = 1)]
     pub workers: usize,
     /// Threads for the element and node loops, per worker [default: the cores shared out
