@@ -10,9 +10,9 @@
 //!   the workers),
 //! - `crash-master` + 2 workers x 1 thread, all with `--idle-spin` (a SCHED_IDLE
 //!   spinner per process keeps vCPUs from halting between messages),
-//! - `crash run --workers 2 --split auto --threads 1`: the split in one process, whose
-//!   two workers run one after the other: its worker compute column is what the split costs
-//!   free of any network or of processes sharing the cores,
+//! - `crash run --workers 2 --split auto --threads 1`: the split in one process, its two
+//!   workers computing at once (since session 27; before, one after the other): the
+//!   cluster without its processes, codec and sockets,
 //! - `crash-master --split auto --no-direct-halo` + 2 workers: the split with the part
 //!   states relayed through the master (two exchanges per step),
 //! - `crash-master --split auto` + 2 workers with `--poll-us 0`: workers that block at

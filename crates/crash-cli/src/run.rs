@@ -268,12 +268,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let cores = crash_core::threads::cores();
     let workers = args.workers.max(1);
     let threads = crash_core::threads::per_worker(args.threads, workers, cores);
-    if args.threads.is_some() || workers > 1 {
-        if let Some(note) =
-            crash_core::threads::oversubscription_of_workers(workers, threads, cores)
-        {
-            eprintln!("crash: note: {note}");
-        }
+    if let Some(note) = crash_core::threads::oversubscription_of_workers(workers, threads, cores) {
+        eprintln!("crash: note: {note}");
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

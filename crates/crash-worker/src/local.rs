@@ -5,9 +5,9 @@ use crate::engine::Engine;
 use crash_link::{Command, LinkError, Reply, WorkerLink};
 use std::collections::VecDeque;
 
-/// An in-process worker: executes each command inside `send` (it uses the process's
-/// rayon pool, so running local workers one after the other costs nothing in
-/// parallelism) and queues the reply.
+/// An in-process worker: executes each command inside `send`, on the caller's thread
+/// and rayon pool, and queues the reply (crash run's last worker, computing while the
+/// threaded ones do, `threaded.rs`; the study's one worker, read between steps).
 #[derive(Debug, Default)]
 pub struct LocalWorker {
     engine: Engine,

@@ -153,30 +153,33 @@ impl InProcess {
     }
 }
 
+impl InProcess {
+    fn link(&self) -> &dyn WorkerLink {
+        match self {
+            InProcess::Inline(w) => w.as_ref(),
+            InProcess::Threaded(w) => w,
+        }
+    }
+    fn link_mut(&mut self) -> &mut dyn WorkerLink {
+        match self {
+            InProcess::Inline(w) => w.as_mut(),
+            InProcess::Threaded(w) => w,
+        }
+    }
+}
+
 impl WorkerLink for InProcess {
     fn send(&mut self, cmd: Command) -> Result<(), LinkError> {
-        match self {
-            InProcess::Inline(w) => w.send(cmd),
-            InProcess::Threaded(w) => w.send(cmd),
-        }
+        self.link_mut().send(cmd)
     }
     fn recv(&mut self) -> Result<Reply, LinkError> {
-        match self {
-            InProcess::Inline(w) => w.recv(),
-            InProcess::Threaded(w) => w.recv(),
-        }
+        self.link_mut().recv()
     }
     fn peer(&self) -> String {
-        match self {
-            InProcess::Inline(w) => w.peer(),
-            InProcess::Threaded(w) => w.peer(),
-        }
+        self.link().peer()
     }
     fn has_definition(&self, id: u32) -> bool {
-        match self {
-            InProcess::Inline(w) => w.has_definition(id),
-            InProcess::Threaded(w) => w.has_definition(id),
-        }
+        self.link().has_definition(id)
     }
 }
 
