@@ -356,3 +356,60 @@ fn split_groups_write_their_contact_rows_once_per_step_in_order_before_each_chec
     run_local(inp, 1, &mut one, &opts(SplitMode::Off)).unwrap();
     assert!(contact_rows(&sink.inner) == contact_rows(&one));
 }
+
+/// The worker answers a Split before it builds its own parts (they are built while the
+/// master relays the bodies): a build that then fails is not lost. Every later command
+/// is refused with its reason until a Reset (a rollback), which clears it.
+#[test]
+fn a_split_whose_own_parts_cannot_be_built_refuses_every_command_until_a_reset() {
+    use crash_core::Clock;
+    use crash_link::{BodyLoad, Command, Reply, SplitSpec};
+    let b = crash_scene::load(&crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
+        .unwrap()
+        .build()
+        .unwrap();
+    let mut e = crash_worker::Engine::new();
+    e.handle(Command::Setup(crash_link::Setup {
+        gravity: b.gravity,
+        contact: b.contact,
+        reactions: false,
+        probes: Default::default(),
+    }));
+    let load = |bodies: &[crash_core::Body]| Command::Load {
+        at: Clock::default(),
+        bodies: bodies.iter().cloned().map(BodyLoad::whole).collect(),
+    };
+    e.handle(load(&b.bodies));
+    let regroup = || Command::Regroup {
+        groups: vec![vec![0, 1]],
+        copies: Vec::new(),
+    };
+    e.handle(regroup());
+    e.handle(Command::Start);
+    // sphere 0 (320 triangles) cut into 400 parts: the columns fit, the cut cannot be made
+    let k = 400u32;
+    let spec = SplitSpec {
+        ids: vec![0, 1],
+        parts: vec![k, 1],
+        holder: vec![(0..k).map(|q| q % 2).collect(), vec![1]],
+        slot: 0,
+        workers: vec![0, 1],
+        peers: Vec::new(),
+    };
+    assert!(matches!(e.handle(Command::Split(spec)), Reply::Unloaded(ref v) if v.len() == 2));
+    e.settle();
+    for cmd in [
+        Command::Frame(vec![0]),
+        Command::States(vec![1]),
+        Command::Start,
+    ] {
+        match e.handle(cmd) {
+            Reply::Error(why) => assert!(why.contains("400 parts"), "{why}"),
+            other => panic!("not refused: {other:?}"),
+        }
+    }
+    assert!(matches!(e.handle(Command::Reset), Reply::Ack));
+    e.handle(load(&b.bodies));
+    e.handle(regroup());
+    assert!(matches!(e.handle(Command::Start), Reply::Report(_)));
+}

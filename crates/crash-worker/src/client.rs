@@ -479,6 +479,7 @@ fn serve(
         };
         let t0 = Instant::now();
         let decoded = command_from_pb(&msg);
+
         let decode_ns = wire_ns + t0.elapsed().as_nanos() as u64;
         let (mut reply, shutdown) = match decoded {
             Ok(cmd) => {
@@ -509,7 +510,11 @@ fn serve(
         last_encode_ns = t1.elapsed().as_nanos() as u64;
         if let Some(l) = lane.as_mut() {
             match l.send(&reply) {
-                Ok(ns) => last_encode_ns += ns,
+                Ok(ns) => {
+                    last_encode_ns += ns;
+                    // what the reply did not wait for (a split's own parts)
+                    pool.install(|| engine.settle());
+                }
                 // the master may close the lane right after a Shutdown
                 Err(_) if shutdown.is_some() => {}
                 Err(e) => {

@@ -60,6 +60,10 @@ pub struct Engine {
     /// This worker's side of the direct halo exchange with the other holders of its
     /// split groups (a worker process; None in process: the master relays).
     peers: Option<crash_link::peer::Peers>,
+    /// A group split here, its parts built after the reply (`settle`), and why their
+    /// build failed if it did (every command but Reset and Shutdown is refused then).
+    unbuilt: Option<split::Unbuilt>,
+    unbuildable: Option<String>,
 }
 
 impl Engine {
@@ -111,6 +115,12 @@ impl Engine {
 
     /// Carry out one command.
     pub fn handle(&mut self, cmd: Command) -> Reply {
+        self.settle();
+        if let Some(why) = &self.unbuildable {
+            if !matches!(cmd, Command::Reset | Command::Shutdown(_)) {
+                return Reply::Error(why.clone());
+            }
+        }
         let res = match cmd {
             Command::Setup(s) => {
                 for g in &mut self.groups {
@@ -160,6 +170,8 @@ impl Engine {
                 self.pending = None;
                 self.at = None;
                 self.broken = false;
+                self.unbuilt = None;
+                self.unbuildable = None;
                 Ok(Reply::Ack)
             }
             Command::Shutdown(_) => Ok(Reply::Ack),

@@ -62,13 +62,13 @@ impl ThreadedWorker {
                 pool.install(move || {
                     while let Some(cmd) = next(&cmd_rx) {
                         let last = matches!(cmd, Command::Shutdown(_));
-                        let reply = shared
-                            .lock()
-                            .unwrap_or_else(PoisonError::into_inner)
-                            .handle(cmd);
+                        let mut engine = shared.lock().unwrap_or_else(PoisonError::into_inner);
+                        let reply = engine.handle(cmd);
                         if reply_tx.send(reply).is_err() || last {
                             break;
                         }
+                        // what the reply did not wait for (a split's own parts)
+                        engine.settle();
                     }
                 });
             })?;

@@ -9,7 +9,7 @@ use crate::input::CostModel;
 use crate::stats::Migration;
 use crash_core::contact::BodyBox;
 use crash_core::{BodyReport, Vec3};
-use crash_link::{BodyLoad, Command, Reply, WorkerLink};
+use crash_link::{BodyLoad, Command, LinkError, Reply, WorkerLink};
 use std::collections::BTreeMap;
 
 impl<L: WorkerLink> Master<'_, L> {
@@ -192,48 +192,58 @@ impl<L: WorkerLink> Master<'_, L> {
 
     /// Hand the bodies to their workers one at a time (each built or taken, sent, and
     /// dropped before the next: the master never holds the model), then set every
-    /// worker's groups. `body(id)` gives the body to load.
+    /// worker's groups. `body(id)` gives the body to load. The commands go out one
+    /// after the other and the acks are read at the end: a worker decodes one body
+    /// while the master builds and encodes the next.
     pub(super) fn load_all(
         &mut self,
         placement: &[usize],
         mut body: impl FnMut(u32) -> Result<BodyLoad, MasterError>,
     ) -> Result<(), MasterError> {
         let nw = self.links.len();
+        let mut sent = Pipeline::new(nw);
         let setup = self.setup();
-        // (a dropped worker's commands are skipped by the exchange)
-        self.expect_acks(
-            (0..nw)
-                .map(|_| vec![Command::Setup(setup.clone())])
-                .collect(),
-            "Setup",
-        )?;
+        for w in 0..nw {
+            sent.send(self, w, Command::Setup(setup.clone()));
+        }
         let at = self.clock;
         let copies = self.copies_to_send(&self.layout, &[], placement);
+        let mut built = Ok(());
         for i in 0..self.info.len() {
             let id = self.info[i].id;
-            let load = body(id)?;
-            let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
+            let load = match body(id) {
+                Ok(l) => l,
+                Err(e) => {
+                    // the replies of what went out are still read: none is left on a link
+                    built = Err(e);
+                    break;
+                }
+            };
             // read-only copies for the other workers' groups that touch it
             for (w, need) in copies.iter().enumerate() {
                 if need.contains(&id) {
-                    cmds[w].push(Command::LoadCopies {
-                        at,
-                        bodies: vec![load.clone()],
-                    });
+                    let bodies = vec![load.clone()];
+                    sent.send(self, w, Command::LoadCopies { at, bodies });
                 }
             }
-            cmds[placement[i]].push(Command::Load {
-                at,
-                bodies: vec![load],
-            });
-            self.expect_acks(cmds, "Load")?;
+            let bodies = vec![load];
+            sent.send(self, placement[i], Command::Load { at, bodies });
         }
-        let cmds = self
-            .layout
-            .iter()
-            .map(|l| vec![Self::regroup_cmd(l)])
-            .collect();
-        self.expect_acks(cmds, "Regroup")
+        if built.is_ok() {
+            let regroups: Vec<Command> = self.layout.iter().map(|l| Self::regroup_cmd(l)).collect();
+            for (w, cmd) in regroups.into_iter().enumerate() {
+                sent.send(self, w, cmd);
+            }
+        }
+        let Pipeline { counts, failed } = sent;
+        let replies = self.settle(&counts, failed, |m, w| m.links[w].recv())?;
+        built?;
+        for (w, r) in replies.into_iter().enumerate() {
+            if r.iter().any(|x| !matches!(x, Reply::Ack)) {
+                return Err(self.bad_reply(w, "Setup, Load or Regroup"));
+            }
+        }
+        Ok(())
     }
 
     /// An exchange whose every reply must be Ack.
@@ -389,4 +399,31 @@ fn grown(mut b: BodyBox, extra: f64) -> BodyBox {
     b.lo -= e;
     b.hi += e;
     b
+}
+
+/// Commands sent without waiting for their replies (counted per worker; a worker's
+/// first failed send ends its sending), read by `settle` at the end.
+struct Pipeline {
+    counts: Vec<usize>,
+    failed: Vec<Option<LinkError>>,
+}
+
+impl Pipeline {
+    fn new(nw: usize) -> Self {
+        Self {
+            counts: vec![0; nw],
+            failed: vec![None; nw],
+        }
+    }
+
+    /// Send `cmd` to worker `w` unless it is dropped or a send to it failed.
+    fn send<L: WorkerLink>(&mut self, m: &mut Master<'_, L>, w: usize, cmd: Command) {
+        if !m.live[w] || self.failed[w].is_some() {
+            return;
+        }
+        match m.links[w].send(cmd) {
+            Ok(()) => self.counts[w] += 1,
+            Err(e) => self.failed[w] = Some(e),
+        }
+    }
 }

@@ -20,6 +20,15 @@ use crash_io::PartFrame;
 use crash_link::{BodyLoad, Reply, SplitSpec, StepReport};
 use std::time::Instant;
 
+/// A group split here whose parts are not built yet (`Engine::settle`).
+#[derive(Debug)]
+pub(crate) struct Unbuilt {
+    bodies: Vec<Body>,
+    parts: Vec<usize>,
+    mine: Vec<Vec<bool>>,
+    spec: SplitSpec,
+}
+
 /// One split group this worker holds parts of.
 #[derive(Debug)]
 pub(crate) struct Shared {
@@ -160,8 +169,11 @@ impl Engine {
         self.setup.as_ref().ok_or(EngineError::NoSetup)
     }
 
-    /// Split one of this worker's groups; its whole bodies for the other holders.
+    /// Split one of this worker's groups; its whole bodies for the other holders. Its
+    /// own parts are built after the reply (`settle`): while the master relays the
+    /// bodies and the other holders build theirs.
     pub(super) fn split(&mut self, spec: SplitSpec) -> Result<Reply, EngineError> {
+        self.settle();
         let (parts, mine) = mine(&spec)?;
         let at = self
             .groups
@@ -172,16 +184,40 @@ impl Engine {
             .ok_or_else(|| {
                 EngineError::Shared(format!("no group {:?} (without copies) here", spec.ids))
             })?;
-        let setup = self.setup_of()?;
-        let (contact, gravity) = (setup.contact, setup.gravity);
-        let bodies = self.groups[at].bodies.clone();
-        let g = SharedGroup::new(&bodies, &parts, mine, contact, gravity)?
-            .with_holders(spec.holder.clone());
-        self.groups.remove(at);
+        self.setup_of()?;
+        let bodies = self.groups.remove(at).bodies;
         let out = bodies.iter().cloned().map(BodyLoad::whole).collect();
-        self.shared
-            .push(Shared::new(g, true, bodies, self.at, spec));
+        self.unbuilt = Some(Unbuilt {
+            bodies,
+            parts,
+            mine,
+            spec,
+        });
         Ok(Reply::Unloaded(out))
+    }
+
+    /// Build the parts of a group split here whose reply has gone (a worker calls it
+    /// once the reply is on its way; every command calls it first). A build that
+    /// fails leaves the engine broken: the next command is refused with the reason.
+    pub fn settle(&mut self) {
+        let Some(u) = self.unbuilt.take() else {
+            return;
+        };
+        let built = self.setup_of().and_then(|s| {
+            Ok(
+                SharedGroup::new(&u.bodies, &u.parts, u.mine, s.contact, s.gravity)?
+                    .with_holders(u.spec.holder.clone()),
+            )
+        });
+        match built {
+            Ok(g) => self
+                .shared
+                .push(Shared::new(g, true, u.bodies, self.at, u.spec)),
+            Err(e) => {
+                self.broken = true;
+                self.unbuildable = Some(e.to_string());
+            }
+        }
     }
 
     /// Hold parts of a group another worker split.
