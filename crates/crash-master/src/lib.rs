@@ -85,6 +85,7 @@ fn drive<'a, L: WorkerLink>(
     let wall = Instant::now();
     // wall time before the checkpoint (the time lost after it is not counted)
     let wall_before = resume.as_ref().map_or(0.0, |c| c.stats.wall_s);
+    let fresh = resume.is_none();
     let mut s = match Session::start_with(input, resume, links, joiner, sink, opts) {
         Ok(s) => s,
         Err(e) => {
@@ -110,6 +111,9 @@ fn drive<'a, L: WorkerLink>(
     } else {
         Ok(())
     };
+    if result.is_ok() && fresh {
+        result = s.split();
+    }
     if result.is_ok() {
         result = loop {
             let r = to_the_end(&mut s, sink, &mut ck);

@@ -62,6 +62,12 @@ impl<'a, L: WorkerLink> Session<'a, L> {
         }
     }
 
+    /// Split the groups the rule picks (after the start; a run resumed from a
+    /// checkpoint splits at its first regroup).
+    pub fn split(&mut self) -> Result<(), MasterError> {
+        self.m.split_groups()
+    }
+
     pub fn finished(&self) -> bool {
         self.m.finished()
     }

@@ -122,6 +122,7 @@ impl LoopRun {
         let mut s =
             Session::start(input, None, &mut self.workers, &mut sink, &opts).map_err(case_error)?;
         let result = (|| {
+            s.split()?;
             while !s.finished() {
                 s.step(&mut sink)?;
                 let Some(engine) = s.link(0).map(|w| w.engine()) else {

@@ -279,7 +279,7 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     /// Split the groups the rule picks (after the start and after every regroup).
-    pub(super) fn split_groups(&mut self) -> Result<(), MasterError> {
+    pub(crate) fn split_groups(&mut self) -> Result<(), MasterError> {
         if self.opts.split == SplitMode::Off || !self.splits.is_empty() {
             return Ok(());
         }

@@ -25,7 +25,9 @@ impl<L: WorkerLink> Master<'_, L> {
 
     /// Bodies onto workers (each body's definition and state move to its worker, one
     /// body at a time: the master keeps none), forces of the initial configuration,
-    /// first dt.
+    /// first dt. The groups are split after (`Session::split`): the first rollback
+    /// point is taken before, as whole groups (the same bits, without the assembly a
+    /// split group's checkpoint needs).
     pub(crate) fn start(
         &mut self,
         bodies: BodySource,
@@ -65,8 +67,7 @@ impl<L: WorkerLink> Master<'_, L> {
         sink.contacts(0, 0.0, &self.meim.pairs())
             .map_err(MasterError::sink)?;
         self.write_results(sink, None)?;
-        self.output(sink, true)?;
-        self.split_groups()
+        self.output(sink, true)
     }
 
     /// The core's rule (`crash_core::driver::choose_dt`), shared by every loop.
