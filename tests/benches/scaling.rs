@@ -251,7 +251,7 @@ fn main() {
         s0.steps
     );
     println!(
-        "| mode | wall [s] | ns/element-cycle | speed-up vs the first | barrier median [us/step] | master codec / worker codec / wire+wake [us] | master work [us/step] | worker compute, summed, vs the first | final hash |"
+        "| mode | wall [s] | ns/element-cycle | speed-up vs the first | barrier median [us/step] | master codec / worker codec / master merge / wire+wake [us] | master work [us/step] | worker compute, summed, vs the first | final hash |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let base = median(runs[0].iter().map(|s| s.wall_time_s).collect());
@@ -276,12 +276,13 @@ fn main() {
             )
         };
         println!(
-            "| {} | {wall:.2} | {ns:.1} | {:.2}x | {:.0} | {:.1} / {:.1} / {:.1} | {:.1} | {:.2}x | {} |",
+            "| {} | {wall:.2} | {ns:.1} | {:.2}x | {:.0} | {:.1} / {:.1} / {:.1} / {:.1} | {:.1} | {:.2}x | {} |",
             mode.label(),
             base / wall,
             part("median"),
             part("master_codec"),
             part("worker_codec"),
+            part("master_merge"),
             part("wire_wake"),
             part("master_work"),
             work(r) / base_work,

@@ -234,7 +234,8 @@ pub struct Summary {
     /// Cost per element per step of each pipeline stage (and "total") [ns].
     pub ns_per_element_cycle: BTreeMap<String, f64>,
     /// The barrier per step [us]: "median", and the means of its parts
-    /// ("master_codec", "worker_codec", "wire_wake") and of the master's own work
+    /// ("master_codec", "worker_codec", "master_merge": the split groups' shares,
+    /// "wire_wake") and of the master's own work
     /// between steps ("master_work").
     #[serde(default)]
     pub barrier_us_per_step: BTreeMap<String, f64>,

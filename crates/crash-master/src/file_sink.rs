@@ -498,12 +498,13 @@ impl Sink for FileSink {
         s.ns_per_element_cycle
             .insert("total".into(), stats.wall_s * 1e9 / cycles);
         let b = &stats.barrier;
-        let [mc, wc, ww] = b.parts_us();
+        let [mc, wc, mg, ww] = b.parts_us();
         let steps = stats.steps.max(1) as f64;
         for (k, v) in [
             ("median", b.median_us()),
             ("master_codec", mc),
             ("worker_codec", wc),
+            ("master_merge", mg),
             ("wire_wake", ww),
             ("master_work", st.meim_ns as f64 / steps / 1e3),
         ] {

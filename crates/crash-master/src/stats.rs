@@ -22,12 +22,16 @@ pub struct StageTimes {
 /// The barrier of every step, in parts (issue 16: measured, then cut). Per step, the
 /// barrier is the step exchange's wall time less the slowest worker's compute; it splits
 /// into the master's encoding and decoding, the slowest worker's decoding and encoding
-/// (`StepReport::codec_ns`), and the rest: the wire and waking the processes.
+/// (`StepReport::codec_ns`), the master's merge of the split groups' shares (their
+/// contact statistics, reports and closing-speed figures), and the rest: the wire, the
+/// system calls and waking the processes.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct BarrierStats {
     pub steps: u64,
     pub master_codec_ns: u64,
     pub worker_codec_ns: u64,
+    #[serde(default)]
+    pub master_merge_ns: u64,
     pub wire_wake_ns: u64,
     /// Steps per barrier length in whole microseconds (the last bin: this many or more).
     pub histogram_us: Vec<u64>,
@@ -38,11 +42,12 @@ const BARRIER_BINS: usize = 5001;
 
 impl BarrierStats {
     /// One step's barrier (`total` = exchange wall time - slowest compute).
-    pub fn record(&mut self, total: u64, master_codec: u64, worker_codec: u64) {
+    pub fn record(&mut self, total: u64, master_codec: u64, worker_codec: u64, merge: u64) {
         self.steps += 1;
         self.master_codec_ns += master_codec;
         self.worker_codec_ns += worker_codec;
-        self.wire_wake_ns += total.saturating_sub(master_codec + worker_codec);
+        self.master_merge_ns += merge;
+        self.wire_wake_ns += total.saturating_sub(master_codec + worker_codec + merge);
         if self.histogram_us.len() != BARRIER_BINS {
             self.histogram_us.resize(BARRIER_BINS, 0);
         }
@@ -63,12 +68,14 @@ impl BarrierStats {
         f64::NAN
     }
 
-    /// Mean of each part per step [us]: master codec, worker codec, wire and wake-up.
-    pub fn parts_us(&self) -> [f64; 3] {
+    /// Mean of each part per step [us]: master codec, worker codec, master merge, wire
+    /// and wake-up.
+    pub fn parts_us(&self) -> [f64; 4] {
         let s = self.steps.max(1) as f64 * 1e3;
         [
             self.master_codec_ns as f64 / s,
             self.worker_codec_ns as f64 / s,
+            self.master_merge_ns as f64 / s,
             self.wire_wake_ns as f64 / s,
         ]
     }
@@ -135,21 +142,22 @@ mod tests {
     fn barrier_median_is_the_middle_step_and_parts_add_up_to_the_total() {
         let mut b = BarrierStats::default();
         // 5 steps: 10, 20, 30, 40 us and one of 9 ms (beyond the last bin)
-        for (total, m, w) in [
-            (10_000, 1_000, 2_000),
-            (20_000, 1_000, 2_000),
-            (30_500, 1_000, 2_000),
-            (40_000, 1_000, 2_000),
-            (9_000_000, 1_000, 2_000),
+        for (total, m, w, g) in [
+            (10_000, 1_000, 2_000, 500),
+            (20_000, 1_000, 2_000, 500),
+            (30_500, 1_000, 2_000, 500),
+            (40_000, 1_000, 2_000, 500),
+            (9_000_000, 1_000, 2_000, 500),
         ] {
-            b.record(total, m, w);
+            b.record(total, m, w, g);
         }
         assert_eq!(b.median_us(), 30.5);
-        let [mc, wc, ww] = b.parts_us();
+        let [mc, wc, mg, ww] = b.parts_us();
+        assert_eq!(mg, 0.5);
         let mean = (10_000 + 20_000 + 30_500 + 40_000 + 9_000_000) as f64 / 5.0 / 1e3;
         assert!(
-            (mc + wc + ww - mean).abs() < 1e-9,
-            "{mc} + {wc} + {ww} vs {mean}"
+            (mc + wc + mg + ww - mean).abs() < 1e-9,
+            "{mc} + {wc} + {mg} + {ww} vs {mean}"
         );
         assert!(BarrierStats::default().median_us().is_nan());
     }

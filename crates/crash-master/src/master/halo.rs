@@ -10,6 +10,7 @@ use crate::error::MasterError;
 use crash_core::partition::{merge_report, PartDt, PartState, SplitFigures};
 use crash_core::BodyReport;
 use crash_link::{escape_peer, Command, LinkError, Reply, StepReport, WorkerLink};
+use std::time::Instant;
 
 impl<L: WorkerLink> Master<'_, L> {
     /// The second half of a step for the split groups: the halo replies (from the
@@ -41,7 +42,10 @@ impl<L: WorkerLink> Master<'_, L> {
             self.stats.halo_relayed_steps += 1;
             self.relay(reps, &holds, &group_of)?
         };
-        self.merge_halos(reps, replies, &group_of)
+        let merging = Instant::now();
+        let merged = self.merge_halos(reps, replies, &group_of);
+        self.merge_ns += merging.elapsed().as_nanos() as u64;
+        merged
     }
 
     /// The halo replies of a step whose holders exchanged their part states directly

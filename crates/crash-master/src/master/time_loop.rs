@@ -126,7 +126,9 @@ impl<L: WorkerLink> Master<'_, L> {
                 "Step",
             )?;
             // the split groups' contact statistics of the pass this Step ran first
+            let merging = Instant::now();
             self.take_split_stats(&mut reps)?;
+            self.merge_ns = ns(merging);
             // split groups: one more exchange (split.rs)
             self.relay_split(&mut reps, direct)?;
             reps
@@ -153,7 +155,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let worker_codec = reps.iter().map(|r| r.codec_ns).max().unwrap_or(0);
         self.stats
             .barrier
-            .record(wall - slowest, master_codec, worker_codec);
+            .record(wall - slowest, master_codec, worker_codec, self.merge_ns);
         self.clock = self.clock.after(h);
 
         let t1 = Instant::now();
@@ -267,10 +269,10 @@ impl<L: WorkerLink> Master<'_, L> {
         self.output(sink, true)?;
         self.record_progress();
         let b = &self.stats.barrier;
-        let [mc, wc, ww] = b.parts_us();
+        let [mc, wc, mg, ww] = b.parts_us();
         let steps = self.stats.steps.max(1) as f64;
         tracing::info!(
-            "barrier per step: median {:.1} us (mean: master encode/decode {mc:.1}, worker decode/encode {wc:.1}, wire and wake-up {ww:.1}); master work {:.1} us",
+            "barrier per step: median {:.1} us (mean: master encode/decode {mc:.1}, worker decode/encode {wc:.1}, master merge {mg:.1}, wire and wake-up {ww:.1}); master work {:.1} us",
             b.median_us(),
             self.stats.stages.meim_ns as f64 / steps / 1e3
         );
