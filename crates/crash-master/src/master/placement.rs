@@ -209,8 +209,8 @@ impl<L: WorkerLink> Master<'_, L> {
         let at = self.clock;
         let copies = self.copies_to_send(&self.layout, &[], placement);
         let mut built = Ok(());
-        for i in 0..self.info.len() {
-            let id = self.info[i].id;
+        let ids: Vec<u32> = self.info.iter().map(|i| i.id).collect();
+        for (&id, &to) in ids.iter().zip(placement) {
             let load = match body(id) {
                 Ok(l) => l,
                 Err(e) => {
@@ -227,7 +227,7 @@ impl<L: WorkerLink> Master<'_, L> {
                 }
             }
             let bodies = vec![load];
-            sent.send(self, placement[i], Command::Load { at, bodies });
+            sent.send(self, to, Command::Load { at, bodies });
         }
         if built.is_ok() {
             let regroups: Vec<Command> = self.layout.iter().map(|l| Self::regroup_cmd(l)).collect();
