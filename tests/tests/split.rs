@@ -413,3 +413,70 @@ fn a_split_whose_own_parts_cannot_be_built_refuses_every_command_until_a_reset()
     e.handle(regroup());
     assert!(matches!(e.handle(Command::Start), Reply::Report(_)));
 }
+
+/// A split planned at the start (protocol v20): every holder was loaded with the group
+/// and started it, so `Share` carries no bodies and each holder splits the group it
+/// holds (slot 0 keeps answering for the bodies). A worker that does not hold that
+/// group, or holds it at another clock, refuses.
+#[test]
+fn a_share_without_bodies_splits_the_group_held_here_and_nowhere_else() {
+    use crash_core::Clock;
+    use crash_link::{BodyLoad, Command, Reply, SplitSpec};
+    let b = crash_scene::load(&crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
+        .unwrap()
+        .build()
+        .unwrap();
+    let started = |ids: Vec<u32>| {
+        let mut e = crash_worker::Engine::new();
+        e.handle(Command::Setup(crash_link::Setup {
+            gravity: b.gravity,
+            contact: b.contact,
+            reactions: false,
+            probes: Default::default(),
+        }));
+        let bodies = b.bodies.iter().filter(|x| ids.contains(&x.def.id));
+        e.handle(Command::Load {
+            at: Clock::default(),
+            bodies: bodies.cloned().map(BodyLoad::whole).collect(),
+        });
+        e.handle(Command::Regroup {
+            groups: vec![ids.clone()],
+            copies: Vec::new(),
+        });
+        assert!(matches!(e.handle(Command::Start), Reply::Report(_)));
+        e
+    };
+    let spec = |slot: u32| SplitSpec {
+        ids: vec![0, 1],
+        parts: vec![2, 1],
+        holder: vec![vec![0, 1], vec![1]],
+        slot,
+        workers: vec![0, 1],
+        peers: Vec::new(),
+    };
+    let share = |slot: u32, at: Clock| Command::Share {
+        at,
+        spec: spec(slot),
+        bodies: Vec::new(),
+    };
+    let at = Clock::default();
+    for slot in [0, 1] {
+        let mut e = started(vec![0, 1]);
+        assert!(
+            matches!(e.handle(share(slot, at)), Reply::Ack),
+            "slot {slot}"
+        );
+        // the home answers for the whole bodies, the other holder for none
+        assert_eq!(e.body_count(), if slot == 0 { 2 } else { 0 });
+    }
+    let mut elsewhere = started(vec![1]);
+    match elsewhere.handle(share(1, at)) {
+        Reply::Error(why) => assert!(why.contains("no group"), "{why}"),
+        other => panic!("not refused: {other:?}"),
+    }
+    let later = at.after(1e-7);
+    match started(vec![0, 1]).handle(share(1, later)) {
+        Reply::Error(_) => {}
+        other => panic!("a Share of another clock was taken: {other:?}"),
+    }
+}

@@ -40,7 +40,9 @@ use thiserror::Error;
 /// Report's halo, PeerHalo frames between workers).
 /// v19: a split group's frame comes from its parts (PartFramesRequest -> PartFrames),
 /// with no assembly of whole bodies.
-pub const PROTOCOL_VERSION: u32 = 19;
+/// v20: a Share without bodies splits the group the worker holds (a split planned at
+/// the start: every holder is loaded with the group and starts it; slot 0 is the home).
+pub const PROTOCOL_VERSION: u32 = 20;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

@@ -144,6 +144,9 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     /// Compute time of each holder's parts of a split group in the last step: (worker,
     /// the split's first id, ns). Every holder reports under the same first id.
     split_ns: Vec<(usize, u32, u64)>,
+    /// Splits planned at the start, made after the first rollback point
+    /// (`split::plan_at_start`).
+    planned: Vec<split::SplitGroup>,
     /// The master's merge of the split groups' shares in this step's exchange [ns]
     /// (a part of the barrier: `BarrierStats::master_merge_ns`).
     merge_ns: u64,
@@ -277,6 +280,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             group_ns: Default::default(),
             split_ns: Vec::new(),
             merge_ns: 0,
+            planned: Vec::new(),
             groups_step: None,
             search: PairSearch::new(c.margin, skin),
             info,

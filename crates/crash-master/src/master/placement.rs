@@ -194,10 +194,12 @@ impl<L: WorkerLink> Master<'_, L> {
     /// dropped before the next: the master never holds the model), then set every
     /// worker's groups. `body(id)` gives the body to load. The commands go out one
     /// after the other and the acks are read at the end: a worker decodes one body
-    /// while the master builds and encodes the next.
+    /// while the master builds and encodes the next. `shadows[w]`: groups worker w is
+    /// loaded with too, beside its own (a split planned at the start: `plan_at_start`).
     pub(super) fn load_all(
         &mut self,
         placement: &[usize],
+        shadows: &[Vec<Vec<u32>>],
         mut body: impl FnMut(u32) -> Result<BodyLoad, MasterError>,
     ) -> Result<(), MasterError> {
         let nw = self.links.len();
@@ -226,11 +228,30 @@ impl<L: WorkerLink> Master<'_, L> {
                     sent.send(self, w, Command::LoadCopies { at, bodies });
                 }
             }
+            if self.planned_body(id) {
+                self.keep_planned(&load);
+                for (w, groups) in shadows.iter().enumerate() {
+                    if groups.iter().any(|g| g.contains(&id)) {
+                        let bodies = vec![load.clone()];
+                        sent.send(self, w, Command::Load { at, bodies });
+                    }
+                }
+            }
             let bodies = vec![load];
             sent.send(self, to, Command::Load { at, bodies });
         }
         if built.is_ok() {
-            let regroups: Vec<Command> = self.layout.iter().map(|l| Self::regroup_cmd(l)).collect();
+            let regroups: Vec<Command> = self
+                .layout
+                .iter()
+                .enumerate()
+                .map(|(w, l)| {
+                    let mut l = l.clone();
+                    let extra = shadows.get(w).into_iter().flatten();
+                    l.extend(extra.map(|g| (g.clone(), Vec::new())));
+                    Self::regroup_cmd(&l)
+                })
+                .collect();
             for (w, cmd) in regroups.into_iter().enumerate() {
                 sent.send(self, w, cmd);
             }

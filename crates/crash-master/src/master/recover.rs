@@ -63,6 +63,8 @@ impl<L: WorkerLink> Master<'_, L> {
         self.expect_acks((0..nw).map(|_| vec![Command::Reset]).collect(), "Reset")?;
         // a Reset forgets the split groups too; the rule splits again at the next regroup
         self.splits.clear();
+        // a split planned at the start and not made yet: the workers forgot its groups
+        self.planned.clear();
         self.split_contact = Default::default();
         self.held = None;
         self.restore_loop(ck);
@@ -77,7 +79,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let mut source = self.source.take();
         let mut states = ck.states.iter();
         let mut index = 0;
-        let loaded = self.load_all(&placement, |id| {
+        let loaded = self.load_all(&placement, &[], |id| {
             let state = states
                 .next()
                 .filter(|(sid, _)| *sid == id)

@@ -20,7 +20,7 @@
 use super::Master;
 use crate::error::MasterError;
 use crate::input::SplitMode;
-use crash_core::contact::ContactPass;
+use crash_core::contact::{BodyBox, ContactPass};
 use crash_core::partition::{longest_axis, partition_body};
 use crash_core::Vec3;
 use crash_io::PartCells;
@@ -169,8 +169,16 @@ impl<L: WorkerLink> Master<'_, L> {
     }
 
     /// The split of the group `ids` over the live workers (home first), or None when
-    /// the rule leaves it whole.
-    fn plan(&self, ids: &[u32], copies: &[u32], total: f64, live: &[usize]) -> Option<SplitGroup> {
+    /// the rule leaves it whole. `boxes` gives a body's node box by id (the last
+    /// reports', or at the start the briefs').
+    fn plan(
+        &self,
+        ids: &[u32],
+        copies: &[u32],
+        total: f64,
+        live: &[usize],
+        boxes: &dyn Fn(u32) -> Option<(Vec3, Vec3)>,
+    ) -> Option<SplitGroup> {
         let k = live.len();
         // the segment contact pass does not run on parts (partition::contact)
         let segments = self.contact.enabled && self.contact.pass == ContactPass::Segments;
@@ -235,7 +243,7 @@ impl<L: WorkerLink> Master<'_, L> {
         // the regions of the largest cut body's parts (its box cut as the parts are),
         // for placing the whole bodies near the part they lie on
         let regions = (parts[largest] > 1)
-            .then(|| self.box_of_id(ids[largest]))
+            .then(|| boxes(ids[largest]))
             .flatten()
             .map(|(lo, hi)| regions(lo, hi, k));
         for (b, &i) in idx.iter().enumerate() {
@@ -247,7 +255,7 @@ impl<L: WorkerLink> Master<'_, L> {
             let fits = |s: usize| load[s] + c <= share * (1.0 + CUT_TOLERANCE);
             let near = regions
                 .as_ref()
-                .zip(self.box_of_id(ids[b]))
+                .zip(boxes(ids[b]))
                 .map(|(r, (lo, hi))| nearest(r, &(0.5 * (lo + hi))))
                 .filter(|&s| fits(s));
             let s = near.unwrap_or(least);
@@ -278,8 +286,66 @@ impl<L: WorkerLink> Master<'_, L> {
         })
     }
 
+    /// The splits the rule picks at the start, planned before the bodies are loaded
+    /// (from the briefs' boxes): every holder is loaded with the group and starts it,
+    /// so the split needs no bodies relayed (`split_groups`). Per worker, the groups it
+    /// holds beside its own until then.
+    pub(super) fn plan_at_start(&mut self, boxes: &[BodyBox]) -> Vec<Vec<Vec<u32>>> {
+        let nw = self.links.len();
+        let mut shadows = vec![Vec::new(); nw];
+        if self.opts.split == SplitMode::Off {
+            return shadows;
+        }
+        let live: Vec<usize> = (0..nw).filter(|&w| self.live[w]).collect();
+        let total: f64 = self.cost.iter().sum();
+        let brief = |id: u32| boxes.iter().find(|b| b.id == id).map(|b| (b.lo, b.hi));
+        for k in 0..self.meim.group_count() {
+            let (ids, copies) = (self.meim.group(k), self.meim.copies(k));
+            if let Some(plan) = self.plan(ids, copies, total, &live, &brief) {
+                for &w in plan.workers.iter().skip(1) {
+                    shadows[w].push(plan.ids.clone());
+                }
+                self.planned.push(plan);
+            }
+        }
+        shadows
+    }
+
+    /// Whether body `id` belongs to a split planned at the start.
+    pub(super) fn planned_body(&self, id: u32) -> bool {
+        self.planned.iter().any(|p| p.ids.contains(&id))
+    }
+
+    /// What the master keeps of a body of a planned split as it goes to its holders:
+    /// its skeleton (frames from the parts) and the part of each element.
+    pub(super) fn keep_planned(&mut self, load: &BodyLoad) {
+        if let Some(p) = self.planned.iter_mut().find(|p| p.ids.contains(&load.id)) {
+            let cells = p.cells_of(std::slice::from_ref(load));
+            p.cells.extend(cells);
+            self.keep_skeletons(std::slice::from_ref(load));
+        }
+    }
+
+    /// The Start reports without the groups a worker holds only until the planned
+    /// split (their home reports them, with the same bits).
+    pub(super) fn drop_shadows(&self, reps: &mut [StepReport]) {
+        for p in &self.planned {
+            let shadow = |id: u32| p.ids.contains(&id);
+            for &w in p.workers.iter().skip(1) {
+                let Some(r) = reps.get_mut(w) else { continue };
+                r.bodies.retain(|b| !shadow(b.id));
+                r.groups.retain(|g| !shadow(g.first));
+                r.contacts.retain(|c| !shadow(c.a) && !shadow(c.b));
+                r.probes.retain(|n| !shadow(n.body));
+            }
+        }
+    }
+
     /// Split the groups the rule picks (after the start and after every regroup).
     pub(crate) fn split_groups(&mut self) -> Result<(), MasterError> {
+        if !self.planned.is_empty() {
+            return self.split_planned();
+        }
         if self.opts.split == SplitMode::Off || !self.splits.is_empty() {
             return Ok(());
         }
@@ -288,7 +354,8 @@ impl<L: WorkerLink> Master<'_, L> {
         let nw = self.links.len();
         for k in 0..self.meim.group_count() {
             let (ids, copies) = (self.meim.group(k).to_vec(), self.meim.copies(k).to_vec());
-            let Some(plan) = self.plan(&ids, &copies, total, &live) else {
+            let Some(plan) = self.plan(&ids, &copies, total, &live, &|id| self.box_of_id(id))
+            else {
                 continue;
             };
             let home = plan.home();
@@ -309,28 +376,56 @@ impl<L: WorkerLink> Master<'_, L> {
                 });
             }
             self.expect_acks(cmds, "Share")?;
-            let cut: Vec<String> = plan
-                .ids
-                .iter()
-                .zip(&plan.parts)
-                .map(|(&id, &p)| format!("{} in {p}", self.name(id)))
-                .collect();
-            tracing::info!(
-                "step {}: group of {} bodies split over workers {:?}: {}; {}",
-                self.clock.step,
-                plan.ids.len(),
-                plan.workers,
-                cut.join(", "),
-                if plan.direct() && !self.direct_failed {
-                    "the workers exchange its halos directly"
-                } else {
-                    "the master relays its halos"
-                }
-            );
-            self.stats.splits += 1;
-            self.splits.push(plan);
+            self.announce_split(plan);
         }
         Ok(())
+    }
+
+    /// The splits planned at the start: every holder already holds the group at this
+    /// clock (loaded and started with it), so each gets a `Share` without bodies and
+    /// all build their parts at once.
+    fn split_planned(&mut self) -> Result<(), MasterError> {
+        let nw = self.links.len();
+        let planned = std::mem::take(&mut self.planned);
+        let mut cmds = vec![Vec::new(); nw];
+        for plan in &planned {
+            for (slot, &w) in plan.workers.iter().enumerate() {
+                cmds[w].push(Command::Share {
+                    at: self.clock,
+                    spec: plan.spec(slot),
+                    bodies: Vec::new(),
+                });
+            }
+        }
+        self.expect_acks(cmds, "Share")?;
+        for plan in planned {
+            self.announce_split(plan);
+        }
+        Ok(())
+    }
+
+    /// Log a split and keep it.
+    fn announce_split(&mut self, plan: SplitGroup) {
+        let cut: Vec<String> = plan
+            .ids
+            .iter()
+            .zip(&plan.parts)
+            .map(|(&id, &p)| format!("{} in {p}", self.name(id)))
+            .collect();
+        tracing::info!(
+            "step {}: group of {} bodies split over workers {:?}: {}; {}",
+            self.clock.step,
+            plan.ids.len(),
+            plan.workers,
+            cut.join(", "),
+            if plan.direct() && !self.direct_failed {
+                "the workers exchange its halos directly"
+            } else {
+                "the master relays its halos"
+            }
+        );
+        self.stats.splits += 1;
+        self.splits.push(plan);
     }
 
     /// The worker and part of each element of body `id` when its group is split.

@@ -40,10 +40,12 @@ impl<L: WorkerLink> Master<'_, L> {
         let boxes: Vec<BodyBox> = briefs.iter().map(|b| self.inflate(b.bbox())).collect();
         self.update_meim(&boxes);
         let placement = self.place_all();
+        let bare: Vec<BodyBox> = briefs.iter().map(|b| b.bbox()).collect();
+        let shadows = self.plan_at_start(&bare);
         self.stats.stages.meim_ns += ns(t0);
         let t1 = Instant::now();
         let mut source = self.source.take();
-        let loaded = self.load_all(&placement, |id| {
+        let loaded = self.load_all(&placement, &shadows, |id| {
             let b = source
                 .as_mut()
                 .ok_or_else(|| MasterError::Input("no bodies".into()))?;
@@ -51,7 +53,8 @@ impl<L: WorkerLink> Master<'_, L> {
         });
         self.source = source;
         loaded?;
-        let reports = self.reports_of(|| Command::Start, "Start")?;
+        let mut reports = self.reports_of(|| Command::Start, "Start")?;
+        self.drop_shadows(&mut reports);
         self.stats.stages.migration_ns += ns(t1);
         self.kin_nodes = true; // the start always carries them
         self.gather(reports, None)?;

@@ -175,15 +175,7 @@ impl Engine {
     pub(super) fn split(&mut self, spec: SplitSpec) -> Result<Reply, EngineError> {
         self.settle();
         let (parts, mine) = mine(&spec)?;
-        let at = self
-            .groups
-            .iter()
-            .position(|g| {
-                g.copies.is_empty() && g.owned().map(|b| b.def.id).eq(spec.ids.iter().copied())
-            })
-            .ok_or_else(|| {
-                EngineError::Shared(format!("no group {:?} (without copies) here", spec.ids))
-            })?;
+        let at = self.group_of_split(&spec)?;
         self.setup_of()?;
         let bodies = self.groups.remove(at).bodies;
         let out = bodies.iter().cloned().map(BodyLoad::whole).collect();
@@ -220,14 +212,20 @@ impl Engine {
         }
     }
 
-    /// Hold parts of a group another worker split.
+    /// Hold parts of a group another worker split; without bodies, of the group held
+    /// here (a split planned at the start: every holder was loaded with the group and
+    /// started it; slot 0, the home, keeps answering for its bodies).
     pub(super) fn share(
         &mut self,
         at: Clock,
         spec: SplitSpec,
         bodies: Vec<BodyLoad>,
     ) -> Result<Reply, EngineError> {
+        self.settle();
         self.check_clock(&at)?;
+        if bodies.is_empty() {
+            return self.share_held(spec);
+        }
         let (parts, mine) = mine(&spec)?;
         if !bodies.iter().map(|b| b.id).eq(spec.ids.iter().copied()) {
             return Err(EngineError::Shared(
@@ -248,6 +246,37 @@ impl Engine {
             .push(Shared::new(g, false, Vec::new(), None, spec));
         self.at = Some(at);
         Ok(Reply::Ack)
+    }
+
+    fn share_held(&mut self, spec: SplitSpec) -> Result<Reply, EngineError> {
+        let (parts, mine) = mine(&spec)?;
+        let at = self.group_of_split(&spec)?;
+        let setup = self.setup_of()?;
+        let (contact, gravity) = (setup.contact, setup.gravity);
+        let g = SharedGroup::new(&self.groups[at].bodies, &parts, mine, contact, gravity)?
+            .with_holders(spec.holder.clone());
+        let bodies = self.groups.remove(at).bodies;
+        let home = spec.slot == 0;
+        let (whole, assembled) = if home {
+            (bodies, self.at)
+        } else {
+            (Vec::new(), None)
+        };
+        self.shared
+            .push(Shared::new(g, home, whole, assembled, spec));
+        Ok(Reply::Ack)
+    }
+
+    /// Where the whole group `spec` splits is among the groups (without copies).
+    fn group_of_split(&self, spec: &SplitSpec) -> Result<usize, EngineError> {
+        self.groups
+            .iter()
+            .position(|g| {
+                g.copies.is_empty() && g.owned().map(|b| b.def.id).eq(spec.ids.iter().copied())
+            })
+            .ok_or_else(|| {
+                EngineError::Shared(format!("no group {:?} (without copies) here", spec.ids))
+            })
     }
 
     /// Phase 1 of a step for the split groups (after the whole groups): the pending
