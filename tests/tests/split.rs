@@ -357,35 +357,48 @@ fn split_groups_write_their_contact_rows_once_per_step_in_order_before_each_chec
     assert!(contact_rows(&sink.inner) == contact_rows(&one));
 }
 
+/// The bodies of the two-sphere cluster scene and its setup.
+fn two_spheres() -> (Vec<crash_core::Body>, crash_link::Setup) {
+    let b = crash_scene::load(&crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
+        .unwrap()
+        .build()
+        .unwrap();
+    let setup = crash_link::Setup {
+        gravity: b.gravity,
+        contact: b.contact,
+        reactions: false,
+        probes: Default::default(),
+    };
+    (b.bodies, setup)
+}
+
+/// An engine loaded with bodies `ids` of the two spheres as one group, started at the
+/// clock's origin.
+fn started_with(ids: &[u32]) -> crash_worker::Engine {
+    use crash_link::{BodyLoad, Command, Reply};
+    let (bodies, setup) = two_spheres();
+    let mut e = crash_worker::Engine::new();
+    e.handle(Command::Setup(setup));
+    let bodies = bodies.into_iter().filter(|x| ids.contains(&x.def.id));
+    e.handle(Command::Load {
+        at: crash_core::Clock::default(),
+        bodies: bodies.map(BodyLoad::whole).collect(),
+    });
+    e.handle(Command::Regroup {
+        groups: vec![ids.to_vec()],
+        copies: Vec::new(),
+    });
+    assert!(matches!(e.handle(Command::Start), Reply::Report(_)));
+    e
+}
+
 /// The worker answers a Split before it builds its own parts (they are built while the
 /// master relays the bodies): a build that then fails is not lost. Every later command
 /// is refused with its reason until a Reset (a rollback), which clears it.
 #[test]
 fn a_split_whose_own_parts_cannot_be_built_refuses_every_command_until_a_reset() {
-    use crash_core::Clock;
     use crash_link::{BodyLoad, Command, Reply, SplitSpec};
-    let b = crash_scene::load(&crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
-        .unwrap()
-        .build()
-        .unwrap();
-    let mut e = crash_worker::Engine::new();
-    e.handle(Command::Setup(crash_link::Setup {
-        gravity: b.gravity,
-        contact: b.contact,
-        reactions: false,
-        probes: Default::default(),
-    }));
-    let load = |bodies: &[crash_core::Body]| Command::Load {
-        at: Clock::default(),
-        bodies: bodies.iter().cloned().map(BodyLoad::whole).collect(),
-    };
-    e.handle(load(&b.bodies));
-    let regroup = || Command::Regroup {
-        groups: vec![vec![0, 1]],
-        copies: Vec::new(),
-    };
-    e.handle(regroup());
-    e.handle(Command::Start);
+    let mut e = started_with(&[0, 1]);
     // sphere 0 (320 triangles) cut into 400 parts: the columns fit, the cut cannot be made
     let k = 400u32;
     let spec = SplitSpec {
@@ -409,8 +422,15 @@ fn a_split_whose_own_parts_cannot_be_built_refuses_every_command_until_a_reset()
         }
     }
     assert!(matches!(e.handle(Command::Reset), Reply::Ack));
-    e.handle(load(&b.bodies));
-    e.handle(regroup());
+    let (bodies, _) = two_spheres();
+    e.handle(Command::Load {
+        at: crash_core::Clock::default(),
+        bodies: bodies.into_iter().map(BodyLoad::whole).collect(),
+    });
+    e.handle(Command::Regroup {
+        groups: vec![vec![0, 1]],
+        copies: Vec::new(),
+    });
     assert!(matches!(e.handle(Command::Start), Reply::Report(_)));
 }
 
@@ -421,47 +441,22 @@ fn a_split_whose_own_parts_cannot_be_built_refuses_every_command_until_a_reset()
 #[test]
 fn a_share_without_bodies_splits_the_group_held_here_and_nowhere_else() {
     use crash_core::Clock;
-    use crash_link::{BodyLoad, Command, Reply, SplitSpec};
-    let b = crash_scene::load(&crash_tests::fixtures::test_scene("two-spheres-tiny.toml"))
-        .unwrap()
-        .build()
-        .unwrap();
-    let started = |ids: Vec<u32>| {
-        let mut e = crash_worker::Engine::new();
-        e.handle(Command::Setup(crash_link::Setup {
-            gravity: b.gravity,
-            contact: b.contact,
-            reactions: false,
-            probes: Default::default(),
-        }));
-        let bodies = b.bodies.iter().filter(|x| ids.contains(&x.def.id));
-        e.handle(Command::Load {
-            at: Clock::default(),
-            bodies: bodies.cloned().map(BodyLoad::whole).collect(),
-        });
-        e.handle(Command::Regroup {
-            groups: vec![ids.clone()],
-            copies: Vec::new(),
-        });
-        assert!(matches!(e.handle(Command::Start), Reply::Report(_)));
-        e
-    };
-    let spec = |slot: u32| SplitSpec {
-        ids: vec![0, 1],
-        parts: vec![2, 1],
-        holder: vec![vec![0, 1], vec![1]],
-        slot,
-        workers: vec![0, 1],
-        peers: Vec::new(),
-    };
+    use crash_link::{Command, Reply, SplitSpec};
     let share = |slot: u32, at: Clock| Command::Share {
         at,
-        spec: spec(slot),
+        spec: SplitSpec {
+            ids: vec![0, 1],
+            parts: vec![2, 1],
+            holder: vec![vec![0, 1], vec![1]],
+            slot,
+            workers: vec![0, 1],
+            peers: Vec::new(),
+        },
         bodies: Vec::new(),
     };
     let at = Clock::default();
     for slot in [0, 1] {
-        let mut e = started(vec![0, 1]);
+        let mut e = started_with(&[0, 1]);
         assert!(
             matches!(e.handle(share(slot, at)), Reply::Ack),
             "slot {slot}"
@@ -469,13 +464,11 @@ fn a_share_without_bodies_splits_the_group_held_here_and_nowhere_else() {
         // the home answers for the whole bodies, the other holder for none
         assert_eq!(e.body_count(), if slot == 0 { 2 } else { 0 });
     }
-    let mut elsewhere = started(vec![1]);
-    match elsewhere.handle(share(1, at)) {
+    match started_with(&[1]).handle(share(1, at)) {
         Reply::Error(why) => assert!(why.contains("no group"), "{why}"),
         other => panic!("not refused: {other:?}"),
     }
-    let later = at.after(1e-7);
-    match started(vec![0, 1]).handle(share(1, later)) {
+    match started_with(&[0, 1]).handle(share(1, at.after(1e-7))) {
         Reply::Error(_) => {}
         other => panic!("a Share of another clock was taken: {other:?}"),
     }
