@@ -211,6 +211,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let at = self.clock;
         let copies = self.copies_to_send(&self.layout, &[], placement);
         let mut built = Ok(());
+        let planned = self.planned_by_id();
         let ids: Vec<u32> = self.info.iter().map(|i| i.id).collect();
         for (&id, &to) in ids.iter().zip(placement) {
             let load = match body(id) {
@@ -228,13 +229,10 @@ impl<L: WorkerLink> Master<'_, L> {
                     sent.send(self, w, Command::LoadCopies { at, bodies });
                 }
             }
-            if self.planned_body(id) {
-                self.keep_planned(&load);
-                for (w, groups) in shadows.iter().enumerate() {
-                    if groups.iter().any(|g| g.contains(&id)) {
-                        let bodies = vec![load.clone()];
-                        sent.send(self, w, Command::Load { at, bodies });
-                    }
+            if let Some(&k) = planned.get(&id) {
+                for w in self.keep_planned(k, &load) {
+                    let bodies = vec![load.clone()];
+                    sent.send(self, w, Command::Load { at, bodies });
                 }
             }
             let bodies = vec![load];

@@ -298,39 +298,53 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let live: Vec<usize> = (0..nw).filter(|&w| self.live[w]).collect();
         let total: f64 = self.cost.iter().sum();
-        let brief = |id: u32| boxes.iter().find(|b| b.id == id).map(|b| (b.lo, b.hi));
-        for k in 0..self.meim.group_count() {
-            let (ids, copies) = (self.meim.group(k), self.meim.copies(k));
-            if let Some(plan) = self.plan(ids, copies, total, &live, &brief) {
-                for &w in plan.workers.iter().skip(1) {
-                    shadows[w].push(plan.ids.clone());
-                }
-                self.planned.push(plan);
+        // the briefs are in body order, as `info`
+        let brief = |id: u32| {
+            let b = boxes.get(self.index(id)?)?;
+            (b.id == id).then_some((b.lo, b.hi))
+        };
+        let plans: Vec<SplitGroup> = (0..self.meim.group_count())
+            .filter_map(|k| {
+                let (ids, copies) = (self.meim.group(k), self.meim.copies(k));
+                self.plan(ids, copies, total, &live, &brief)
+            })
+            .collect();
+        for plan in &plans {
+            for &w in plan.workers.iter().skip(1) {
+                shadows[w].push(plan.ids.clone());
             }
         }
+        self.planned = plans;
         shadows
     }
 
-    /// Whether body `id` belongs to a split planned at the start.
-    pub(super) fn planned_body(&self, id: u32) -> bool {
-        self.planned.iter().any(|p| p.ids.contains(&id))
+    /// The planned split holding body `id`, by body id (`plan_at_start`).
+    pub(super) fn planned_by_id(&self) -> BTreeMap<u32, usize> {
+        let each = self.planned.iter().enumerate();
+        each.flat_map(|(k, p)| p.ids.iter().map(move |&id| (id, k)))
+            .collect()
     }
 
-    /// What the master keeps of a body of a planned split as it goes to its holders:
-    /// its skeleton (frames from the parts) and the part of each element.
-    pub(super) fn keep_planned(&mut self, load: &BodyLoad) {
-        if let Some(p) = self.planned.iter_mut().find(|p| p.ids.contains(&load.id)) {
-            let cells = p.cells_of(std::slice::from_ref(load));
-            p.cells.extend(cells);
-            self.keep_skeletons(std::slice::from_ref(load));
-        }
+    /// What the master keeps of a body of planned split `k` as it goes to its holders
+    /// (the worker of each slot but the home's: loaded with it too): its skeleton
+    /// (frames from the parts) and the part of each element.
+    pub(super) fn keep_planned(&mut self, k: usize, load: &BodyLoad) -> Vec<usize> {
+        let Some(p) = self.planned.get_mut(k) else {
+            return Vec::new();
+        };
+        let cells = p.cells_of(std::slice::from_ref(load));
+        p.cells.extend(cells);
+        let others = p.workers[1..].to_vec();
+        self.keep_skeletons(std::slice::from_ref(load));
+        others
     }
 
     /// The Start reports without the groups a worker holds only until the planned
     /// split (their home reports them, with the same bits).
     pub(super) fn drop_shadows(&self, reps: &mut [StepReport]) {
-        for p in &self.planned {
-            let shadow = |id: u32| p.ids.contains(&id);
+        let planned = self.planned_by_id();
+        for (k, p) in self.planned.iter().enumerate() {
+            let shadow = |id: u32| planned.get(&id) == Some(&k);
             for &w in p.workers.iter().skip(1) {
                 let Some(r) = reps.get_mut(w) else { continue };
                 r.bodies.retain(|b| !shadow(b.id));
