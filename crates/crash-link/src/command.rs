@@ -129,7 +129,8 @@ pub enum Command {
     /// definitions included, for the other holders).
     Split(SplitSpec),
     /// Hold the parts `spec` gives this worker of a group another worker splits: the
-    /// whole bodies at clock `at`.
+    /// whole bodies at clock `at`. Without bodies: split the group held here at `at`
+    /// (a split planned at the start; slot 0 is the home).
     Share {
         at: Clock,
         spec: SplitSpec,
