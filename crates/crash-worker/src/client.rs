@@ -479,7 +479,6 @@ fn serve(
         };
         let t0 = Instant::now();
         let decoded = command_from_pb(&msg);
-
         let decode_ns = wire_ns + t0.elapsed().as_nanos() as u64;
         let (mut reply, shutdown) = match decoded {
             Ok(cmd) => {

@@ -173,7 +173,6 @@ impl Engine {
     /// own parts are built after the reply (`settle`): while the master relays the
     /// bodies and the other holders build theirs.
     pub(super) fn split(&mut self, spec: SplitSpec) -> Result<Reply, EngineError> {
-        self.settle();
         let (parts, mine) = mine(&spec)?;
         let at = self.group_of_split(&spec)?;
         self.setup_of()?;
@@ -221,7 +220,6 @@ impl Engine {
         spec: SplitSpec,
         bodies: Vec<BodyLoad>,
     ) -> Result<Reply, EngineError> {
-        self.settle();
         self.check_clock(&at)?;
         if bodies.is_empty() {
             return self.share_held(spec);
