@@ -194,12 +194,11 @@ impl<L: WorkerLink> Master<'_, L> {
     /// dropped before the next: the master never holds the model), then set every
     /// worker's groups. `body(id)` gives the body to load. The commands go out one
     /// after the other and the acks are read at the end: a worker decodes one body
-    /// while the master builds and encodes the next. `shadows[w]`: groups worker w is
-    /// loaded with too, beside its own (a split planned at the start: `plan_at_start`).
+    /// while the master builds and encodes the next. The bodies of a split planned at
+    /// the start go to each of its holders (`plan_at_start`).
     pub(super) fn load_all(
         &mut self,
         placement: &[usize],
-        shadows: &[Vec<Vec<u32>>],
         mut body: impl FnMut(u32) -> Result<BodyLoad, MasterError>,
     ) -> Result<(), MasterError> {
         let nw = self.links.len();
@@ -245,8 +244,7 @@ impl<L: WorkerLink> Master<'_, L> {
                 .enumerate()
                 .map(|(w, l)| {
                     let mut l = l.clone();
-                    let extra = shadows.get(w).into_iter().flatten();
-                    l.extend(extra.map(|g| (g.clone(), Vec::new())));
+                    l.extend(self.shadows_of(w).map(|g| (g.to_vec(), Vec::new())));
                     Self::regroup_cmd(&l)
                 })
                 .collect();

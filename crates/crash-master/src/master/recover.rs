@@ -79,7 +79,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let mut source = self.source.take();
         let mut states = ck.states.iter();
         let mut index = 0;
-        let loaded = self.load_all(&placement, &[], |id| {
+        let loaded = self.load_all(&placement, |id| {
             let state = states
                 .next()
                 .filter(|(sid, _)| *sid == id)

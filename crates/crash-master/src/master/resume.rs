@@ -113,7 +113,7 @@ impl<L: WorkerLink> Master<'_, L> {
         let placement = self.place_all();
         let mut source = Some(bodies);
         let mut states = ck.states.into_iter();
-        let loaded = self.load_all(&placement, &[], |id| {
+        let loaded = self.load_all(&placement, |id| {
             let body = source
                 .as_mut()
                 .ok_or_else(|| MasterError::Input("no bodies".into()))?

@@ -288,13 +288,11 @@ impl<L: WorkerLink> Master<'_, L> {
 
     /// The splits the rule picks at the start, planned before the bodies are loaded
     /// (from the briefs' boxes): every holder is loaded with the group and starts it,
-    /// so the split needs no bodies relayed (`split_groups`). Per worker, the groups it
-    /// holds beside its own until then.
-    pub(super) fn plan_at_start(&mut self, boxes: &[BodyBox]) -> Vec<Vec<Vec<u32>>> {
+    /// so the split needs no bodies relayed (`split_groups`).
+    pub(super) fn plan_at_start(&mut self, boxes: &[BodyBox]) {
         let nw = self.links.len();
-        let mut shadows = vec![Vec::new(); nw];
         if self.opts.split == SplitMode::Off {
-            return shadows;
+            return;
         }
         let live: Vec<usize> = (0..nw).filter(|&w| self.live[w]).collect();
         let total: f64 = self.cost.iter().sum();
@@ -309,13 +307,14 @@ impl<L: WorkerLink> Master<'_, L> {
                 self.plan(ids, copies, total, &live, &brief)
             })
             .collect();
-        for plan in &plans {
-            for &w in plan.workers.iter().skip(1) {
-                shadows[w].push(plan.ids.clone());
-            }
-        }
         self.planned = plans;
-        shadows
+    }
+
+    /// The groups worker `w` holds beside its own until the planned splits are made
+    /// (it holds parts of them, not their home).
+    pub(super) fn shadows_of(&self, w: usize) -> impl Iterator<Item = &[u32]> + '_ {
+        let held = move |p: &&SplitGroup| p.workers.iter().skip(1).any(|&x| x == w);
+        self.planned.iter().filter(held).map(|p| &p.ids[..])
     }
 
     /// The planned split holding body `id`, by body id (`plan_at_start`).

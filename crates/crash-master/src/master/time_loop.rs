@@ -41,11 +41,11 @@ impl<L: WorkerLink> Master<'_, L> {
         self.update_meim(&boxes);
         let placement = self.place_all();
         let bare: Vec<BodyBox> = briefs.iter().map(|b| b.bbox()).collect();
-        let shadows = self.plan_at_start(&bare);
+        self.plan_at_start(&bare);
         self.stats.stages.meim_ns += ns(t0);
         let t1 = Instant::now();
         let mut source = self.source.take();
-        let loaded = self.load_all(&placement, &shadows, |id| {
+        let loaded = self.load_all(&placement, |id| {
             let b = source
                 .as_mut()
                 .ok_or_else(|| MasterError::Input("no bodies".into()))?;
