@@ -34,9 +34,7 @@ impl<L: WorkerLink> Master<'_, L> {
     /// The split group whose bodies include all of `g` (the split itself, or bodies
     /// that left it while it is kept).
     fn split_holding(&self, g: &[u32]) -> Option<&super::split::SplitGroup> {
-        self.splits
-            .iter()
-            .find(|s| g.iter().all(|id| s.ids().contains(id)))
+        self.splits.iter().find(|s| g.iter().all(|&id| s.has(id)))
     }
 
     /// The current MEIM groups as rows (a split group: one row per holder).

@@ -80,6 +80,9 @@ pub(crate) struct SplitGroup {
     peers: Vec<String>,
     /// The worker and part of each element of each body (the frames' cell fields).
     cells: BTreeMap<u32, PartCells>,
+    /// The place of each body in `ids` (a group of thousands of bodies is looked up per
+    /// body and per pair).
+    place: BTreeMap<u32, usize>,
 }
 
 impl SplitGroup {
@@ -102,6 +105,11 @@ impl SplitGroup {
     /// The group's bodies, in MEIM order.
     pub(super) fn ids(&self) -> &[u32] {
         &self.ids
+    }
+
+    /// Whether body `id` is in the group.
+    pub(super) fn has(&self, id: u32) -> bool {
+        self.place.contains_key(&id)
     }
 
     /// Per holder (slot order): its worker, the bodies of `g` (bodies of this group)
@@ -136,7 +144,7 @@ impl SplitGroup {
     fn cells_of(&self, bodies: &[BodyLoad]) -> BTreeMap<u32, PartCells> {
         let mut out = BTreeMap::new();
         for b in bodies {
-            let (Some(i), Some(def)) = (self.ids.iter().position(|&id| id == b.id), &b.def) else {
+            let (Some(&i), Some(def)) = (self.place.get(&b.id), &b.def) else {
                 continue;
             };
             let part = match self.parts[i] {
@@ -274,6 +282,7 @@ impl<L: WorkerLink> Master<'_, L> {
             return None;
         }
         Some(SplitGroup {
+            place: ids.iter().enumerate().map(|(i, &id)| (id, i)).collect(),
             ids: ids.to_vec(),
             parts,
             holder,
@@ -486,7 +495,7 @@ impl<L: WorkerLink> Master<'_, L> {
     pub(super) fn split_home(&self, id: u32) -> usize {
         self.splits
             .iter()
-            .find(|s| s.ids.contains(&id))
+            .find(|s| s.has(id))
             .map_or(0, |s| s.home())
     }
 
@@ -499,7 +508,7 @@ impl<L: WorkerLink> Master<'_, L> {
     pub(super) fn holds_part(&self, w: usize, id: u32) -> bool {
         self.splits
             .iter()
-            .any(|s| s.workers.contains(&w) && s.ids.contains(&id))
+            .any(|s| s.workers.contains(&w) && s.has(id))
     }
 
     /// Assemble the split groups' whole bodies at their homes (before a frame, a
@@ -529,8 +538,7 @@ impl<L: WorkerLink> Master<'_, L> {
         }
         let mut cmds: Vec<Vec<Command>> = vec![Vec::new(); nw];
         for s in &self.splits {
-            let (these, rest): (Vec<_>, Vec<_>) =
-                parts.into_iter().partition(|p| s.ids.contains(&p.0));
+            let (these, rest): (Vec<_>, Vec<_>) = parts.into_iter().partition(|p| s.has(p.0));
             parts = rest;
             match cmds[s.home()].first_mut() {
                 Some(Command::Assemble(a)) => a.extend(these),
