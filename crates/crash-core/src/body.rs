@@ -201,6 +201,11 @@ pub struct BodyDef {
     /// add up to the whole body's. None for a whole body.
     #[serde(skip)]
     pub uncounted: Option<std::sync::Arc<[bool]>>,
+    /// A contact view's sub-body (`partition::view`): the whole body's mass per
+    /// initial segment area, which the segment pass's stiffness reads
+    /// (`Surface::areal_mass`); None for a body that is its own whole.
+    #[serde(skip)]
+    pub whole_areal_mass: Option<f64>,
 }
 
 /// What a step changes: nodal motion, element resultants and force slots, contact
@@ -357,6 +362,7 @@ impl Body {
                 kinematic: false,
                 halo_nodes: 0,
                 uncounted: None,
+                whole_areal_mass: None,
             }),
             mass_sum: Default::default(),
         })

@@ -274,6 +274,7 @@ impl Group {
             closing: None,
             figures,
             counted: &[],
+            counted_segments: &[],
         };
         let limit = crate::contact::stage::contact_forces_given(
             &mut self.bodies,

@@ -9,7 +9,7 @@
 mod contact_util;
 
 use contact_util::*;
-use crash_core::contact::ContactConfig;
+use crash_core::contact::{ContactConfig, ContactPass};
 use crash_core::hash::state_hash;
 use crash_core::partition::{GroupSplit, ViewRule};
 use crash_core::shapes::{plate, ElementKind};
@@ -90,8 +90,12 @@ fn min_dt(r: &[f64]) -> f64 {
 }
 
 fn whole_run(bodies: &[Body], end: f64) -> Trace {
+    whole_run_with(bodies, end, config())
+}
+
+fn whole_run_with(bodies: &[Body], end: f64, cfg: ContactConfig) -> Trace {
     let mut g = Group::new(bodies.to_vec(), Vec3::zeros());
-    g.contact = config();
+    g.contact = cfg;
     let dts0: Vec<f64> = g
         .start()
         .expect("start")
@@ -127,7 +131,7 @@ fn whole_run(bodies: &[Body], end: f64) -> Trace {
 /// The same run with body i in `parts[i]` parts; also the pushes the parts booked
 /// (summed over the steps), and the most view nodes (over all views) per owned node.
 fn split_run(bodies: &[Body], parts: &[usize], rule: ViewRule, end: f64) -> (Trace, usize, f64) {
-    split_run_with_skin(bodies, parts, rule, end, None).0
+    split_run_with_skin(bodies, parts, rule, end, None, config()).0
 }
 
 /// `split_run` with the views' skin set (default: the search margin); also the number
@@ -138,8 +142,9 @@ fn split_run_with_skin(
     rule: ViewRule,
     end: f64,
     skin: Option<f64>,
+    cfg: ContactConfig,
 ) -> ((Trace, usize, f64), u64) {
-    let mut g = GroupSplit::new(bodies, parts, config(), Vec3::zeros(), rule).expect("split");
+    let mut g = GroupSplit::new(bodies, parts, cfg, Vec3::zeros(), rule).expect("split");
     if let Some(skin) = skin {
         g.skin = skin;
     }
@@ -188,8 +193,12 @@ fn first_difference(got: &Trace, want: &Trace) -> Option<usize> {
 }
 
 fn check(parts_of: fn(usize) -> [usize; 2], what: &str) {
+    check_with(parts_of, what, config());
+}
+
+fn check_with(parts_of: fn(usize) -> [usize; 2], what: &str, cfg: ContactConfig) {
     let bodies = drop_scene();
-    let want = whole_run(&bodies, END);
+    let want = whole_run_with(&bodies, END, cfg);
     println!(
         "whole: {} steps, most active nodes {}, pushes {}, final sphere vz {:.3} m/s",
         want.hashes.len(),
@@ -202,7 +211,8 @@ fn check(parts_of: fn(usize) -> [usize; 2], what: &str) {
     assert!(want.v.z > 0.5, "rebound: {} m/s", want.v.z);
     for k in 1..=4 {
         let parts = parts_of(k);
-        let (got, pushes, per_owned) = split_run(&bodies, &parts, ViewRule::default(), END);
+        let (got, pushes, per_owned) =
+            split_run_with_skin(&bodies, &parts, ViewRule::default(), END, None, cfg).0;
         assert_eq!(
             got.hashes.len(),
             want.hashes.len(),
@@ -244,6 +254,62 @@ fn a_split_sphere_dropped_on_a_split_plate_steps_bit_identically_to_the_whole_gr
     check(|k| [k, k], "both split");
 }
 
+/// The segment pass (points between the nodes, loads on the corner normals pulled back
+/// to the nodes around them) reaches farther than a node hit: its views hold the second
+/// ring of segments around the owned nodes and every master within the bulge reach
+/// (`partition::select_points`), the stiffening step is the minimum over the views of
+/// the points each counts.
+fn segments() -> ContactConfig {
+    ContactConfig {
+        pass: ContactPass::Segments,
+        ..config()
+    }
+}
+
+#[test]
+fn under_the_segment_pass_a_split_plate_steps_bit_identically_to_the_whole_group() {
+    check_with(|k| [1, k], "segment pass, split plate", segments());
+}
+
+#[test]
+fn under_the_segment_pass_split_bodies_step_bit_identically_to_the_whole_group() {
+    check_with(|k| [k, k], "segment pass, both split", segments());
+}
+
+#[test]
+fn under_the_segment_pass_coarse_spheres_in_parts_step_bit_identically_to_the_whole_group() {
+    // level 2: segments of about 30 mm, bulges of millimetres, the stiffening law's
+    // step sets the clock while the spheres press (checked below)
+    let bodies = coarse_head_on();
+    let want = whole_run_with(&bodies, HEAD_ON_END, segments());
+    let free = whole_run(&bodies, HEAD_ON_END);
+    assert!(want.active >= 1, "contact: {} points", want.active);
+    assert!(want.v.x < -1.0, "rebound: {} m/s", want.v.x);
+    let shortened = want.dts.iter().filter(|d| **d < free.dts[0] * 0.999).count();
+    println!("segment pass head-on: {} steps, {shortened} shortened", want.dts.len());
+    for k in 1..=3 {
+        for skin in [None, Some(1e-4)] {
+            let ((got, pushes, _), _) = split_run_with_skin(
+                &bodies,
+                &[k, k],
+                ViewRule::default(),
+                HEAD_ON_END,
+                skin,
+                segments(),
+            );
+            assert_eq!(
+                first_difference(&got, &want),
+                None,
+                "{k} parts each, skin {skin:?}"
+            );
+            let stats_differ =
+                (0..want.contacts.len()).find(|&s| got.contacts[s] != want.contacts[s]);
+            assert_eq!(stats_differ, None, "{k} parts, skin {skin:?}: statistics");
+            assert_eq!(pushes, want.pushes, "{k} parts, skin {skin:?}: points booked");
+        }
+    }
+}
+
 /// Two coarse spheres (level 2: edges of about 30 mm against a reach of 3 mm) closing
 /// head-on: a hit's segment corners have segments far outside the reach.
 fn coarse_head_on() -> Vec<Body> {
@@ -276,6 +342,7 @@ fn coarse_spheres_closing_head_on_in_parts_step_bit_identically_to_the_whole_gro
             ViewRule::default(),
             HEAD_ON_END,
             Some(1e-4),
+            config(),
         );
         assert!(builds > 5, "{builds} builds");
         assert_eq!(

@@ -17,6 +17,10 @@ use std::mem::take;
 /// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
 /// `sb`): each body slave once with half the weight; stiffness per unit area
 /// kappa = s mu / dt_ref^2 (the soft rule per area, mu the lighter areal mass).
+/// `counted`: which slave segments' points the statistics book, of a and of b (None:
+/// all): a split group's views overlap, and each point is booked by the holder that
+/// counts its slave segment's element.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn segment_pair(
     bodies: &mut [Body],
     ia: usize,
@@ -25,6 +29,7 @@ pub(crate) fn segment_pair(
     sb: &Surface,
     cfg: &ContactConfig,
     dt_ref: f64,
+    counted: (Option<&[bool]>, Option<&[bool]>),
 ) -> PairStats {
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
@@ -40,11 +45,10 @@ pub(crate) fn segment_pair(
     let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
     let first = point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu);
     let second = point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu);
-    let count = |p: &[Points]| p.iter().map(|c| c.pushes.len()).sum::<usize>();
-    let mut st = PairStats::empty(a.def.id, b.def.id, count(&first) + count(&second));
+    let mut st = PairStats::empty(a.def.id, b.def.id, 0);
     let thin = a.def.section.thickness.min(b.def.section.thickness);
-    apply_points(bodies, ia, ib, &first, &mut st, true);
-    apply_points(bodies, ib, ia, &second, &mut st, false);
+    apply_points(bodies, (ia, ib), &first, &mut st, true, counted.0);
+    apply_points(bodies, (ib, ia), &second, &mut st, false, counted.1);
     // the loads on each body's normals, summed per normal (in point order), then pulled
     // back once per normal in normal order
     let on_a = first
@@ -116,14 +120,15 @@ fn add_forces(b: &mut Body, forces: &[(u32, Vec3)], kin: &mut KinLoad) {
 
 /// Add the points of one direction of the segment pass: their node forces on the
 /// slave's nodes (body `islave`) and the master's, sequentially in point order; what lands on
-/// a kinematic body goes into the pair's `KinLoad` too.
+/// a kinematic body goes into the pair's `KinLoad` too. The statistics book the points
+/// whose slave segment `counted` holds (every point without it).
 fn apply_points(
     bodies: &mut [Body],
-    islave: usize,
-    imaster: usize,
+    (islave, imaster): (usize, usize),
     chunks: &[Points],
     st: &mut PairStats,
     slave_is_a: bool,
+    counted: Option<&[bool]>,
 ) {
     let (mut l_s, mut l_m) = if slave_is_a {
         (take(&mut st.kin_a), take(&mut st.kin_b))
@@ -141,11 +146,14 @@ fn apply_points(
             &p.master_f[..p.master_count as usize],
             &mut l_m,
         );
-        st.book(
-            p.depth,
-            p.normal_force,
-            Some(if slave_is_a { p.force } else { -p.force }),
-        );
+        if counted.is_none_or(|c| c.get(p.slave_seg as usize).copied().unwrap_or(false)) {
+            st.active_nodes += 1;
+            st.book(
+                p.depth,
+                p.normal_force,
+                Some(if slave_is_a { p.force } else { -p.force }),
+            );
+        }
     }
     if slave_is_a {
         (st.kin_a, st.kin_b) = (l_s, l_m);

@@ -249,11 +249,11 @@ impl Surface {
             mass_per_k,
             inv_k,
             min_mass: body.def.mass.iter().copied().fold(f64::INFINITY, f64::min),
-            areal_mass: if total_area > 0.0 {
+            areal_mass: body.def.whole_areal_mass.unwrap_or(if total_area > 0.0 {
                 body.def.mass.iter().sum::<f64>() / total_area
             } else {
                 0.0
-            },
+            }),
             adj_start,
             adj,
             inc_start,

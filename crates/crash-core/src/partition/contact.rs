@@ -84,7 +84,7 @@ pub struct GroupSplit {
     /// (for the global figures and to fill the views, what would cross the wire).
     pub(super) whole: Vec<Body>,
     /// Whole-body surfaces (element-form stable step constants), per contact body.
-    surfaces: Vec<Option<Surface>>,
+    pub(super) surfaces: Vec<Option<Surface>>,
     /// One view per holder (`view_parts`), and the positions they were built at.
     pub views: Vec<View>,
     pub(super) reference: Vec<Vec<Vec3>>,
@@ -115,14 +115,6 @@ impl GroupSplit {
         gravity: Vec3,
         rule: ViewRule,
     ) -> Result<Self, CoreError> {
-        if contact.pass == ContactPass::Segments {
-            // a view's reach and ring are sized for node hits; the segment pass reaches
-            // farther (points between nodes, normals' neighbours): not done
-            return Err(CoreError::Other {
-                body: "contact".into(),
-                what: "contact.pass = segments does not run on bodies split into parts".into(),
-            });
-        }
         let splits = bodies
             .iter()
             .zip(parts)
@@ -211,8 +203,8 @@ impl GroupSplit {
         let bounds = self.whole_bounds();
         let (dt, closing) = self.figures_given(&element_dt, &bounds);
         let rebuild = self.views.is_empty() || self.moved_beyond_skin();
-        self.views_pass(&element_dt, &closing, &bounds, h, step, rebuild)?;
-        Ok(dt)
+        let (_, limits) = self.views_pass(&element_dt, &closing, &bounds, h, step, rebuild)?;
+        Ok(dt.iter().zip(&limits).map(|(d, l)| d.min(*l)).collect())
     }
 
     /// Gather the whole bodies from the parts and give each body's node box (min/max
@@ -318,6 +310,11 @@ impl GroupSplit {
     /// The contact pass of the parts computed here, on their views, at the positions
     /// `figures` gathered: `element_dt[i]` body i's element critical step over all its
     /// parts (the soft penalty's reference step reads it), `closing` from `figures`.
+    /// Returns whether the views were rebuilt, and each body's step limit from the
+    /// views' passes (the smallest over them; infinite where none): the segment pass's
+    /// stiffening step, booked from the points each view counts, so that the minimum
+    /// over all holders is the whole group's. The node passes' limits (element form,
+    /// closing speed) are `figures_given`'s already.
     pub(super) fn views_pass(
         &mut self,
         element_dt: &[f64],
@@ -326,13 +323,14 @@ impl GroupSplit {
         h: f64,
         step: u64,
         rebuild: bool,
-    ) -> Result<bool, SplitError> {
+    ) -> Result<(bool, Vec<f64>), SplitError> {
         let cfg = self.contact;
+        let mut limits = vec![f64::INFINITY; self.whole.len()];
         if !cfg.enabled {
             for p in self.splits.iter_mut().flat_map(|s| &mut s.parts) {
                 p.body.state.f_contact.clear();
             }
-            return Ok(false);
+            return Ok((false, limits));
         }
         if rebuild {
             self.build_views()?;
@@ -363,7 +361,7 @@ impl GroupSplit {
                 // view's bodies, and a view node outside a view body's box grown by
                 // the margin is outside that body's reach anyway (no box to compute)
                 let vbounds: Vec<(Vec3, Vec3)> = view.index.iter().map(|&j| bounds[j]).collect();
-                contact_forces_given(
+                let dt = contact_forces_given(
                     &mut view.bodies,
                     &cfg,
                     &mut view.state,
@@ -375,9 +373,16 @@ impl GroupSplit {
                         closing: Some(closing),
                         figures: &[],
                         counted: &view.counted,
+                        counted_segments: &view.counted_segments,
                     },
                 )
                 .map_err(|f| in_whole(f, view))?;
+                // (the node passes' limits on a view are the whole group's or larger)
+                if cfg.pass == ContactPass::Segments {
+                    for (&j, d) in view.index.iter().zip(dt) {
+                        limits[j] = limits[j].min(d);
+                    }
+                }
             }
             for (&(i, q), at) in view.parts.iter().zip(&view.owned_at) {
                 if !self.mine[i][q] {
@@ -400,7 +405,7 @@ impl GroupSplit {
             }
             PairStats::merge_sorted(&mut self.stats, view.state.stats());
         }
-        Ok(rebuild)
+        Ok((rebuild, limits))
     }
 
     fn moved_beyond_skin(&self) -> bool {

@@ -14,6 +14,7 @@ mod inner;
 mod parts;
 mod report;
 mod select;
+mod select_points;
 mod shared;
 mod view;
 

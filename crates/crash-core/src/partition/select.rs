@@ -74,7 +74,7 @@ impl Boxes {
     }
 
     /// The bodies with a box within r of (lo, hi) grown by `r` (those a query can meet).
-    fn near_bodies(&self, (lo, hi): (Vec3, Vec3), r: f64) -> Vec<usize> {
+    pub(super) fn near_bodies(&self, (lo, hi): (Vec3, Vec3), r: f64) -> Vec<usize> {
         let pad = Vec3::repeat(r);
         self.trees
             .iter()
@@ -87,7 +87,7 @@ impl Boxes {
     }
 
     /// Does the box (lo, hi) grown by r meet a box of body k?
-    fn near(&self, k: usize, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
+    pub(super) fn near(&self, k: usize, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
         let Some((tree, env)) = self.trees.get(k).and_then(Option::as_ref) else {
             return false;
         };
@@ -128,7 +128,7 @@ pub(super) struct Reach<'a> {
 }
 
 /// Box of element e's nodes (triangles then quads) at the current positions.
-fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
+pub(super) fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
     nodes_of(b, e)
         .iter()
         .fold(crate::mesh::bounds(&[]), |(lo, hi), &n| {
@@ -137,7 +137,7 @@ fn node_box(b: &Body, e: usize) -> (Vec3, Vec3) {
         })
 }
 
-fn nodes_of(b: &Body, e: usize) -> &[u32] {
+pub(super) fn nodes_of(b: &Body, e: usize) -> &[u32] {
     b.def.element_nodes(e)
 }
 

@@ -569,7 +569,10 @@ impl SharedGroup {
 
     /// The pending contact pass (left by `forces`) on the views of the parts here, with
     /// each body's element step over all holders (`dt`, in the group's body order).
-    pub fn contact(&mut self, figures: &SplitFigures) -> Result<(), SplitError> {
+    /// Returns the step limits the pass set on the group's bodies here (the segment
+    /// pass's stiffening step, by body id; none under the node passes, whose limits
+    /// `forces` gave): the minimum over the holders is the whole group's.
+    pub fn contact(&mut self, figures: &SplitFigures) -> Result<Vec<(u32, f64)>, SplitError> {
         let dt = &figures.dts;
         if dt.len() != self.ids.len() || dt.iter().zip(&self.ids).any(|(d, &id)| d.id != id) {
             return Err(CoreError::Other {
@@ -594,12 +597,18 @@ impl SharedGroup {
             }
             .into());
         }
-        if self
-            .split
-            .views_pass(&edt, &figures.closing(), &p.bounds, p.h, p.step, rebuild)?
-        {
+        let (rebuilt, limits) =
+            self.split
+                .views_pass(&edt, &figures.closing(), &p.bounds, p.h, p.step, rebuild)?;
+        if rebuilt {
             self.export = exports(&self.split);
         }
-        Ok(())
+        Ok(self
+            .ids
+            .iter()
+            .zip(limits)
+            .filter(|(_, l)| l.is_finite())
+            .map(|(&id, l)| (id, l))
+            .collect())
     }
 }

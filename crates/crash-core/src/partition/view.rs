@@ -2,9 +2,10 @@
 //! how it is selected and filled (the reach rule is in `contact`'s module text).
 
 use super::select::{select, Boxes, Reach};
+use super::select_points::{segment_reach, select_segments, union};
 use super::{GroupSplit, Split};
 use crate::body::Body;
-use crate::contact::ContactState;
+use crate::contact::{ContactPass, ContactState};
 use crate::error::{CoreError, Fault};
 use std::collections::BTreeMap;
 
@@ -50,6 +51,9 @@ pub struct View {
     /// Per view body and view node: owned by one of `parts` (the contact statistics
     /// book the pushes of these slave nodes only: each push once over all views).
     pub(super) counted: Vec<Vec<bool>>,
+    /// Per view body and view element: counted by one of `parts` (the segment pass's
+    /// statistics book the points of these slave segments only).
+    pub(super) counted_segments: Vec<Vec<bool>>,
     pub(super) state: ContactState,
 }
 
@@ -64,6 +68,7 @@ impl View {
             parts,
             owned_at: Vec::new(),
             counted: Vec::new(),
+            counted_segments: Vec::new(),
             state: ContactState::default(),
         }
     }
@@ -138,6 +143,7 @@ impl GroupSplit {
             })
             .collect();
         let all = Boxes::of_elements(&self.whole, &every);
+        let g_segments = segment_reach(&self.whole, self.skin);
         let mut views = Vec::new();
         for parts in self.view_parts() {
             let mine = parts.iter().any(|&(i, q)| self.mine[i][q]);
@@ -170,7 +176,17 @@ impl GroupSplit {
                 let q = self.splits[j].owner[n as usize].0 as usize;
                 view.gives(j, q)
             };
-            let picked = select(&self.whole, owned, &reach);
+            let mut picked = select(&self.whole, owned, &reach);
+            if self.contact.pass == ContactPass::Segments {
+                // the segment pass's reach (select_points.rs); the node passes' rule
+                // stays for self-contact, which runs node to segment
+                let segs = select_segments(&self.whole, &lists, &all, g_segments);
+                picked = if self.whole.iter().any(|b| b.def.self_contact) {
+                    union(picked, segs)
+                } else {
+                    segs
+                };
+            }
             for (j, (b, (node, element))) in self.whole.iter().zip(picked).enumerate() {
                 if node.is_empty() {
                     continue;
@@ -183,6 +199,8 @@ impl GroupSplit {
                     continue;
                 }
                 let mut vb = super::parts::sub_body(b, &node, &element, node.len())?;
+                // the segment pass's stiffness reads the whole body's areal mass
+                vb.def_mut().whole_areal_mass = self.surfaces[j].as_ref().map(|s| s.areal_mass);
                 if !self.rule.whole_masses {
                     let m = crate::mesh::Mesh {
                         nodes: vb.def.x0.clone(),
@@ -202,6 +220,7 @@ impl GroupSplit {
             if mine {
                 view.owned_at = owned_at(&view, &self.splits, &self.whole);
                 view.counted = counted(&view);
+                view.counted_segments = counted_segments(&view, &self.splits);
             }
             views.push(view);
         }
@@ -285,6 +304,32 @@ fn counted(view: &View) -> Vec<Vec<bool>> {
         }
     }
     out
+}
+
+/// Per view body, which view elements one of the view's parts counts (its owner: the
+/// part owning the element's first node, `BodyDef::uncounted`).
+fn counted_segments(view: &View, splits: &[Split]) -> Vec<Vec<bool>> {
+    view.index
+        .iter()
+        .zip(&view.element)
+        .take(view.bodies.len())
+        .map(|(&j, element)| {
+            let mut out = vec![false; element.len()];
+            for &(i, q) in view.parts.iter().filter(|&&(i, _)| i == j) {
+                let p = &splits[i].parts[q];
+                let uncounted = p.body.def.uncounted.as_deref();
+                for (k, &e) in p.element.iter().enumerate() {
+                    if uncounted.is_some_and(|u| u[k]) {
+                        continue;
+                    }
+                    if let Ok(at) = element.binary_search(&e) {
+                        out[at] = true;
+                    }
+                }
+            }
+            out
+        })
+        .collect()
 }
 
 /// A fault found on a view, with the whole body's node and segment numbers.
