@@ -80,6 +80,7 @@ impl InstantWorker {
             parts: Vec::new(),
             part_dts: Default::default(),
             split_contacts: Vec::new(),
+            split_limits: Vec::new(),
             halo: None,
         }
     }

@@ -88,6 +88,41 @@ fn the_showcase_split_over_two_grpc_workers_has_the_single_process_state() {
     assert_eq!(s.final_state_hash, "1370e0b4b94fd75d");
 }
 
+/// The showcase under the segment pass (`contact.pass = "segments"`) to 1.2 ms.
+const SEGMENTS: &str = "scenes/bench/sphere-on-plate-segments.toml";
+const SEGMENTS_HASH: &str = "07508666adfac5f1";
+
+/// Under the segment pass the split group's views reach its points' masters and the
+/// normals' neighbours, and its contact pass runs in the step (its stiffening step
+/// limits the next one): the single-process state and one worker's contacts.csv.
+#[test]
+fn the_showcase_under_the_segment_pass_split_over_two_workers_has_the_single_process_state() {
+    let inp = scene(SEGMENTS, 1.2e-3);
+    let (_, reference) = driver_reference(&inp);
+    assert_eq!(format!("{reference:016x}"), SEGMENTS_HASH);
+    let (hash, splits) = split_run(&inp, 2, SplitMode::Auto);
+    assert!(splits >= 1, "the showcase's one group must be split");
+    assert_eq!(format!("{hash:016x}"), SEGMENTS_HASH);
+}
+
+/// The same over 2 `crash-worker` processes (gRPC on loopback).
+#[test]
+fn the_showcase_under_the_segment_pass_split_over_two_grpc_workers_has_the_single_process_state() {
+    let out = out_dir("split-grpc-segments");
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(SEGMENTS);
+    let extra = ["--split", "auto", "--end-time", "1.2e-3", "--output-interval", "6e-4"];
+    let (mut m, url) = master(&p, 2, &out, &extra);
+    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+    assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
+    for p in &mut w {
+        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    }
+    assert!(m.log().contains("split over workers"), "{}", m.log());
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    assert!(s.fault.is_none(), "{:?}", s.fault);
+    assert_eq!(s.final_state_hash, SEGMENTS_HASH);
+}
+
 #[test]
 fn many_spheres_on_one_plate_split_over_two_workers_have_the_single_process_state() {
     let inp = scene("scenes/bench/spheres-on-deformable-plate.toml", 3e-4);

@@ -234,6 +234,7 @@ fn step_report_round_trips_bit_exact() {
         probes,
         bodies,
         parts: vec![part_state()],
+        split_limits: vec![(3, 1.25e-7), (7, f64::MIN_POSITIVE)],
         part_dts: SplitFigures {
             dts: vec![PartDt {
                 id: 3,

@@ -221,6 +221,11 @@ pub struct StepReport {
     /// each push booked by the holder owning its slave node, so the master's merge
     /// per pair (`PairStats::merge`) gives one process's figures.
     pub split_contacts: Vec<PairStats>,
+    /// The step limits the split groups' contact pass set on this worker, by body id
+    /// (a Contact in the step under the segment pass: its stiffening step, the
+    /// minimum over the points this worker's views count); the master takes the
+    /// minimum over the holders.
+    pub split_limits: Vec<(u32, f64)>,
     /// A Step with `direct`: the second half of the split groups' step, after the
     /// holders exchanged their part states with each other (None when no split group
     /// is held here, or another holder's fault stopped the exchange).

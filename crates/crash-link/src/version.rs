@@ -42,7 +42,10 @@ use thiserror::Error;
 /// with no assembly of whole bodies.
 /// v20: a Share without bodies splits the group the worker holds (a split planned at
 /// the start: every holder is loaded with the group and starts it; slot 0 is the home).
-pub const PROTOCOL_VERSION: u32 = 20;
+/// v21: a split group under the segment pass runs its contact pass in the step (a
+/// Contact after the Halo), whose Report carries the stiffening step per body
+/// (Report.limit_ids, limit_dts).
+pub const PROTOCOL_VERSION: u32 = 21;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

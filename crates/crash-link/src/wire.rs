@@ -456,6 +456,8 @@ fn report_to_pb(rep: &StepReport) -> pb::Report {
         part_dts: (!rep.part_dts.is_empty()).then(|| part_dts_to_pb(&rep.part_dts)),
         split_contacts: (!rep.split_contacts.is_empty())
             .then(|| contacts_to_pb(&rep.split_contacts)),
+        limit_ids: rep.split_limits.iter().map(|l| l.0).collect(),
+        limit_dts: rep.split_limits.iter().map(|l| l.1).collect(),
         halo: rep.halo.as_deref().map(|h| {
             Box::new(pb::Halo {
                 outcome: Some(match h {
@@ -637,6 +639,16 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
         split_contacts: match &r.split_contacts {
             Some(c) => contacts_from_pb(c)?,
             None => Vec::new(),
+        },
+        split_limits: {
+            if r.limit_ids.len() != r.limit_dts.len() {
+                return Err(ProtoError::Invalid(format!(
+                    "report.limit_ids has {} entries, report.limit_dts {}",
+                    r.limit_ids.len(),
+                    r.limit_dts.len()
+                )));
+            }
+            r.limit_ids.iter().copied().zip(r.limit_dts.iter().copied()).collect()
         },
         halo: r
             .halo

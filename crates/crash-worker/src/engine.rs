@@ -491,6 +491,7 @@ impl Engine {
             parts: Vec::new(),
             part_dts: Default::default(),
             split_contacts: Vec::new(),
+            split_limits: Vec::new(),
             halo: None,
         };
         for (g, (r, nanos)) in self.groups.iter().zip(results) {

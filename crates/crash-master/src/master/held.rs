@@ -62,6 +62,19 @@ impl<L: WorkerLink> Master<'_, L> {
         &mut self,
         shares: impl Iterator<Item = (usize, Vec<PairStats>)>,
     ) -> Result<(), MasterError> {
+        let merged = self.merged_split_shares(shares)?;
+        if let Some(h) = self.held.as_mut().filter(|h| h.split.is_none()) {
+            h.split = Some(merged);
+        }
+        Ok(())
+    }
+
+    /// The holders' shares of a split pass's statistics (by worker), checked and
+    /// merged per pair.
+    pub(super) fn merged_split_shares(
+        &mut self,
+        shares: impl Iterator<Item = (usize, Vec<PairStats>)>,
+    ) -> Result<Vec<PairStats>, MasterError> {
         let mut merged: Vec<PairStats> = Vec::new();
         for (w, share) in shares {
             for c in &share {
@@ -75,10 +88,7 @@ impl<L: WorkerLink> Master<'_, L> {
             }
             PairStats::merge_sorted(&mut merged, &share);
         }
-        if let Some(h) = self.held.as_mut().filter(|h| h.split.is_none()) {
-            h.split = Some(merged);
-        }
-        Ok(())
+        Ok(merged)
     }
 
     /// Write the held rows once their split statistics are in.

@@ -186,6 +186,9 @@ pub(crate) struct Master<'a, L: WorkerLink> {
     split_contact: crash_core::partition::SplitFigures,
     /// The last step's contact rows while its split groups' contact pass is pending.
     held: Option<held::HeldRows>,
+    /// The split groups' contact statistics of a pass run in the step (the segment
+    /// pass: `contact_in_step`), merged over the holders, for this step's rows.
+    split_now: Option<Vec<crash_core::contact::PairStats>>,
     pub(crate) stats: RunStats,
 }
 
@@ -302,6 +305,7 @@ impl<'a, L: WorkerLink> Master<'a, L> {
             skeletons: Default::default(),
             split_contact: Default::default(),
             held: None,
+            split_now: None,
             stats: RunStats::default(),
         })
     }

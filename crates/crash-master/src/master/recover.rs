@@ -67,6 +67,7 @@ impl<L: WorkerLink> Master<'_, L> {
         self.planned.clear();
         self.split_contact = Default::default();
         self.held = None;
+        self.split_now = None;
         self.restore_loop(ck);
         let placement = self.place_all();
         // per body: does its new worker lack the definition?

@@ -188,9 +188,7 @@ impl<L: WorkerLink> Master<'_, L> {
         boxes: &dyn Fn(u32) -> Option<(Vec3, Vec3)>,
     ) -> Option<SplitGroup> {
         let k = live.len();
-        // the segment contact pass does not run on parts (partition::contact)
-        let segments = self.contact.enabled && self.contact.pass == ContactPass::Segments;
-        if k < 2 || segments || !copies.is_empty() || !self.results.history.is_empty() {
+        if k < 2 || !copies.is_empty() || !self.results.history.is_empty() {
             return None;
         }
         let idx: Vec<usize> = ids.iter().filter_map(|&id| self.index(id)).collect();
@@ -475,6 +473,49 @@ impl<L: WorkerLink> Master<'_, L> {
             }
         }
         self.take_split_stats(&mut reps)
+    }
+
+    /// Under the segment pass, the split groups' contact pass runs in the step, right
+    /// after the Halo (a Contact with the element steps just merged), not at the start
+    /// of the next Step: its stiffening step (docs/theory-contact.md, "Depth") limits
+    /// the bodies' next step, which is chosen before that Step. Each holder reports the
+    /// limit from the points its views count; the minimum over the holders goes into
+    /// the body's merged report at its home (`reps`), the statistics into this step's
+    /// rows (`split_now`). One more exchange per step: the price of the bits.
+    pub(super) fn contact_in_step(&mut self, reps: &mut [StepReport]) -> Result<(), MasterError> {
+        let in_step = self.contact.enabled && self.contact.pass == ContactPass::Segments;
+        if !in_step || self.split_contact.is_empty() {
+            return Ok(());
+        }
+        let dts = std::mem::take(&mut self.split_contact);
+        let cmds = self.to_holders(|| Command::Contact(dts.clone()));
+        let mut shares = Vec::new();
+        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
+            for reply in r {
+                let Reply::Report(rep) = reply else {
+                    return Err(self.bad_reply(w, "Contact"));
+                };
+                for &(id, dt) in &rep.split_limits {
+                    if !self.holds_part(w, id) || dt.is_nan() || dt <= 0.0 {
+                        let what = format!("a contact step limit of body {id}");
+                        return Err(self.implausible(w, &what));
+                    }
+                    let home = self.split_home(id);
+                    let body = reps
+                        .get_mut(home)
+                        .and_then(|r| r.bodies.iter_mut().find(|b| b.id == id));
+                    if let Some(b) = body {
+                        b.stable_dt = b.stable_dt.min(dt);
+                    }
+                }
+                if let Some(r) = reps.get_mut(w) {
+                    r.compute_ns += rep.compute_ns;
+                }
+                shares.push((w, rep.split_contacts));
+            }
+        }
+        self.split_now = Some(self.merged_split_shares(shares.into_iter())?);
+        Ok(())
     }
 
     /// One command for every worker holding parts of a split group (none for the

@@ -132,8 +132,10 @@ impl<L: WorkerLink> Master<'_, L> {
             let merging = Instant::now();
             self.take_split_stats(&mut reps)?;
             self.merge_ns = ns(merging);
-            // split groups: one more exchange (split.rs)
+            // split groups: one more exchange (split.rs), and under the segment pass
+            // a third, the contact pass
             self.relay_split(&mut reps, direct)?;
+            self.contact_in_step(&mut reps)?;
             reps
         };
         let wall = ns(t0);
@@ -164,6 +166,10 @@ impl<L: WorkerLink> Master<'_, L> {
         let t1 = Instant::now();
         let _s = tracing::debug_span!("meim").entered();
         self.gather(reps, Some((at, h)))?;
+        if let Some(split) = self.split_now.take() {
+            self.contacts.extend(split);
+            self.contacts.sort_by_key(|c| (c.a, c.b));
+        }
         let energy = self.ledger.record(
             EnergyTotals::sum(self.reports.iter().map(|r| &r.energy)),
             !short,

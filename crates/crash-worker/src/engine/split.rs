@@ -424,13 +424,15 @@ impl Engine {
     }
 
     /// The pending contact pass of every split group held here, before an assembly
-    /// (the master sends the element steps the next Step would carry); the report
-    /// carries this worker's share of their contact statistics.
+    /// (the master sends the element steps the next Step would carry), or in the step
+    /// under the segment pass; the report carries this worker's share of their contact
+    /// statistics and the step limits the passes set here (`StepReport::split_limits`).
     pub(super) fn contact(&mut self, dts: SplitFigures) -> Reply {
         if self.broken {
             return Reply::Error(EngineError::Broken.to_string());
         }
         let mut rep = StepReport::default();
+        let t0 = Instant::now();
         for k in 0..self.shared.len() {
             let s = &mut self.shared[k];
             if !s.g.contact_pending() {
@@ -442,13 +444,17 @@ impl Engine {
                 Err(e) => return Reply::Error(e.to_string()),
             };
             s.nanos += t.elapsed().as_nanos() as u64;
-            if let Err(e) = r {
-                let first = s.first();
-                return self.failed(first, e);
+            match r {
+                Ok(limits) => rep.split_limits.extend(limits),
+                Err(e) => {
+                    let first = s.first();
+                    return self.failed(first, e);
+                }
             }
             rep.split_contacts
                 .extend_from_slice(s.g.split.contact_stats());
         }
+        rep.compute_ns = t0.elapsed().as_nanos() as u64;
         Reply::Report(rep)
     }
 
