@@ -123,6 +123,34 @@ fn the_showcase_under_the_segment_pass_split_over_two_grpc_workers_has_the_singl
     assert_eq!(s.final_state_hash, SEGMENTS_HASH);
 }
 
+/// Two coarse spheres head-on under the segment pass, split over two workers (every
+/// body cut): the stiffening step halves the clock while they press (dt 1.33 to 3.04
+/// us), each holder reports it for the points it counts and the master takes the
+/// minimum, in process and over gRPC: the single-process state.
+#[test]
+fn the_segment_pass_stiffening_step_over_split_workers_keeps_the_single_process_state() {
+    let rel = "tests/scenes/coarse-spheres-segments.toml";
+    let inp = scene(rel, 1.5e-3);
+    let (_, reference) = driver_reference(&inp);
+    let want = "f375c896d40286be";
+    assert_eq!(format!("{reference:016x}"), want);
+    let (hash, splits) = split_run(&inp, 2, SplitMode::Always);
+    assert!(splits >= 1);
+    assert_eq!(format!("{hash:016x}"), want);
+    let out = out_dir("split-grpc-stiffening");
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(rel);
+    let (mut m, url) = master(&p, 2, &out, &["--split", "always"]);
+    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
+    assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
+    for p in &mut w {
+        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
+    }
+    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
+    assert!(s.fault.is_none(), "{:?}", s.fault);
+    assert!(s.dt_min_s < 0.5 * s.dt_max_s, "{} {}", s.dt_min_s, s.dt_max_s);
+    assert_eq!(s.final_state_hash, want);
+}
+
 #[test]
 fn many_spheres_on_one_plate_split_over_two_workers_have_the_single_process_state() {
     let inp = scene("scenes/bench/spheres-on-deformable-plate.toml", 3e-4);
