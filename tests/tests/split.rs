@@ -109,8 +109,17 @@ fn the_showcase_under_the_segment_pass_split_over_two_workers_has_the_single_pro
 #[test]
 fn the_showcase_under_the_segment_pass_split_over_two_grpc_workers_has_the_single_process_state() {
     let out = out_dir("split-grpc-segments");
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(SEGMENTS);
-    let extra = ["--split", "auto", "--end-time", "1.2e-3", "--output-interval", "6e-4"];
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(SEGMENTS);
+    let extra = [
+        "--split",
+        "auto",
+        "--end-time",
+        "1.2e-3",
+        "--output-interval",
+        "6e-4",
+    ];
     let (mut m, url) = master(&p, 2, &out, &extra);
     let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
     assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
@@ -138,7 +147,9 @@ fn the_segment_pass_stiffening_step_over_split_workers_keeps_the_single_process_
     assert!(splits >= 1);
     assert_eq!(format!("{hash:016x}"), want);
     let out = out_dir("split-grpc-stiffening");
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(rel);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel);
     let (mut m, url) = master(&p, 2, &out, &["--split", "always"]);
     let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
     assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
@@ -147,7 +158,12 @@ fn the_segment_pass_stiffening_step_over_split_workers_keeps_the_single_process_
     }
     let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
     assert!(s.fault.is_none(), "{:?}", s.fault);
-    assert!(s.dt_min_s < 0.5 * s.dt_max_s, "{} {}", s.dt_min_s, s.dt_max_s);
+    assert!(
+        s.dt_min_s < 0.5 * s.dt_max_s,
+        "{} {}",
+        s.dt_min_s,
+        s.dt_max_s
+    );
     assert_eq!(s.final_state_hash, want);
 }
 

@@ -275,6 +275,7 @@ impl Group {
             figures,
             counted: &[],
             counted_segments: &[],
+            slave_segments: &[],
         };
         let limit = crate::contact::stage::contact_forces_given(
             &mut self.bodies,

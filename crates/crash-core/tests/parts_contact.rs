@@ -285,8 +285,15 @@ fn under_the_segment_pass_coarse_spheres_in_parts_step_bit_identically_to_the_wh
     let free = whole_run(&bodies, HEAD_ON_END);
     assert!(want.active >= 1, "contact: {} points", want.active);
     assert!(want.v.x < -1.0, "rebound: {} m/s", want.v.x);
-    let shortened = want.dts.iter().filter(|d| **d < free.dts[0] * 0.999).count();
-    println!("segment pass head-on: {} steps, {shortened} shortened", want.dts.len());
+    let shortened = want
+        .dts
+        .iter()
+        .filter(|d| **d < free.dts[0] * 0.999)
+        .count();
+    println!(
+        "segment pass head-on: {} steps, {shortened} shortened",
+        want.dts.len()
+    );
     for k in 1..=3 {
         for skin in [None, Some(1e-4)] {
             let ((got, pushes, _), _) = split_run_with_skin(
@@ -305,7 +312,10 @@ fn under_the_segment_pass_coarse_spheres_in_parts_step_bit_identically_to_the_wh
             let stats_differ =
                 (0..want.contacts.len()).find(|&s| got.contacts[s] != want.contacts[s]);
             assert_eq!(stats_differ, None, "{k} parts, skin {skin:?}: statistics");
-            assert_eq!(pushes, want.pushes, "{k} parts, skin {skin:?}: points booked");
+            assert_eq!(
+                pushes, want.pushes,
+                "{k} parts, skin {skin:?}: points booked"
+            );
         }
     }
 }

@@ -648,7 +648,11 @@ pub fn report_from_pb(r: &pb::Report) -> Result<StepReport, ProtoError> {
                     r.limit_dts.len()
                 )));
             }
-            r.limit_ids.iter().copied().zip(r.limit_dts.iter().copied()).collect()
+            r.limit_ids
+                .iter()
+                .copied()
+                .zip(r.limit_dts.iter().copied())
+                .collect()
         },
         halo: r
             .halo

@@ -100,7 +100,9 @@ fn strip_points(n: usize, i: usize) -> impl Iterator<Item = (f64, f64)> {
 /// touch lies in it); `curved`: both bodies' segments that can touch the other
 /// (`reach::near_sets`; slave's, master's): the slave's are the segments searched;
 /// `kappa`: penalty stiffness per unit area of this direction (weight included); `mu`:
-/// areal mass for the damping.
+/// areal mass for the damping; `slaves`: the slave segments whose points are wanted
+/// (None: all; a split group's view wants those that can push its owned nodes, and
+/// each point's result does not depend on which others are searched).
 #[allow(clippy::too_many_arguments)]
 pub fn point_pushes(
     sb: &Body,
@@ -112,6 +114,7 @@ pub fn point_pushes(
     cfg: &ContactConfig,
     kappa: f64,
     mu: f64,
+    slaves: Option<&[bool]>,
 ) -> Vec<Points> {
     let (scurv, mcurv) = curved;
     let (hs_max, hm_max) = (scurv.bound, mcurv.bound);
@@ -131,7 +134,18 @@ pub fn point_pushes(
     let (mlo, mhi) = master_near;
     let mbox = (mlo.add_scalar(-press), mhi.add_scalar(press));
     let xm = &mb.state.x;
-    let (live, sboxes) = (scurv.segs(), scurv.boxes());
+    let (mut live, mut sboxes) = (scurv.segs(), scurv.boxes());
+    let kept: (Vec<u32>, Vec<(Vec3, Vec3)>);
+    if let Some(want) = slaves {
+        let wanted = |j: &u32| want.get(*j as usize).copied().unwrap_or(false);
+        kept = live
+            .iter()
+            .zip(sboxes)
+            .filter(|(j, _)| wanted(j))
+            .map(|(j, b)| (*j, *b))
+            .unzip();
+        (live, sboxes) = (&kept.0, &kept.1);
+    }
     live.par_chunks(SEG_CHUNK)
         .zip(sboxes.par_chunks(SEG_CHUNK))
         .map(|(segs, bxs)| {

@@ -19,7 +19,8 @@ use std::mem::take;
 /// kappa = s mu / dt_ref^2 (the soft rule per area, mu the lighter areal mass).
 /// `counted`: which slave segments' points the statistics book, of a and of b (None:
 /// all): a split group's views overlap, and each point is booked by the holder that
-/// counts its slave segment's element.
+/// counts its slave segment's element. `slaves`: the slave segments searched, of a and
+/// of b (None: all; a split group's view searches those that can push its owned nodes).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn segment_pair(
     bodies: &mut [Body],
@@ -30,6 +31,7 @@ pub(crate) fn segment_pair(
     cfg: &ContactConfig,
     dt_ref: f64,
     counted: (Option<&[bool]>, Option<&[bool]>),
+    slaves: (Option<&[bool]>, Option<&[bool]>),
 ) -> PairStats {
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
@@ -43,8 +45,8 @@ pub(crate) fn segment_pair(
     let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
     // the other's segments a point can touch lie in the box of the other's near set
     let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
-    let first = point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu);
-    let second = point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu);
+    let first = point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu, slaves.0);
+    let second = point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu, slaves.1);
     let mut st = PairStats::empty(a.def.id, b.def.id, 0);
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, (ia, ib), &first, &mut st, true, counted.0);

@@ -153,6 +153,7 @@ pub fn contact_forces(
         figures: &[],
         counted: &[],
         counted_segments: &[],
+        slave_segments: &[],
     };
     contact_forces_given(bodies, cfg, state, element_dt, bounds, h, step, given)
 }
@@ -164,13 +165,15 @@ pub fn contact_forces(
 /// book (`counted`, by body index then node; empty: every node): a split group's
 /// views overlap, and each push is booked by the holder owning its slave node; under
 /// the segment pass, by the holder counting the element of its point's slave segment
-/// (`counted_segments`, by body index then segment; empty: every segment).
+/// (`counted_segments`, by body index then segment; empty: every segment), and only
+/// the slave segments `slave_segments` holds are searched (empty: all).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Given<'a> {
     pub closing: Option<&'a BTreeMap<(u32, u32), Option<f64>>>,
     pub figures: &'a [Option<NodeFigures>],
     pub counted: &'a [Vec<bool>],
     pub counted_segments: &'a [Vec<bool>],
+    pub slave_segments: &'a [Vec<bool>],
 }
 
 /// The closing-speed step of a pair of different bodies (`SpeedRule::LimitDt`): a
@@ -331,7 +334,9 @@ pub(crate) fn contact_forces_given(
         if segment_pass {
             let segs = |k: usize| given.counted_segments.get(k).map(Vec::as_slice);
             let counted = (segs(ia), segs(ib));
-            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref, counted);
+            let wanted = |k: usize| given.slave_segments.get(k).map(Vec::as_slice);
+            let slaves = (wanted(ia), wanted(ib));
+            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref, counted, slaves);
             // the stiffening law's step (docs/theory-contact.md, "Depth")
             let (a, b) = (&bodies[ia], &bodies[ib]);
             let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);

@@ -374,6 +374,7 @@ impl GroupSplit {
                         figures: &[],
                         counted: &view.counted,
                         counted_segments: &view.counted_segments,
+                        slave_segments: &view.slave_segments,
                     },
                 )
                 .map_err(|f| in_whole(f, view))?;

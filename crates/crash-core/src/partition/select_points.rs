@@ -12,47 +12,79 @@
 //! only if their node boxes lie within c + bulge(s) + bulge(m) (its gap is d - h_m - c
 //! and it stands off its facet by at most h_s); each bulge is at most its segment's
 //! loose bound (pairs / 8 times its node box's diagonal), and until the next build
-//! every node moves at most the skin, so G = t_max + 2 L + 2 skin (L the largest loose
-//! bound at the build, the diagonals grown by 2 sqrt(3) skin) bounds that distance at
-//! the build. The view's slaves are the segments within G of another body's segment
+//! every node moves at most the skin, so for bodies j and k G = c + L_j + L_k + 2 skin
+//! (L_j body j's largest loose bound at the build, the diagonals grown by 2 sqrt(3)
+//! skin) bounds that distance at the build. The view's slaves are the segments within G of another body's segment
 //! that are in that second ring or within G of another body's segment in it; its
 //! masters every segment of another body within G of a slave (so each point's closest
 //! master is the whole body's); then the corners and one ring of segments around every
 //! node (complete corner normals, and every node a pull-back reaches).
-//! A point of a segment outside those sets may find a wrong master or none, but its
-//! pushes reach no owned node, and the statistics book only the points of the segments
-//! the holder counts (`View::counted_segments`).
+//! Only the slaves are searched (`View::slave_segments`): a point of another segment
+//! could find a wrong master or none, and its pushes would reach no owned node anyway.
+//! The statistics book only the points of the segments the holder counts
+//! (`View::counted_segments`).
 
 use super::select::{node_box, nodes_of, Boxes};
 use crate::body::Body;
 
-/// The segments' reach G of a view build (module text): the thickest contact body,
-/// the largest loose bulge bound with every node box grown by the skin, two skins.
-pub(super) fn segment_reach(bodies: &[Body], skin: f64) -> f64 {
-    let grow = 2.0 * 3f64.sqrt() * skin;
-    let mut t_max = 0.0f64;
-    let mut loose = 0.0f64;
-    for b in bodies.iter().filter(|b| b.def.contact) {
-        t_max = t_max.max(b.def.section.thickness);
-        for e in 0..b.def.element_count() {
-            let (lo, hi) = node_box(b, e);
-            let pairs = if nodes_of(b, e).len() == 3 { 3.0 } else { 6.0 };
-            loose = loose.max(pairs / 8.0 * ((hi - lo).norm() + grow));
-        }
-    }
-    (t_max + 2.0 * loose + 2.0 * skin) * (1.0 + 1e-9)
+/// The segments' reach of a view build (module text), per pair of bodies.
+pub(super) struct SegmentReach {
+    /// Per body: its largest loose bulge bound, every node box grown by the skin (0
+    /// for a body without contact), and its thickness.
+    loose: Vec<f64>,
+    thick: Vec<f64>,
+    skin: f64,
 }
 
-/// The nodes and segments (whole-body indices, sorted) of every body of `bodies` in
-/// the view under the segment pass (empty for a body without contact). `mine[j]`: the
-/// holder's elements of body j (None: none); `all`: every contact body's elements;
-/// `g`: `segment_reach`.
+impl SegmentReach {
+    pub(super) fn of(bodies: &[Body], skin: f64) -> Self {
+        let grow = 2.0 * 3f64.sqrt() * skin;
+        let loose = bodies
+            .iter()
+            .map(|b| {
+                if !b.def.contact {
+                    return 0.0;
+                }
+                (0..b.def.element_count())
+                    .map(|e| {
+                        let (lo, hi) = node_box(b, e);
+                        let pairs = if nodes_of(b, e).len() == 3 { 3.0 } else { 6.0 };
+                        pairs / 8.0 * ((hi - lo).norm() + grow)
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        let thick = bodies.iter().map(|b| b.def.section.thickness).collect();
+        Self { loose, thick, skin }
+    }
+
+    /// G of bodies j and k.
+    fn g(&self, j: usize, k: usize) -> f64 {
+        let c = 0.5 * (self.thick[j] + self.thick[k]);
+        (c + self.loose[j] + self.loose[k] + 2.0 * self.skin) * (1.0 + 1e-9)
+    }
+
+    /// The largest G of body j with any body.
+    fn most(&self, j: usize) -> f64 {
+        (0..self.loose.len())
+            .map(|k| self.g(j, k))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// What `select_segments` picks: per body, the nodes and segments of the view and the
+/// slaves among them (whole-body indices, sorted).
+pub(super) type Picked = (Vec<(Vec<u32>, Vec<u32>)>, Vec<Vec<u32>>);
+
+/// The nodes and segments of every body of `bodies` in the view under the segment
+/// pass (empty for a body without contact), and its slaves. `mine[j]`: the holder's
+/// elements of body j (None: none); `all`: every contact body's elements.
 pub(super) fn select_segments(
     bodies: &[Body],
     mine: &[Option<Vec<u32>>],
     all: &Boxes,
-    g: f64,
-) -> Vec<(Vec<u32>, Vec<u32>)> {
+    reach: &SegmentReach,
+) -> Picked {
     // the second ring around the owned nodes: segments with a node of a holder element
     let ring2: Vec<Option<Vec<u32>>> = bodies
         .iter()
@@ -83,10 +115,11 @@ pub(super) fn select_segments(
                 return None;
             }
             let body_box = crate::mesh::bounds(&b.state.x);
-            let others = |t: &Boxes| -> Vec<usize> {
-                t.near_bodies(body_box, g)
+            let others = |t: &Boxes| -> Vec<(usize, f64)> {
+                t.near_bodies(body_box, reach.most(j))
                     .into_iter()
                     .filter(|&k| k != j)
+                    .map(|k| (k, reach.g(j, k)))
                     .collect()
             };
             let (near_all, near_ring) = (others(all), others(&ring2_boxes));
@@ -99,16 +132,16 @@ pub(super) fn select_segments(
                 (0..ne)
                     .filter(|&e| {
                         let bx = node_box(b, e as usize);
-                        near_all.iter().any(|&k| all.near(k, bx, g))
+                        near_all.iter().any(|&(k, g)| all.near(k, bx, g))
                             && (in_ring[e as usize]
-                                || near_ring.iter().any(|&k| ring2_boxes.near(k, bx, g)))
+                                || near_ring.iter().any(|&(k, g)| ring2_boxes.near(k, bx, g)))
                     })
                     .collect(),
             )
         })
         .collect();
     let slave_boxes = Boxes::of_elements(bodies, &slaves);
-    bodies
+    let picked = bodies
         .iter()
         .enumerate()
         .map(|(j, b)| {
@@ -117,10 +150,11 @@ pub(super) fn select_segments(
             }
             let ne = b.def.element_count();
             let body_box = crate::mesh::bounds(&b.state.x);
-            let others: Vec<usize> = slave_boxes
-                .near_bodies(body_box, g)
+            let others: Vec<(usize, f64)> = slave_boxes
+                .near_bodies(body_box, reach.most(j))
                 .into_iter()
                 .filter(|&k| k != j)
+                .map(|k| (k, reach.g(j, k)))
                 .collect();
             let mut take = vec![false; ne];
             for &e in slaves[j].iter().flatten() {
@@ -130,7 +164,7 @@ pub(super) fn select_segments(
             for (e, t) in take.iter_mut().enumerate() {
                 if !*t && !others.is_empty() {
                     let bx = node_box(b, e);
-                    *t = others.iter().any(|&k| slave_boxes.near(k, bx, g));
+                    *t = others.iter().any(|&(k, g)| slave_boxes.near(k, bx, g));
                 }
             }
             // their corners, then the ring: every segment at one of those nodes
@@ -155,7 +189,11 @@ pub(super) fn select_segments(
             let element = (0..ne as u32).filter(|&e| take[e as usize]).collect();
             (node, element)
         })
-        .collect()
+        .collect();
+    (
+        picked,
+        slaves.into_iter().map(Option::unwrap_or_default).collect(),
+    )
 }
 
 /// The union of two selections of the same bodies (sorted lists).

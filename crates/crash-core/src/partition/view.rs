@@ -2,7 +2,7 @@
 //! how it is selected and filled (the reach rule is in `contact`'s module text).
 
 use super::select::{select, Boxes, Reach};
-use super::select_points::{segment_reach, select_segments, union};
+use super::select_points::{select_segments, union, SegmentReach};
 use super::{GroupSplit, Split};
 use crate::body::Body;
 use crate::contact::{ContactPass, ContactState};
@@ -54,6 +54,9 @@ pub struct View {
     /// Per view body and view element: counted by one of `parts` (the segment pass's
     /// statistics book the points of these slave segments only).
     pub(super) counted_segments: Vec<Vec<bool>>,
+    /// Per view body and view element under the segment pass: its points can push an
+    /// owned node (the segments searched as slaves; empty: all).
+    pub(super) slave_segments: Vec<Vec<bool>>,
     pub(super) state: ContactState,
 }
 
@@ -69,6 +72,7 @@ impl View {
             owned_at: Vec::new(),
             counted: Vec::new(),
             counted_segments: Vec::new(),
+            slave_segments: Vec::new(),
             state: ContactState::default(),
         }
     }
@@ -143,7 +147,7 @@ impl GroupSplit {
             })
             .collect();
         let all = Boxes::of_elements(&self.whole, &every);
-        let g_segments = segment_reach(&self.whole, self.skin);
+        let g_segments = SegmentReach::of(&self.whole, self.skin);
         let mut views = Vec::new();
         for parts in self.view_parts() {
             let mine = parts.iter().any(|&(i, q)| self.mine[i][q]);
@@ -176,17 +180,20 @@ impl GroupSplit {
                 let q = self.splits[j].owner[n as usize].0 as usize;
                 view.gives(j, q)
             };
-            let mut picked = select(&self.whole, owned, &reach);
-            if self.contact.pass == ContactPass::Segments {
+            let mut slaves = Vec::new();
+            let picked = if self.contact.pass == ContactPass::Segments {
                 // the segment pass's reach (select_points.rs); the node passes' rule
                 // stays for self-contact, which runs node to segment
-                let segs = select_segments(&self.whole, &lists, &all, g_segments);
-                picked = if self.whole.iter().any(|b| b.def.self_contact) {
-                    union(picked, segs)
+                let (segs, s) = select_segments(&self.whole, &lists, &all, &g_segments);
+                slaves = s;
+                if self.whole.iter().any(|b| b.def.self_contact) {
+                    union(select(&self.whole, owned, &reach), segs)
                 } else {
                     segs
-                };
-            }
+                }
+            } else {
+                select(&self.whole, owned, &reach)
+            };
             for (j, (b, (node, element))) in self.whole.iter().zip(picked).enumerate() {
                 if node.is_empty() {
                     continue;
@@ -211,6 +218,10 @@ impl GroupSplit {
                     vb.def_mut().mass = own.def.mass.clone();
                 }
                 view.bodies.push(vb);
+                if let Some(s) = slaves.get(j) {
+                    let flags = element.iter().map(|e| s.binary_search(e).is_ok()).collect();
+                    view.slave_segments.push(flags);
+                }
                 view.fill
                     .push(runs(node.iter().map(|&n| self.splits[j].owner[n as usize])));
                 view.index.push(j);
