@@ -488,7 +488,15 @@ class ContactStage:
     def __init__(self, cfg):
         self.cfg = cfg
         self.surfaces = {}
+        self.geometries = {}
         self.stats = []
+
+    def geometry(self, b):
+        g = self.geometries.get(b.id)
+        if g is None:
+            from .contact_segments import Geometry
+            g = self.geometries[b.id] = Geometry(b)
+        return g
 
     def surface(self, b):
         s = self.surfaces.get(b.id)
@@ -533,6 +541,17 @@ class ContactStage:
                     dt[ib] = min(dt[ib], d)
                     pair_dt = min(pair_dt, d)
             dt_ref = REFERENCE_SAFETY * pair_dt
+            if cfg.get("pass", "nodes") == "segments" and not self_pair:
+                # the segment pass (contact_segments.py) and the stiffening law's step
+                from .contact_segments import segment_pair, law_step
+                st = segment_pair(a, b, self.geometry(a), self.geometry(b), cfg, dt_ref)
+                c = 0.5 * (a.thickness + b.thickness)
+                d = law_step(cfg["penalty_scale"], st["max_penetration"] / c, pair_dt)
+                if d is not None:
+                    dt[ia] = min(dt[ia], d)
+                    dt[ib] = min(dt[ib], d)
+                self.stats.append(st)
+                continue
             first = pushes(search(a, b, sb, self_pair), a, b, sb, cfg, dt_ref)
             second = None if self_pair else pushes(search(b, a, sa, False), b, a, sa, cfg, dt_ref)
             st = dict(a=ida, b=idb, active=0, max_penetration=0.0, normal_force=0.0)

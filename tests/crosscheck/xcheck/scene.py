@@ -238,7 +238,12 @@ def load(path, end_time=None, output_interval=None):
         "penalty_scale": float(c.get("penalty_scale", 0.1)),
         "damping_ratio": float(c.get("damping_ratio", 0.0)),
         "speed_rule": c.get("speed_rule", "limit_dt"),
+        "pass": c.get("pass", "nodes"),
     }
+    if s.contact["pass"] not in ("nodes", "segments"):
+        raise ValueError(f"contact.pass: {s.contact['pass']!r} is not \"nodes\" or \"segments\"")
+    if s.contact["pass"] == "segments" and s.contact["penalty"] != "soft":
+        raise ValueError("contact.pass = \"segments\" needs penalty = \"soft\"")
     materials = {k: _material(v) for k, v in spec.get("materials", {}).items()}
     scene_dir = os.path.dirname(os.path.abspath(path))
     s.bodies = [_body(i, b, materials, scene_dir) for i, b in enumerate(spec.get("bodies", []))]
