@@ -61,17 +61,19 @@ fn the_showcase_split_over_two_workers_has_the_single_process_state() {
 /// the showcase to 1.2 ms ends in the single-process state, and the log names the split.
 #[test]
 fn the_showcase_split_over_two_grpc_workers_has_the_single_process_state() {
-    let out = out_dir("split-grpc");
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes/sphere-on-plate.toml");
-    let extra = [
-        "--split",
-        "auto",
-        "--end-time",
-        "1.2e-3",
-        "--output-interval",
-        "6e-4",
-    ];
-    let (mut m, url) = master(&p, 2, &out, &extra);
+    let s = grpc_split("scenes/sphere-on-plate.toml", "split-grpc", SHOWCASE_SPLIT);
+    assert_eq!(s.final_state_hash, "1370e0b4b94fd75d");
+}
+
+/// `crash-master` with `extra` over 2 `crash-worker` processes on scene `rel` (into
+/// out dir `name`): the log names a split over both workers, the run ends without a
+/// fault; its summary.
+fn grpc_split(rel: &str, name: &str, extra: &[&str]) -> crash_io::Summary {
+    let out = out_dir(name);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel);
+    let (mut m, url) = master(&p, 2, &out, extra);
     let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
     assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
     for p in &mut w {
@@ -85,8 +87,18 @@ fn the_showcase_split_over_two_grpc_workers_has_the_single_process_state() {
     );
     let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
     assert!(s.fault.is_none(), "{:?}", s.fault);
-    assert_eq!(s.final_state_hash, "1370e0b4b94fd75d");
+    s
 }
+
+/// The showcase's split run over gRPC workers: to 1.2 ms, a frame at half time.
+const SHOWCASE_SPLIT: &[&str] = &[
+    "--split",
+    "auto",
+    "--end-time",
+    "1.2e-3",
+    "--output-interval",
+    "6e-4",
+];
 
 /// The showcase under the segment pass (`contact.pass = "segments"`) to 1.2 ms.
 const SEGMENTS: &str = "scenes/bench/sphere-on-plate-segments.toml";
@@ -108,27 +120,7 @@ fn the_showcase_under_the_segment_pass_split_over_two_workers_has_the_single_pro
 /// The same over 2 `crash-worker` processes (gRPC on loopback).
 #[test]
 fn the_showcase_under_the_segment_pass_split_over_two_grpc_workers_has_the_single_process_state() {
-    let out = out_dir("split-grpc-segments");
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(SEGMENTS);
-    let extra = [
-        "--split",
-        "auto",
-        "--end-time",
-        "1.2e-3",
-        "--output-interval",
-        "6e-4",
-    ];
-    let (mut m, url) = master(&p, 2, &out, &extra);
-    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
-    assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
-    for p in &mut w {
-        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
-    }
-    assert!(m.log().contains("split over workers"), "{}", m.log());
-    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
-    assert!(s.fault.is_none(), "{:?}", s.fault);
+    let s = grpc_split(SEGMENTS, "split-grpc-segments", SHOWCASE_SPLIT);
     assert_eq!(s.final_state_hash, SEGMENTS_HASH);
 }
 
@@ -146,18 +138,7 @@ fn the_segment_pass_stiffening_step_over_split_workers_keeps_the_single_process_
     let (hash, splits) = split_run(&inp, 2, SplitMode::Always);
     assert!(splits >= 1);
     assert_eq!(format!("{hash:016x}"), want);
-    let out = out_dir("split-grpc-stiffening");
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(rel);
-    let (mut m, url) = master(&p, 2, &out, &["--split", "always"]);
-    let mut w: Vec<_> = (0..2).map(|_| worker(&url, 1, &[])).collect();
-    assert!(m.wait(Duration::from_secs(600)).success(), "{}", m.log());
-    for p in &mut w {
-        assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
-    }
-    let s = crash_io::read_summary(out.join(crash_io::SUMMARY_JSON)).unwrap();
-    assert!(s.fault.is_none(), "{:?}", s.fault);
+    let s = grpc_split(rel, "split-grpc-stiffening", &["--split", "always"]);
     assert!(
         s.dt_min_s < 0.5 * s.dt_max_s,
         "{} {}",

@@ -188,7 +188,7 @@ pub(super) fn select(
         .iter()
         .zip(slaves)
         .enumerate()
-        .map(|(j, (b, mut keep))| {
+        .map(|(j, (b, keep))| {
             if !b.def.contact {
                 return (Vec::new(), Vec::new());
             }
@@ -202,7 +202,7 @@ pub(super) fn select(
             let itself = b.def.self_contact;
             // a slave's own segments too (its normal sums them), then the segments near
             // a slave of another body
-            let mut take: Vec<bool> = (0..ne)
+            let take: Vec<bool> = (0..ne)
                 .map(|e| {
                     if nodes_of(b, e).iter().any(|&n| keep[n as usize]) {
                         return true;
@@ -215,30 +215,41 @@ pub(super) fn select(
                         || (itself && reach.mine.near(j, bx, 2.0 * g))
                 })
                 .collect();
-            let corners = |keep: &mut Vec<bool>, take: &[bool]| {
-                for e in (0..ne).filter(|&e| take[e]) {
-                    for &n in nodes_of(b, e) {
-                        keep[n as usize] = true;
-                    }
-                }
-            };
-            corners(&mut keep, &take);
-            // the ring: every segment at a node of the view, so that each normal read
-            // sums all of its node's segments
-            if reach.ring {
-                let core = keep.clone();
-                for (e, t) in take.iter_mut().enumerate() {
-                    if nodes_of(b, e).iter().any(|&n| core[n as usize]) {
-                        *t = true;
-                    }
-                }
-                corners(&mut keep, &take);
-            }
-            let node = (0..keep.len() as u32)
-                .filter(|&n| keep[n as usize])
-                .collect();
-            let element = (0..ne as u32).filter(|&e| take[e as usize]).collect();
-            (node, element)
+            corners_and_ring(b, take, keep, reach.ring)
         })
         .collect()
+}
+
+/// The view's lists of body `b` from the segments taken (`take`) and the nodes kept so
+/// far (`keep`): the corners of the segments, then (`ring`) every segment at one of
+/// those nodes, so that each normal read sums all of its node's segments, and their
+/// corners; sorted whole-body indices (nodes, segments).
+pub(super) fn corners_and_ring(
+    b: &Body,
+    mut take: Vec<bool>,
+    mut keep: Vec<bool>,
+    ring: bool,
+) -> (Vec<u32>, Vec<u32>) {
+    let ne = take.len();
+    let corners = |keep: &mut Vec<bool>, take: &[bool]| {
+        for e in (0..ne).filter(|&e| take[e]) {
+            for &n in nodes_of(b, e) {
+                keep[n as usize] = true;
+            }
+        }
+    };
+    corners(&mut keep, &take);
+    if ring {
+        for (e, t) in take.iter_mut().enumerate() {
+            if !*t && nodes_of(b, e).iter().any(|&n| keep[n as usize]) {
+                *t = true;
+            }
+        }
+        corners(&mut keep, &take);
+    }
+    let node = (0..keep.len() as u32)
+        .filter(|&n| keep[n as usize])
+        .collect();
+    let element = (0..ne as u32).filter(|&e| take[e as usize]).collect();
+    (node, element)
 }

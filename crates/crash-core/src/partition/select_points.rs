@@ -24,7 +24,7 @@
 //! The statistics book only the points of the segments the holder counts
 //! (`View::counted_segments`).
 
-use super::select::{node_box, nodes_of, Boxes};
+use super::select::{corners_and_ring, node_box, nodes_of, Boxes};
 use crate::body::Body;
 
 /// The segments' reach of a view build (module text), per pair of bodies.
@@ -168,26 +168,7 @@ pub(super) fn select_segments(
                 }
             }
             // their corners, then the ring: every segment at one of those nodes
-            let mut keep = vec![false; b.state.x.len()];
-            let corners = |keep: &mut Vec<bool>, take: &[bool]| {
-                for e in (0..ne).filter(|&e| take[e]) {
-                    for &n in nodes_of(b, e) {
-                        keep[n as usize] = true;
-                    }
-                }
-            };
-            corners(&mut keep, &take);
-            for (e, t) in take.iter_mut().enumerate() {
-                if nodes_of(b, e).iter().any(|&n| keep[n as usize]) {
-                    *t = true;
-                }
-            }
-            corners(&mut keep, &take);
-            let node = (0..keep.len() as u32)
-                .filter(|&n| keep[n as usize])
-                .collect();
-            let element = (0..ne as u32).filter(|&e| take[e as usize]).collect();
-            (node, element)
+            corners_and_ring(b, take, vec![false; b.state.x.len()], true)
         })
         .collect();
     (
