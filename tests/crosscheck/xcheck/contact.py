@@ -32,6 +32,19 @@ def margin_for(cfg, body):
     return cfg["margin"] if cfg["margin"] > 0.0 else body.thickness
 
 
+def segment_nodes(body):
+    """The corner nodes of a body's segments, triangles then quads, 4 per row (a
+    triangle's slot 3 repeats node 2)."""
+    nt, nq = len(body.tris), len(body.quads)
+    nodes = np.zeros((nt + nq, 4), dtype=np.int64)
+    if nt:
+        nodes[:nt, :3] = body.tris
+        nodes[:nt, 3] = body.tris[:, 2]
+    if nq:
+        nodes[nt:] = body.quads
+    return nodes
+
+
 class Surface:
     """Segments of a body (triangles, then quads), their smallest node mass, the
     element-form stiffness per unit scale, node adjacency for self-contact."""
@@ -39,12 +52,7 @@ class Surface:
     def __init__(self, body):
         nt, nq = len(body.tris), len(body.quads)
         self.count = np.concatenate([np.full(nt, 3), np.full(nq, 4)]).astype(np.int64)
-        nodes = np.zeros((nt + nq, 4), dtype=np.int64)
-        if nt:
-            nodes[:nt, :3] = body.tris
-            nodes[:nt, 3] = body.tris[:, 2]
-        if nq:
-            nodes[nt:] = body.quads
+        nodes = segment_nodes(body)
         self.nodes = nodes
         m = body.mass[nodes]
         m[:nt, 3] = np.inf

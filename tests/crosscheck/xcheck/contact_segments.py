@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from .vec import dot, cross, norm
-from .contact import project, CREASE_COS, TIE
+from .contact import project, segment_nodes, CREASE_COS, TIE
 
 SPACING = 1.0
 MAX_PARTS = 24
@@ -67,12 +67,7 @@ class Geometry:
         nt, nq = len(body.tris), len(body.quads)
         self.ns = nt + nq
         self.tri = np.arange(self.ns) < nt
-        nodes = np.zeros((self.ns, 4), dtype=np.int64)
-        if nt:
-            nodes[:nt, :3] = body.tris
-            nodes[:nt, 3] = body.tris[:, 2]
-        if nq:
-            nodes[nt:] = body.quads
+        nodes = segment_nodes(body)
         self.nodes = nodes
         self.count = np.where(self.tri, 3, 4)
         self.nn = len(body.x)
