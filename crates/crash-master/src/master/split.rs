@@ -6,8 +6,8 @@
 //! A group is split when its estimated cost exceeds the fair share (total / live
 //! workers) by the balance tolerance (`SplitMode::Auto`), or whenever there are two
 //! workers (`SplitMode::Always`, for tests), and only when it holds no kinematic body
-//! or copy, no history node is asked for (their figures are not merged yet) and the
-//! contact pass is the node pass (the segment pass does not run on parts). Each
+//! or copy and no history node is asked for (their figures are not merged yet); under
+//! the segment pass its contact pass runs in the step (`contact_in_step`). Each
 //! body whose cost exceeds the group's cost over the workers is cut into one part per
 //! live worker (part q on slot q); when none is, a group's largest body carrying at
 //! least half the share (a floor under many bodies) is cut so. The smaller bodies stay
