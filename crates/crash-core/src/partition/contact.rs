@@ -28,6 +28,10 @@
 //! farther than the skin (`VIEW_SKIN` margins) less the tunnelling budget since it was
 //! built.
 //!
+//! Under the segment pass (`ContactPass::Segments`) the views reach farther, by
+//! `partition::select_points`'s rule (a point pushes the nodes around its segments'
+//! corners), and the pass's stiffening step comes back from the views (`views_pass`).
+//!
 //! Global figures: the candidate pairs (body boxes: min/max over the parts), the
 //! element critical steps (min over the parts) and the closing-speed step of each pair
 //! (a mass-weighted mean velocity summed in node order over the whole body: an ordered
