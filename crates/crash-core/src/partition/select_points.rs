@@ -14,11 +14,12 @@
 //! loose bound (pairs / 8 times its node box's diagonal), and until the next build
 //! every node moves at most the skin, so for bodies j and k G = c + L_j + L_k + 2 skin
 //! (L_j body j's largest loose bound at the build, the diagonals grown by 2 sqrt(3)
-//! skin) bounds that distance at the build. The view's slaves are the segments within G of another body's segment
-//! that are in that second ring or within G of another body's segment in it; its
-//! masters every segment of another body within G of a slave (so each point's closest
-//! master is the whole body's); then the corners and one ring of segments around every
-//! node (complete corner normals, and every node a pull-back reaches).
+//! skin) bounds that distance at the build. The view's slaves are the segments within
+//! G of another body's segment that are in that second ring or within G of another
+//! body's segment in it; its masters every segment of another body within G of a slave
+//! (so each point's closest master is the whole body's); then the corners and one ring
+//! of segments around every node (complete corner normals, and every node a pull-back
+//! reaches).
 //! Only the slaves are searched (`View::slave_segments`): a point of another segment
 //! could find a wrong master or none, and its pushes would reach no owned node anyway.
 //! The statistics book only the points of the segments the holder counts

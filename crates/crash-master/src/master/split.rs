@@ -460,19 +460,28 @@ impl<L: WorkerLink> Master<'_, L> {
         if self.split_contact.is_empty() {
             return Ok(());
         }
+        let mut reps = vec![StepReport::default(); self.links.len()];
+        for (w, rep) in self.run_split_contact()? {
+            reps[w].split_contacts.extend(rep.split_contacts);
+        }
+        self.take_split_stats(&mut reps)
+    }
+
+    /// Send every holder a `Contact` with the element steps the last step kept (the
+    /// pending pass runs there); the reports by worker.
+    fn run_split_contact(&mut self) -> Result<Vec<(usize, StepReport)>, MasterError> {
         let dts = std::mem::take(&mut self.split_contact);
-        let nw = self.links.len();
         let cmds = self.to_holders(|| Command::Contact(dts.clone()));
-        let mut reps = vec![StepReport::default(); nw];
+        let mut out = Vec::new();
         for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
             for reply in r {
                 let Reply::Report(rep) = reply else {
                     return Err(self.bad_reply(w, "Contact"));
                 };
-                reps[w].split_contacts.extend(rep.split_contacts);
+                out.push((w, rep));
             }
         }
-        self.take_split_stats(&mut reps)
+        Ok(out)
     }
 
     /// Under the segment pass, the split groups' contact pass runs in the step, right
@@ -487,32 +496,25 @@ impl<L: WorkerLink> Master<'_, L> {
         if !in_step || self.split_contact.is_empty() {
             return Ok(());
         }
-        let dts = std::mem::take(&mut self.split_contact);
-        let cmds = self.to_holders(|| Command::Contact(dts.clone()));
         let mut shares = Vec::new();
-        for (w, r) in self.exchange(cmds)?.into_iter().enumerate() {
-            for reply in r {
-                let Reply::Report(rep) = reply else {
-                    return Err(self.bad_reply(w, "Contact"));
-                };
-                for &(id, dt) in &rep.split_limits {
-                    if !self.holds_part(w, id) || dt.is_nan() || dt <= 0.0 {
-                        let what = format!("a contact step limit of body {id}");
-                        return Err(self.implausible(w, &what));
-                    }
-                    let home = self.split_home(id);
-                    let body = reps
-                        .get_mut(home)
-                        .and_then(|r| r.bodies.iter_mut().find(|b| b.id == id));
-                    if let Some(b) = body {
-                        b.stable_dt = b.stable_dt.min(dt);
-                    }
+        for (w, rep) in self.run_split_contact()? {
+            for &(id, dt) in &rep.split_limits {
+                if !self.holds_part(w, id) || dt.is_nan() || dt <= 0.0 {
+                    let what = format!("a contact step limit of body {id}");
+                    return Err(self.implausible(w, &what));
                 }
-                if let Some(r) = reps.get_mut(w) {
-                    r.compute_ns += rep.compute_ns;
+                let home = self.split_home(id);
+                let body = reps
+                    .get_mut(home)
+                    .and_then(|r| r.bodies.iter_mut().find(|b| b.id == id));
+                if let Some(b) = body {
+                    b.stable_dt = b.stable_dt.min(dt);
                 }
-                shares.push((w, rep.split_contacts));
             }
+            if let Some(r) = reps.get_mut(w) {
+                r.compute_ns += rep.compute_ns;
+            }
+            shares.push((w, rep.split_contacts));
         }
         self.split_now = Some(self.merged_split_shares(shares.into_iter())?);
         Ok(())
