@@ -183,14 +183,15 @@ pub fn penetration_message(built: &crash_scene::Built, p: &crash_scene::Penetrat
             .map_or_else(|| format!("#{id}"), |b| format!("'{}'", b.def.name))
     };
     format!(
-        "bodies {} and {} interpenetrate at t = 0: node {} of {} is {:.3e} m inside {} ({} nodes penetrate); move them apart",
+        "bodies {} and {} interpenetrate at t = 0: {} of {} is {:.3e} m inside {} ({} {} penetrate); move them apart",
         name(p.node_body),
         name(p.segment_body),
-        p.node,
+        p.at,
         name(p.node_body),
         p.depth,
         name(p.segment_body),
-        p.nodes
+        p.nodes,
+        p.at.counted()
     )
 }
 

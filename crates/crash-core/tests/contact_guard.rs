@@ -3,8 +3,8 @@
 mod contact_util;
 
 use contact_util::*;
-use crash_core::contact::{initial_penetrations, ContactConfig};
-use crash_core::{Fault, Run, RunConfig, Vec3};
+use crash_core::contact::{initial_penetrations, ContactConfig, ContactPass, Inside, PenaltyKind};
+use crash_core::{Body, Fault, Run, RunConfig, Vec3};
 
 fn fast_sphere_run(margin: f64, speed: f64) -> Result<Run, Fault> {
     let (r, t) = (0.1, 0.002);
@@ -90,8 +90,11 @@ fn initial_penetrations_name_bodies_and_depth() {
         .find(|q| q.node_body == 0 && q.segment_body == 7)
         .expect("reported");
     assert!((hit.depth - depth).abs() < 1e-12, "depth {}", hit.depth);
+    let Inside::Node(node) = hit.at else {
+        panic!("a node pass reports nodes: {hit:?}")
+    };
     assert!(
-        (s.state.x[hit.node].z - s.state.x.iter().map(|q| q.z).fold(f64::INFINITY, f64::min)).abs()
+        (s.state.x[node].z - s.state.x.iter().map(|q| q.z).fold(f64::INFINITY, f64::min)).abs()
             < 1e-15
     );
     assert!(found
@@ -106,4 +109,58 @@ fn initial_penetrations_name_bodies_and_depth() {
         x.z += 2.0 * depth;
     }
     assert!(initial_penetrations(&[lifted, p], &ContactConfig::default()).is_empty());
+}
+
+/// A coarse sphere whose lowest facet lies flat `lift` beyond contact distance of a
+/// plate: every node is outside, the curved surface the segment pass presses with
+/// bulges below the facet by about the facet's sagitta.
+fn facet_down_sphere(lift: f64) -> (Body, f64) {
+    let (r, t, level) = (0.03, 0.5e-3, 1);
+    let mut m = crash_core::shapes::icosphere(r, level);
+    let tri = m.tris[0];
+    let centroid: Vec3 = tri.iter().map(|&n| m.nodes[n as usize]).sum::<Vec3>() / 3.0;
+    let rot = nalgebra::Rotation3::rotation_between(&centroid, &-Vec3::z()).expect("not opposite");
+    m.transform(rot.matrix(), Vec3::zeros());
+    let low = m.nodes.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    // plate at z = 0 of thickness t: contact distance t
+    m.transform(
+        &nalgebra::Matrix3::identity(),
+        Vec3::new(0.0, 0.0, t + lift - low),
+    );
+    let sagitta = r - (centroid.norm());
+    (shell(0, &m, t), sagitta)
+}
+
+#[test]
+fn a_curved_surface_reaching_into_a_body_where_no_node_does_is_an_initial_penetration_under_the_segment_pass(
+) {
+    let lift = 0.2e-3;
+    let (s, sagitta) = facet_down_sphere(lift);
+    let p = fixed_plate(1, 0.1, 20, 0.5e-3, 0.0);
+    let nodes = ContactConfig::default();
+    let segments = ContactConfig {
+        pass: ContactPass::Segments,
+        penalty: PenaltyKind::Soft,
+        ..ContactConfig::default()
+    };
+    // the node passes see every node 0.2 mm clear
+    assert!(initial_penetrations(&[s.clone(), p.clone()], &nodes).is_empty());
+    let found = initial_penetrations(&[s.clone(), p.clone()], &segments);
+    println!("sagitta {sagitta:.4e} m: {found:?}");
+    let hit = found
+        .iter()
+        .find(|q| q.node_body == 0 && q.segment_body == 1)
+        .expect("the sphere's curved surface is inside the plate's");
+    assert!(matches!(hit.at, Inside::Point { .. }), "{hit:?}");
+    // the curved surface dips below the facet by less than the sphere's sagitta (the
+    // bulge is the quadratic of the nodal normals, 0.4 of it at this facet's centroid)
+    assert!(
+        hit.depth > 0.2 * sagitta && hit.depth < sagitta - lift,
+        "depth {:.4e}",
+        hit.depth
+    );
+    // lifted past the bulge: nothing under either pass
+    let (high, _) = facet_down_sphere(sagitta);
+    let high = initial_penetrations(&[high, p], &segments);
+    assert!(high.is_empty(), "{high:?}");
 }

@@ -360,8 +360,8 @@ pub(crate) fn overlap_error(scene: &Scene, ctx: &Ctx, p: &Penetration) -> SceneE
         ErrorKind::Geometry,
         &key,
         format!(
-            "bodies \"{}\" and \"{}\" interpenetrate at t = 0: {} node(s) of \"{}\" lie closer to \"{}\" than the half-thickness sum {:.4e} m (node {} by {:.4e} m, at element {}); move them apart",
-            a.name, b.name, p.nodes, a.name, b.name, gap, p.node, p.depth, p.segment
+            "bodies \"{}\" and \"{}\" interpenetrate at t = 0: {} {} of \"{}\" lie closer to \"{}\" than the half-thickness sum {:.4e} m ({} by {:.4e} m, at element {}); move them apart",
+            a.name, b.name, p.nodes, p.at.counted(), a.name, b.name, gap, p.at, p.depth, p.segment
         ),
     )
 }

@@ -8,6 +8,7 @@ pub mod curved;
 pub mod figures;
 pub mod forest;
 pub mod narrow;
+pub mod overlap;
 pub(crate) mod passes;
 pub mod quadrature;
 pub(crate) mod reach;
@@ -27,8 +28,7 @@ pub use config::{
     ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
     SOFT_SCALE_LIMIT,
 };
+pub use overlap::{initial_penetrations, Inside, Penetration};
 pub use segment::{project, segments, Projection, Segment};
-pub use stage::{
-    body_bounds, check_moves, contact_forces, initial_penetrations, ContactState, Penetration,
-};
+pub use stage::{body_bounds, check_moves, contact_forces, ContactState};
 pub use stats::{KinLoad, PairStats, Tally};

@@ -5,7 +5,7 @@
 use super::config::ContactConfig;
 use super::curved::{normal_pullback, NormalOf};
 use super::quadrature::BULGE_REACH;
-use super::quadrature::{point_pushes, NormalLoad, Points};
+use super::quadrature::{point_pushes, NormalLoad, PointPush, Points};
 use super::reach::{near_sets, union};
 use super::stats::{KinLoad, PairStats};
 use super::surface::Surface;
@@ -162,4 +162,27 @@ fn apply_points(
     } else {
         (st.kin_b, st.kin_a) = (l_s, l_m);
     }
+}
+
+/// The segment pass's active points of slave body `a` against master body `b` at the
+/// current positions, without forces: their number and the deepest (for the check at
+/// t = 0: a curved surface can reach into another body where no node does).
+pub(crate) fn active_points(
+    a: &Body,
+    sa: &Surface,
+    b: &Body,
+    sb: &Surface,
+    cfg: &ContactConfig,
+) -> (usize, Option<PointPush>) {
+    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+    let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
+    let near_b = union(cb.boxes());
+    // any stiffness: which points are active depends on the gap alone
+    let mu = sa.areal_mass.min(sb.areal_mass);
+    let chunks = point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, 1.0, mu, None);
+    let pushes = chunks.into_iter().flat_map(|c| c.pushes);
+    pushes.fold((0, None), |(n, deepest): (usize, Option<PointPush>), p| {
+        let deeper = deepest.as_ref().is_none_or(|d| p.depth > d.depth);
+        (n + 1, if deeper { Some(p) } else { deepest })
+    })
 }

@@ -12,7 +12,7 @@ use super::config::{
     ContactConfig, ContactPass, PenaltyKind, SpeedRule, CLOSING_FRACTION, REFERENCE_SAFETY,
 };
 use super::figures::NodeFigures;
-use super::narrow::{forces, search, Hit, Normals, Push};
+use super::narrow::{forces, Normals, Push};
 use super::passes::{all_pair_passes, PairJob};
 use super::segment::Segment;
 use super::segpair::segment_pair;
@@ -24,7 +24,6 @@ use super::verlet::NodeLists;
 use crate::body::Body;
 use crate::error::Fault;
 use crate::Vec3;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::mem::take;
 
@@ -88,7 +87,7 @@ pub(crate) fn pairs_of(
 
 /// `body`'s surface, made if new and refreshed for this pass (`Surface::refresh_given`:
 /// `given` and `step` let it use the integration's figures).
-fn ensure_surface<'s>(
+pub(crate) fn ensure_surface<'s>(
     surfaces: &'s mut BTreeMap<u32, Surface>,
     body: &Body,
     skin: f64,
@@ -506,54 +505,4 @@ pub fn check_moves(
         }
     }
     Ok(())
-}
-
-/// A node that starts inside another body's contact surface.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Penetration {
-    /// The body of the penetrating node and the body whose segment it penetrates.
-    pub node_body: u32,
-    pub segment_body: u32,
-    /// The deepest node of this (node body, segment body) pass, its segment and depth
-    /// [m] below the contact surface ((t_a + t_b)/2 from the mid-surface).
-    pub node: usize,
-    pub segment: usize,
-    pub depth: f64,
-    /// How many nodes of the node body penetrate that body.
-    pub nodes: usize,
-}
-
-/// Initial penetrations between different bodies at the current positions, one entry
-/// per (node body, segment body) with any, sorted by that pair.
-pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetration> {
-    let mut out = Vec::new();
-    let mut surfaces = BTreeMap::new();
-    let bounds = body_bounds(bodies);
-    for (ia, ib) in pairs_of(bodies, cfg, &bounds) {
-        if ia == ib {
-            continue;
-        }
-        for (n, s) in [(ia, ib), (ib, ia)] {
-            let (nb, sb) = (&bodies[n], &bodies[s]);
-            let chunks = super::surface::node_chunks(nb);
-            let surf = ensure_surface(&mut surfaces, sb, cfg.margin_for(sb), None, None);
-            let hits = search(nb, &chunks, sb, surf, false, &mut NodeLists::default());
-            let deepest = hits.iter().fold(None::<&Hit>, |d, h| match d {
-                Some(d) if d.depth >= h.depth => Some(d),
-                _ => Some(h),
-            });
-            if let Some(h) = deepest {
-                out.push(Penetration {
-                    node_body: nb.def.id,
-                    segment_body: sb.def.id,
-                    node: h.node as usize,
-                    segment: h.segment as usize,
-                    depth: h.depth,
-                    nodes: hits.len(),
-                });
-            }
-        }
-    }
-    out.sort_by_key(|p| (p.node_body, p.segment_body));
-    out
 }
