@@ -41,8 +41,11 @@ pub const MAX_PARTS: usize = 24;
 /// a share of c, and farther where the meshes' bulge bounds are larger (coarse curved
 /// meshes: a level-1 sphere of R 30 mm bulges 1.6 mm off its facets, 1.3 c).
 pub const BULGE_REACH: f64 = 0.25;
-/// Slave segments per task.
+/// Most slave segments per task.
 const SEG_CHUNK: usize = 256;
+/// Tasks per thread of the pool the slave segments are cut into (fewer, larger ones
+/// when there are few segments: at least one query group each).
+const TASKS_PER_THREAD: usize = 4;
 /// Slave segments per master tree query (consecutive ones: the mesh order keeps them
 /// near each other).
 const QUERY_GROUP: usize = 8;
@@ -134,21 +137,30 @@ pub fn point_pushes(
     let (mlo, mhi) = master_near;
     let mbox = (mlo.add_scalar(-press), mhi.add_scalar(press));
     let xm = &mb.state.x;
-    let (mut live, mut sboxes) = (scurv.segs(), scurv.boxes());
-    let kept: (Vec<u32>, Vec<(Vec3, Vec3)>);
-    if let Some(want) = slaves {
-        let wanted = |j: &u32| want.get(*j as usize).copied().unwrap_or(false);
-        kept = live
-            .iter()
-            .zip(sboxes)
-            .filter(|(j, _)| wanted(j))
-            .map(|(j, b)| (*j, *b))
-            .unzip();
-        (live, sboxes) = (&kept.0, &kept.1);
-    }
-    live.par_chunks(SEG_CHUNK)
-        .zip(sboxes.par_chunks(SEG_CHUNK))
-        .map(|(segs, bxs)| {
+    // the slave segments searched: those wanted whose node box meets the master's near
+    // box grown by `press` (the rest hold no point that can touch), in index order
+    let wanted = |j: &u32| slaves.is_none_or(|w| w.get(*j as usize).copied().unwrap_or(false));
+    let passing: Vec<(u32, (Vec3, Vec3))> = scurv
+        .segs()
+        .iter()
+        .zip(scurv.boxes())
+        .filter(|(j, sbx)| {
+            let gap = box_gap(sbx, &mbox);
+            wanted(j) && (gap.is_nan() || gap <= 0.0)
+        })
+        .map(|(&js, &sbx)| (js, sbx))
+        .collect();
+    // tasks of a few query groups each, a few tasks per thread: the points cluster
+    // where the bodies touch, so tasks much larger than that leave a thread idle
+    let per_task = passing
+        .len()
+        .div_ceil(TASKS_PER_THREAD * rayon::current_num_threads());
+    let chunk = per_task
+        .next_multiple_of(QUERY_GROUP)
+        .clamp(QUERY_GROUP, SEG_CHUNK);
+    passing
+        .par_chunks(chunk)
+        .map(|passing| {
             let mut out = Points::default();
             let mut cand = Vec::new();
             let mut group_cand = Vec::new();
@@ -165,15 +177,6 @@ pub fn point_pushes(
                 let (lo, hi) = (sbx.0.add_scalar(-gp), sbx.1.add_scalar(gp));
                 ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
             };
-            let passing: Vec<(u32, (Vec3, Vec3))> = segs
-                .iter()
-                .zip(bxs)
-                .filter(|(_, sbx)| {
-                    let gap = box_gap(sbx, &mbox);
-                    gap.is_nan() || gap <= 0.0
-                })
-                .map(|(&js, &sbx)| (js, sbx))
-                .collect();
             for group in passing.chunks(QUERY_GROUP) {
                 // one tree query for the group's union box; each segment keeps the
                 // segments whose stored box meets its own box (the tree's test: the set

@@ -8,6 +8,10 @@ use super::curved::{loose_bulge_bound, near_curved, node_box, Curved, NearCurved
 use super::segment::{closest, Closest, Corners, Segment};
 use super::surface::Surface;
 use crate::Vec3;
+use rayon::prelude::*;
+
+/// Segments per task of a near set's node boxes.
+const LIVE_TASK: usize = 256;
 
 /// Euclidean gap of two boxes (0 when they meet).
 pub(crate) fn box_gap(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
@@ -32,7 +36,8 @@ fn live_boxes(
     let mut live = Vec::new();
     surf.near_segments(&[lo.x, lo.y, lo.z], &[hi.x, hi.y, hi.z], &mut live);
     let boxes = live
-        .iter()
+        .par_iter()
+        .with_min_len(LIVE_TASK)
         .map(|&j| node_box(&surf.segments[j as usize], x))
         .collect();
     (live, boxes)
@@ -97,8 +102,10 @@ pub(crate) fn near_sets(
     let bounds = |s: &Surface| s.bounds();
     // 1. as before this step: every segment within the loose reach of the other body
     let live1 = base + sp.loose_bulge_ub + sq.loose_bulge_ub;
-    let (live_p, boxes_p) = live_boxes(sp, xp, &bounds(sq), live1);
-    let (live_q, boxes_q) = live_boxes(sq, xq, &bounds(sp), live1);
+    let ((live_p, boxes_p), (live_q, boxes_q)) = rayon::join(
+        || live_boxes(sp, xp, &bounds(sq), live1),
+        || live_boxes(sq, xq, &bounds(sp), live1),
+    );
     let grow1 =
         base + loose_bulge_bound(sp, &live_p, &boxes_p) + loose_bulge_bound(sq, &live_q, &boxes_q);
     let cp = near_curved(sp, xp, &live_p, &boxes_p, &union(&boxes_q), grow1);
