@@ -45,8 +45,12 @@ pub(crate) fn segment_pair(
     let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
     // the other's segments a point can touch lie in the box of the other's near set
     let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
-    let first = point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu, slaves.0);
-    let second = point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu, slaves.1);
+    // the two directions at once (each reads only positions): the pool gets both
+    // directions' tasks, and a direction with few points does not leave a thread idle
+    let (first, second) = rayon::join(
+        || point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu, slaves.0),
+        || point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu, slaves.1),
+    );
     let mut st = PairStats::empty(a.def.id, b.def.id, 0);
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, (ia, ib), &first, &mut st, true, counted.0);
