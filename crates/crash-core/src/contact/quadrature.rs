@@ -46,6 +46,8 @@ const SEG_CHUNK: usize = 256;
 /// Tasks per thread of the pool the slave segments are cut into (fewer, larger ones
 /// when there are few segments: at least one query group each).
 const TASKS_PER_THREAD: usize = 4;
+/// Columns of a strip (two points each) whose points search one list of masters.
+const BLOCK: usize = 4;
 /// Slave segments per master tree query (consecutive ones: the mesh order keeps them
 /// near each other).
 const QUERY_GROUP: usize = 8;
@@ -293,8 +295,13 @@ fn slave_segment(
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
     let (reach, touch) = (r.reach, r.touch);
-    let touch2 = touch * touch;
     let mut keep: Vec<usize> = Vec::with_capacity(masters.len());
+    let mut block: Vec<usize> = Vec::with_capacity(masters.len());
+    let near = Near {
+        masters,
+        touch,
+        hs_bound,
+    };
     let subs = if seg.count == 3 { 1 } else { 4 };
     for sub in 0..subs {
         let st = sub_triangle(seg, xs_, sub);
@@ -331,17 +338,30 @@ fn slave_segment(
                 hi = hi.sup(p);
             }
             let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
-            keep.clear();
-            keep.extend((0..masters.len()).filter(|&mi| {
-                let m = &masters[mi];
-                !gap_at_least(box_gap2(&strip, &m.bx), touch, touch2)
-                    && m.slab
-                        .is_none_or(|sl| sl.gap_hull(&corners, hs_bound) < touch)
-            }));
+            near.cull(&corners, 0..masters.len(), &mut keep);
             if keep.is_empty() {
                 continue;
             }
-            for (u, v) in strip_points(n, i) {
+            // a long strip in blocks of BLOCK columns (two points each), each point
+            // searching the strip's masters that come within touch of its block: on a
+            // coarse mesh most of a long strip lies away from the contact
+            let mut at_block = usize::MAX;
+            for (k, (u, v)) in strip_points(n, i).enumerate() {
+                if k / (2 * BLOCK) != at_block {
+                    at_block = k / (2 * BLOCK);
+                    let (j0, j1) = (at_block * BLOCK, ((at_block + 1) * BLOCK).min(n - i));
+                    let (v0, v1) = (j0 as f64 / n as f64, j1 as f64 / n as f64);
+                    let bc = [
+                        flat_at(u0, v0),
+                        flat_at(u1, v0),
+                        flat_at(u0, v1),
+                        flat_at(u1, v1),
+                    ];
+                    near.cull(&bc, keep.iter().copied(), &mut block);
+                }
+                if block.is_empty() {
+                    continue;
+                }
                 let mut w = base;
                 for q in 0..4 {
                     w[q] += u * st.dw_du[q] + v * st.dw_dv[q];
@@ -351,7 +371,7 @@ fn slave_segment(
                 let xa = flat + nsub * hs;
                 // closest master segment (ties within TIE c: lowest index; `masters` sorted)
                 let again;
-                let (pr, m, mcv) = match nearest(&xa, masters, &keep, r) {
+                let (pr, m, mcv) = match nearest(&xa, masters, &block, r) {
                     Pick::Found(pr, mi) => (pr, &masters[mi], mcurv.of(&masters[mi])),
                     Pick::Drop => continue,
                     Pick::Rerun => {
@@ -453,5 +473,36 @@ fn slave_segment(
                 });
             }
         }
+    }
+}
+
+/// The masters a region of a slave segment's points can touch.
+struct Near<'a> {
+    masters: &'a [Master],
+    touch: f64,
+    hs_bound: f64,
+}
+
+impl Near<'_> {
+    /// Of the masters `from` (positions in `masters`, in order), into `out`, those whose
+    /// box and slab come within touch of the region: the hull of its flat `corners`
+    /// grown by the slave's bulge bound holds its points. A master left out lies at
+    /// touch or beyond from every point of the region, which `reach::nearest` skips
+    /// either way (no bits depend on the region's size).
+    fn cull(&self, corners: &[Vec3; 4], from: impl Iterator<Item = usize>, out: &mut Vec<usize>) {
+        let (mut lo, mut hi) = (corners[0], corners[0]);
+        for p in &corners[1..] {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        let region = (lo.add_scalar(-self.hs_bound), hi.add_scalar(self.hs_bound));
+        let touch2 = self.touch * self.touch;
+        out.clear();
+        out.extend(from.filter(|&mi| {
+            let m = &self.masters[mi];
+            !gap_at_least(box_gap2(&region, &m.bx), self.touch, touch2)
+                && m.slab
+                    .is_none_or(|sl| sl.gap_hull(corners, self.hs_bound) < self.touch)
+        }));
     }
 }
