@@ -349,15 +349,20 @@ fn slave_segment(
             for (k, (u, v)) in strip_points(n, i).enumerate() {
                 if k / (2 * BLOCK) != at_block {
                     at_block = k / (2 * BLOCK);
-                    let (j0, j1) = (at_block * BLOCK, ((at_block + 1) * BLOCK).min(n - i));
-                    let (v0, v1) = (j0 as f64 / n as f64, j1 as f64 / n as f64);
-                    let bc = [
-                        flat_at(u0, v0),
-                        flat_at(u1, v0),
-                        flat_at(u0, v1),
-                        flat_at(u1, v1),
-                    ];
-                    near.cull(&bc, keep.iter().copied(), &mut block);
+                    if n - i <= BLOCK {
+                        // a short strip is its one block
+                        block.clone_from(&keep);
+                    } else {
+                        let (j0, j1) = (at_block * BLOCK, ((at_block + 1) * BLOCK).min(n - i));
+                        let (v0, v1) = (j0 as f64 / n as f64, j1 as f64 / n as f64);
+                        let bc = [
+                            flat_at(u0, v0),
+                            flat_at(u1, v0),
+                            flat_at(u0, v1),
+                            flat_at(u1, v1),
+                        ];
+                        near.cull(&bc, keep.iter().copied(), &mut block);
+                    }
                 }
                 if block.is_empty() {
                     continue;
