@@ -204,20 +204,26 @@ pub fn bulge_bound(b: &[[f64; 4]; 4]) -> f64 {
     0.25 * s
 }
 
+/// The loose bound's factor on a segment's node-box diagonal D, for a segment of
+/// `corners` corners: corner normals lie within the crease angle (30 degrees) of the
+/// segment's normal, so |n_j - n_i| <= 2 sin 30 = 1 and |b_ij| <= |e_ij| / 2 <= D / 2;
+/// with weights w >= 0 summing to 1, sum_{i<j} w_i w_j = (1 - sum w_i^2) / 2 <=
+/// (1 - 1/k) / 2 (k corners), so |h| <= (1 - 1/k) / 4 x D: D / 6 for a triangle, 3 D /
+/// 16 for a quad. (Until session 31: pairs / 8 x D, from w_i w_j <= 1/4 per pair, 2.25
+/// and 4 times as large.)
+pub fn loose_factor(corners: usize) -> f64 {
+    let k = corners as f64;
+    (1.0 - 1.0 / k) / 4.0
+}
+
 /// A loose bound on the bulge of the segments `live` (node boxes `boxes`, by position in
-/// `live`): corner normals lie within the crease angle (30 degrees) of the segment's
-/// normal, so |n_j - n_i| <= 1, |b_ij| <= |e_ij| / 2 and |h| <= sum |e_ij| / 8 <=
-/// (pairs / 8) x the box diagonal.
+/// `live`): `loose_factor` x the node box's diagonal, the largest.
 pub fn loose_bulge_bound(surf: &Surface, live: &[u32], boxes: &[(Vec3, Vec3)]) -> f64 {
     live.iter()
         .zip(boxes)
         .map(|(&j, (lo, hi))| {
-            let pairs = if surf.segments[j as usize].count == 3 {
-                3.0
-            } else {
-                6.0
-            };
-            (hi - lo).norm_squared() * (pairs * pairs / 64.0)
+            let f = loose_factor(surf.segments[j as usize].count as usize);
+            (hi - lo).norm_squared() * (f * f)
         })
         .fold(0.0, f64::max)
         .sqrt()

@@ -71,7 +71,7 @@ pub(crate) fn union(boxes: &[(Vec3, Vec3)]) -> (Vec3, Vec3) {
 
 /// The segments of both bodies of a pair that can touch the other (their curved data,
 /// node boxes and largest bulge bound, `NearCurved`), in three steps so that the loose
-/// bulge bound of a coarse flat body (a 6.7 mm plate quad: 7 mm, its true bulge 0) does
+/// bulge bound of a coarse flat body (a 6.7 mm plate quad: 1.8 mm, its true bulge 0) does
 /// not size the other body's set:
 /// - first body `p` (the one with the larger loose bound, `Surface::loose_bulge_ub`):
 ///   its segments within 1.25 c + both loose bounds of the other's (as before);

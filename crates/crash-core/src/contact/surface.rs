@@ -136,7 +136,7 @@ pub struct Surface {
     /// The union of the stored boxes of each `BOX_CHUNK` consecutive segments.
     chunk_boxes: Vec<([f64; 3], [f64; 3])>,
     /// Until the next build, a bound on `curved::loose_bulge_bound` of any segments'
-    /// node boxes: (pairs / 8) x the largest stored box's diagonal without the
+    /// node boxes: `curved::loose_factor` x the largest stored box's diagonal without the
     /// half-thickness pads (a node box stays within its build's box grown by the skin).
     pub loose_bulge_ub: f64,
     /// `tree_id()`.
@@ -386,9 +386,9 @@ impl Surface {
             .iter()
             .zip(&self.boxes)
             .map(|(seg, (lo, hi))| {
-                let pairs = if seg.count == 3 { 3.0 } else { 6.0 };
+                let f = super::curved::loose_factor(seg.count as usize);
                 let d2: f64 = (0..3).map(|d| (hi[d] - lo[d] - t).max(0.0).powi(2)).sum();
-                d2 * (pairs * pairs / 64.0)
+                d2 * (f * f)
             })
             .fold(0.0, f64::max)
             .sqrt()

@@ -11,7 +11,7 @@
 //! elements: a part holds every element of its owned nodes). A point of s touches m
 //! only if their node boxes lie within c + bulge(s) + bulge(m) (its gap is d - h_m - c
 //! and it stands off its facet by at most h_s); each bulge is at most its segment's
-//! loose bound (pairs / 8 times its node box's diagonal), and until the next build
+//! loose bound (`curved::loose_factor` times its node box's diagonal), and until the next build
 //! every node moves at most the skin, so for bodies j and k G = c + L_j + L_k + 2 skin
 //! (L_j body j's largest loose bound at the build, the diagonals grown by 2 sqrt(3)
 //! skin) bounds that distance at the build. The view's slaves are the segments within
@@ -27,6 +27,7 @@
 
 use super::select::{corners_and_ring, node_box, nodes_of, Boxes};
 use crate::body::Body;
+use crate::contact::curved::loose_factor;
 
 /// The segments' reach of a view build (module text), per pair of bodies.
 pub(super) struct SegmentReach {
@@ -49,8 +50,7 @@ impl SegmentReach {
                 (0..b.def.element_count())
                     .map(|e| {
                         let (lo, hi) = node_box(b, e);
-                        let pairs = if nodes_of(b, e).len() == 3 { 3.0 } else { 6.0 };
-                        pairs / 8.0 * ((hi - lo).norm() + grow)
+                        loose_factor(nodes_of(b, e).len()) * ((hi - lo).norm() + grow)
                     })
                     .fold(0.0, f64::max)
             })
