@@ -129,7 +129,7 @@ class Curved:
     """A body's curved data at the current positions: face vectors and unit normals,
     nodal normals (sums and units), corner normals (nodal, or the segment's own past the
     30 degree crease), whether each corner took its nodal normal, the bulge coefficients
-    b_ij and each segment's bound sum |b_ij| / 4."""
+    b_ij and each segment's bound min(sum |b_ij| / 4, 3/8 max |b_ij|)."""
 
     def __init__(self, g, x):
         X = x[g.nodes]
@@ -153,7 +153,10 @@ class Curved:
                 b[:, i, j] = v
                 b[:, j, i] = v
         self.b = b
-        self.bound = 0.25 * sum(np.abs(b[:, i, j]) for i in range(4) for j in range(i + 1, 4))
+        pairs = [np.abs(b[:, i, j]) for i in range(4) for j in range(i + 1, 4)]
+        # the smaller of sum |b_ij| / 4 (w_i w_j <= 1/4) and max |b_ij| 3/8 (sum over
+        # pairs of w_i w_j <= (1 - 1/k) / 2 <= 3/8)
+        self.bound = np.minimum(0.25 * sum(pairs), 0.375 * np.max(pairs, axis=0))
         self.lo = X.min(axis=1)
         self.hi = X.max(axis=1)
         self._dF = None

@@ -192,16 +192,18 @@ pub fn coefficients(seg: &Segment, x: &[Vec3], normals: &[Vec3; 4]) -> [[f64; 4]
     b
 }
 
-/// The largest |h| of a segment: sum_{i<j} |b_ij| / 4 (weights w >= 0 summing to 1 give
-/// w_i w_j <= 1/4).
+/// A bound on |h| over a segment: the smaller of sum_{i<j} |b_ij| / 4 (weights w >= 0
+/// summing to 1 give w_i w_j <= 1/4) and max |b_ij| x 3/8 (sum_{i<j} w_i w_j <= (1 -
+/// 1/k) / 2 <= 3/8 for k <= 4 corners; a triangle's b has no fourth row).
 pub fn bulge_bound(b: &[[f64; 4]; 4]) -> f64 {
-    let mut s = 0.0;
+    let (mut s, mut m) = (0.0, 0.0f64);
     for (i, row) in b.iter().enumerate() {
         for v in &row[i + 1..] {
             s += v.abs();
+            m = m.max(v.abs());
         }
     }
-    0.25 * s
+    (0.25 * s).min(0.375 * m)
 }
 
 /// The loose bound's factor on a segment's node-box diagonal D, for a segment of
