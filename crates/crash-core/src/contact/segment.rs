@@ -168,6 +168,17 @@ pub fn closest(p: &Vec3, k: &Corners) -> Closest {
     let mut best_sq = f64::INFINITY;
     for s in 0..4 {
         let (a, b) = (xs[s], xs[(s + 1) % 4]);
+        // a sub-triangle whose box lies farther than the best so far (its squared gap
+        // above best_sq by more than round-off) would be skipped below anyway: its
+        // projection is not computed (the same answer, ties to the first included)
+        if s > 0 {
+            let (lo, hi) = (c.inf(&a).inf(&b), c.sup(&a).sup(&b));
+            let zero = Vec3::zeros();
+            let g2 = ((lo - p).sup(&zero) + (p - hi).sup(&zero)).norm_squared();
+            if g2 > best_sq * (1.0 + 1e-12) {
+                continue;
+            }
+        }
         let w = triangle_weights(p, &c, &a, &b);
         let mut weights = [0.25 * w[0]; 4];
         weights[s] += w[1];
