@@ -6,6 +6,7 @@
 
 use super::config::{ContactConfig, ContactPass};
 use super::narrow::{search, Hit};
+use super::quadrature::PointPush;
 use super::segpair::active_points;
 use super::stage::{body_bounds, ensure_surface, pairs_of};
 use super::surface::{node_chunks, Surface};
@@ -78,14 +79,16 @@ pub fn initial_penetrations(bodies: &[Body], cfg: &ContactConfig) -> Vec<Penetra
                 None,
             );
         }
-        for (n, s) in [(ia, ib), (ib, ia)] {
-            let (nb, sb) = (&bodies[n], &bodies[s]);
-            let (ns, ss) = (&surfaces[&nb.def.id], &surfaces[&sb.def.id]);
-            out.extend(match cfg.pass {
-                ContactPass::Nodes => by_nodes(nb, sb, ss),
-                ContactPass::Segments => by_points(nb, ns, sb, ss, cfg),
-            });
-        }
+        let (a, b) = (&bodies[ia], &bodies[ib]);
+        let (sa, sb) = (&surfaces[&a.def.id], &surfaces[&b.def.id]);
+        let found = match cfg.pass {
+            ContactPass::Nodes => [by_nodes(a, b, sb), by_nodes(b, a, sa)],
+            ContactPass::Segments => {
+                let [ab, ba] = active_points(a, sa, b, sb, cfg);
+                [by_points(a, b, ab), by_points(b, a, ba)]
+            }
+        };
+        out.extend(found.into_iter().flatten());
     }
     out.sort_by_key(|p| (p.node_body, p.segment_body));
     out
@@ -108,16 +111,14 @@ fn by_nodes(nb: &Body, sb: &Body, surf: &Surface) -> Option<Penetration> {
     })
 }
 
-/// Segments are the elements in element order (`segment::segments`), so a segment's
-/// index names its element.
+/// The deepest of a body's active points (`nb`'s against `sb`, their count) as a
+/// penetration. Segments are the elements in element order (`segment::segments`), so a
+/// segment's index names its element.
 fn by_points(
     nb: &Body,
-    ns: &Surface,
     sb: &Body,
-    ss: &Surface,
-    cfg: &ContactConfig,
+    (count, deepest): (usize, Option<PointPush>),
 ) -> Option<Penetration> {
-    let (count, deepest) = active_points(nb, ns, sb, ss, cfg);
     let p = deepest?;
     Some(Penetration {
         node_body: nb.def.id,

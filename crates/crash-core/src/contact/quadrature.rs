@@ -332,13 +332,7 @@ fn slave_segment(
                 flat_at(u0, 1.0 - u0),
                 flat_at(u1, 1.0 - u1),
             ];
-            let (mut lo, mut hi) = (corners[0], corners[0]);
-            for p in &corners[1..] {
-                lo = lo.inf(p);
-                hi = hi.sup(p);
-            }
-            let strip = (lo.add_scalar(-hs_bound), hi.add_scalar(hs_bound));
-            near.cull(&corners, 0..masters.len(), &mut keep);
+            let strip = near.cull(&corners, 0..masters.len(), &mut keep);
             if keep.is_empty() {
                 continue;
             }
@@ -493,8 +487,13 @@ impl Near<'_> {
     /// box and slab come within touch of the region: the hull of its flat `corners`
     /// grown by the slave's bulge bound holds its points. A master left out lies at
     /// touch or beyond from every point of the region, which `reach::nearest` skips
-    /// either way (no bits depend on the region's size).
-    fn cull(&self, corners: &[Vec3; 4], from: impl Iterator<Item = usize>, out: &mut Vec<usize>) {
+    /// either way (no bits depend on the region's size). Returns the region's box.
+    fn cull(
+        &self,
+        corners: &[Vec3; 4],
+        from: impl Iterator<Item = usize>,
+        out: &mut Vec<usize>,
+    ) -> (Vec3, Vec3) {
         let (mut lo, mut hi) = (corners[0], corners[0]);
         for p in &corners[1..] {
             lo = lo.inf(p);
@@ -509,5 +508,6 @@ impl Near<'_> {
                 && m.slab
                     .is_none_or(|sl| sl.gap_hull(corners, self.hs_bound) < self.touch)
         }));
+        region
     }
 }

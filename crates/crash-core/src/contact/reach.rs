@@ -5,7 +5,7 @@
 //! pass", "*Cost.*".
 
 use super::curved::{loose_bulge_bound, near_curved, node_box, Curved, NearCurved};
-use super::segment::{closest, Closest, Corners, Segment};
+use super::segment::{closest, point_gap2, Closest, Corners, Segment};
 use super::surface::Surface;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -41,11 +41,6 @@ fn live_boxes(
         .map(|&j| node_box(&surf.segments[j as usize], x))
         .collect();
     (live, boxes)
-}
-
-/// Squared gap of a point and a box.
-fn point_gap2(p: &Vec3, b: &(Vec3, Vec3)) -> f64 {
-    ((b.0 - p).sup(&Vec3::zeros()) + (p - b.1).sup(&Vec3::zeros())).norm_squared()
 }
 
 /// `box_gap >= r` from the squared gap `s` (`box_gap2`) and r2 = r r: without the

@@ -172,10 +172,8 @@ pub fn closest(p: &Vec3, k: &Corners) -> Closest {
         // above best_sq by more than round-off) would be skipped below anyway: its
         // projection is not computed (the same answer, ties to the first included)
         if s > 0 {
-            let (lo, hi) = (c.inf(&a).inf(&b), c.sup(&a).sup(&b));
-            let zero = Vec3::zeros();
-            let g2 = ((lo - p).sup(&zero) + (p - hi).sup(&zero)).norm_squared();
-            if g2 > best_sq * (1.0 + 1e-12) {
+            let bx = (c.inf(&a).inf(&b), c.sup(&a).sup(&b));
+            if point_gap2(p, &bx) > best_sq * (1.0 + 1e-12) {
                 continue;
             }
         }
@@ -203,6 +201,11 @@ pub fn closest(p: &Vec3, k: &Corners) -> Closest {
         }
     }
     best
+}
+
+/// Squared gap of a point and a box.
+pub(crate) fn point_gap2(p: &Vec3, b: &(Vec3, Vec3)) -> f64 {
+    ((b.0 - p).sup(&Vec3::zeros()) + (p - b.1).sup(&Vec3::zeros())).norm_squared()
 }
 
 /// Closest point of segment `seg` (positions `x`) to `p`.

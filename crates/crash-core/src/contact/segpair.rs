@@ -36,21 +36,7 @@ pub(crate) fn segment_pair(
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
     let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
-    // the segments of each body that can touch the other, their curved data and how far
-    // each body's curved surface can stand off its facets there (exact bounds over those
-    // segments, so the search misses no point of a coarse mesh): `reach::near_sets`.
-    // Only segments whose tree box comes within 1.25 c plus both surfaces' loose bulge
-    // bounds of the other body are read.
-    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
-    // the other's segments a point can touch lie in the box of the other's near set
-    let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
-    // the two directions at once (each reads only positions): the pool gets both
-    // directions' tasks, and a direction with few points does not leave a thread idle
-    let (first, second) = rayon::join(
-        || point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu, slaves.0),
-        || point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu, slaves.1),
-    );
+    let (first, second) = pair_points(a, sa, b, sb, cfg, kappa, mu, slaves);
     let mut st = PairStats::empty(a.def.id, b.def.id, 0);
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, (ia, ib), &first, &mut st, true, counted.0);
@@ -168,25 +154,55 @@ fn apply_points(
     }
 }
 
-/// The segment pass's active points of slave body `a` against master body `b` at the
-/// current positions, without forces: their number and the deepest (for the check at
-/// t = 0: a curved surface can reach into another body where no node does).
+/// Both directions' points of a pair (a's against b, b's against a) at the current
+/// positions, stiffness per unit area `kappa`, damping areal mass `mu`.
+#[allow(clippy::too_many_arguments)]
+fn pair_points(
+    a: &Body,
+    sa: &Surface,
+    b: &Body,
+    sb: &Surface,
+    cfg: &ContactConfig,
+    kappa: f64,
+    mu: f64,
+    slaves: (Option<&[bool]>, Option<&[bool]>),
+) -> (Vec<Points>, Vec<Points>) {
+    // the segments of each body that can touch the other, their curved data and how far
+    // each body's curved surface can stand off its facets there (exact bounds over those
+    // segments, so the search misses no point of a coarse mesh): `reach::near_sets`.
+    // Only segments whose tree box comes within 1.25 c plus both surfaces' loose bulge
+    // bounds of the other body are read.
+    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
+    let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
+    // the other's segments a point can touch lie in the box of the other's near set
+    let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
+    // the two directions at once (each reads only positions): the pool gets both
+    // directions' tasks, and a direction with few points does not leave a thread idle
+    rayon::join(
+        || point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu, slaves.0),
+        || point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu, slaves.1),
+    )
+}
+
+/// The segment pass's active points of a pair at the current positions, without
+/// forces, per direction (a's points against b, b's against a): their number and the
+/// deepest (for the check at t = 0: a curved surface can reach into another body where
+/// no node does).
 pub(crate) fn active_points(
     a: &Body,
     sa: &Surface,
     b: &Body,
     sb: &Surface,
     cfg: &ContactConfig,
-) -> (usize, Option<PointPush>) {
-    let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
-    let near_b = union(cb.boxes());
+) -> [(usize, Option<PointPush>); 2] {
     // any stiffness: which points are active depends on the gap alone
     let mu = sa.areal_mass.min(sb.areal_mass);
-    let chunks = point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, 1.0, mu, None);
-    let pushes = chunks.into_iter().flat_map(|c| c.pushes);
-    pushes.fold((0, None), |(n, deepest): (usize, Option<PointPush>), p| {
-        let deeper = deepest.as_ref().is_none_or(|d| p.depth > d.depth);
-        (n + 1, if deeper { Some(p) } else { deepest })
+    let (first, second) = pair_points(a, sa, b, sb, cfg, 1.0, mu, (None, None));
+    [first, second].map(|chunks| {
+        let pushes = chunks.into_iter().flat_map(|c| c.pushes);
+        pushes.fold((0, None), |(n, deepest): (usize, Option<PointPush>), p| {
+            let deeper = deepest.as_ref().is_none_or(|d| p.depth > d.depth);
+            (n + 1, if deeper { Some(p) } else { deepest })
+        })
     })
 }
