@@ -25,11 +25,14 @@ pub struct RunArgs {
     pub out: Option<PathBuf>,
     /// In-process workers, computing at once, each with its share of the groups (a
     /// group larger than its share split by elements, see --split): a shared-memory
-    /// domain decomposition. Results are bit-identical for any number.
-    #[arg(long, default_value_t = 1)]
-    pub workers: usize,
-    /// Threads for the element and node loops, per worker [default: the cores shared out
-    /// among the workers].
+    /// domain decomposition. Results are bit-identical for any number. [default: one
+    /// worker of one thread per core (or per --threads), fewer for a scene of fewer than
+    /// 1 024 elements a worker]
+    #[arg(long)]
+    pub workers: Option<usize>,
+    /// Compute threads: with --workers, per worker, for its element and node loops
+    /// [default: the cores shared out among the workers]; without it, in all (each
+    /// becomes a worker of its own) [default: the cores].
     #[arg(long)]
     pub threads: Option<usize>,
     /// Replace the scene's end time [s].
@@ -267,8 +270,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     let input = RunInput::from_built(built);
     // every in-process worker computes on a pool of its own (the last on this one)
     let cores = crash_core::threads::cores();
-    let workers = args.workers.max(1);
-    let threads = crash_core::threads::per_worker(args.threads, workers, cores);
+    let (workers, threads) = match args.workers {
+        Some(w) => (
+            w.max(1),
+            crash_core::threads::per_worker(args.threads, w.max(1), cores),
+        ),
+        None => crash_core::threads::domains(args.threads, input.size().elements, cores),
+    };
     if let Some(note) = crash_core::threads::oversubscription_of_workers(workers, threads, cores) {
         eprintln!("crash: note: {note}");
     }
@@ -315,11 +323,16 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         );
     }
     eprintln!(
-        "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {workers} worker(s) x {threads} thread(s), {simd} element kernels, writing {}",
+        "crash: running '{}' ({} bodies, {} elements) to t = {:.4e} s with {workers} worker(s) x {threads} thread(s){}, {simd} element kernels, writing {}",
         input.name,
         input.briefs.len(),
         input.size().elements,
         input.config.end_time,
+        if args.workers.is_none() && workers > 1 {
+            " (a domain per thread; --workers 1 shares the loops instead)"
+        } else {
+            ""
+        },
         out.display()
     );
     let mut workers =

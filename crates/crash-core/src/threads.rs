@@ -26,6 +26,24 @@ pub fn per_worker(requested: Option<usize>, workers: usize, cores: usize) -> usi
     requested.unwrap_or(cores / workers.max(1)).max(1)
 }
 
+/// Elements per compute unit below which `crash run` (without `--workers`) uses fewer
+/// units: a domain of fewer elements costs more in its exchanges than it computes
+/// (docs/performance.md, session 32: a 1 000-element scene is no faster on 2 units, a
+/// 4 400-element one 1.65x).
+pub const UNIT_ELEMENTS: usize = 1024;
+
+/// `crash run` without `--workers`: (in-process workers, threads each) for a scene of
+/// `elements` with `threads` compute threads asked for (the cores when not given). Each
+/// thread becomes a domain of its own, an in-process worker of one thread (the scene's
+/// large groups split by elements): workers that each own their part's data scale
+/// further on two cores than threads that share every loop (1.79x against 1.39x on the
+/// showcase, docs/performance.md, session 32); fewer domains when the scene has fewer
+/// than `UNIT_ELEMENTS` elements a domain. Results are the same bits either way.
+pub fn domains(threads: Option<usize>, elements: usize, cores: usize) -> (usize, usize) {
+    let total = threads.unwrap_or(cores).max(1);
+    (total.min(elements / UNIT_ELEMENTS).max(1), 1)
+}
+
 /// `oversubscription` for `workers` in-process workers of `threads` threads each (they
 /// compute at once, so their threads add up).
 pub fn oversubscription_of_workers(workers: usize, threads: usize, cores: usize) -> Option<String> {
@@ -58,6 +76,28 @@ mod tests {
             note.contains("8 threads") && note.contains("2 cores") && note.contains("--threads 2")
         );
         assert!(oversubscription(2, 1).expect("2 on 1").contains("1 core:"));
+    }
+
+    #[test]
+    fn a_domain_per_thread_for_scenes_large_enough() {
+        assert_eq!(
+            domains(None, 24_080, 2),
+            (2, 1),
+            "the showcase: one per core"
+        );
+        assert_eq!(domains(Some(1), 24_080, 2), (1, 1));
+        assert_eq!(
+            domains(Some(4), 24_080, 2),
+            (4, 1),
+            "asked for: the note says"
+        );
+        assert_eq!(
+            domains(None, 3_000, 8),
+            (2, 1),
+            "a small scene: fewer domains"
+        );
+        assert_eq!(domains(None, 1_000, 2), (1, 1), "a tiny one: one");
+        assert_eq!(domains(None, 0, 0), (1, 1));
     }
 
     #[test]
