@@ -2,7 +2,8 @@
 //! sitting with the repetitions interleaved (mode A, B, C, D, then again), so machine
 //! load affects every mode alike:
 //!
-//! - `crash run --threads 1` and `crash run --threads 2` (one process),
+//! - `crash run --workers 1 --threads 1` and `--workers 1 --threads 2` (one process, one
+//!   worker whose threads share the element and node loops),
 //! - `crash-master` + 1 and + 2 `crash-worker` processes x 1 thread (gRPC on loopback),
 //! - `crash-master --split auto` + 2 workers: a group above its fair share is split
 //!   over both workers by elements (the holders send each other their part states
@@ -12,7 +13,8 @@
 //!   spinner per process keeps vCPUs from halting between messages),
 //! - `crash run --workers 2 --split auto --threads 1`: the split in one process, its two
 //!   workers computing at once (since session 27; before, one after the other): the
-//!   cluster without its processes, codec and sockets,
+//!   cluster without its processes, codec and sockets; what `crash run --threads 2`
+//!   does without `--workers` since session 32 (a domain per thread),
 //! - `crash-master --split auto --no-direct-halo` + 2 workers: the split with the part
 //!   states relayed through the master (two exchanges per step),
 //! - `crash-master --split auto` + 2 workers with `--poll-us 0`: workers that block at
@@ -60,7 +62,7 @@ impl Mode {
             Mode::Local {
                 threads,
                 workers: 1,
-            } => format!("crash run --threads {threads}"),
+            } => format!("crash run --workers 1 --threads {threads}"),
             Mode::Local { threads, workers } => {
                 format!("crash run --workers {workers} --split auto --threads {threads}")
             }

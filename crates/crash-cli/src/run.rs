@@ -275,7 +275,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
             w.max(1),
             crash_core::threads::per_worker(args.threads, w.max(1), cores),
         ),
-        None => crash_core::threads::domains(args.threads, input.size().elements, cores),
+        None => {
+            // crash-master splits no group that holds a kinematic copy or a history node
+            let deformable = input.briefs.iter().filter(|b| !b.kinematic).count();
+            let splits = deformable == input.briefs.len() && input.results.history.is_empty();
+            let elements = input.size().elements;
+            crash_core::threads::domains(args.threads, elements, cores, splits, deformable)
+        }
     };
     if let Some(note) = crash_core::threads::oversubscription_of_workers(workers, threads, cores) {
         eprintln!("crash: note: {note}");

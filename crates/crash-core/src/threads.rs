@@ -38,10 +38,24 @@ pub const UNIT_ELEMENTS: usize = 1024;
 /// large groups split by elements): workers that each own their part's data scale
 /// further on two cores than threads that share every loop (1.79x against 1.39x on the
 /// showcase, docs/performance.md, session 32); fewer domains when the scene has fewer
-/// than `UNIT_ELEMENTS` elements a domain. Results are the same bits either way.
-pub fn domains(threads: Option<usize>, elements: usize, cores: usize) -> (usize, usize) {
+/// than `UNIT_ELEMENTS` elements a domain. `splits`: the master may split the scene's
+/// groups (crash-master splits none that holds a kinematic copy or a history node);
+/// when it may not and there are fewer than two deformable `bodies` a domain, domains
+/// would idle: one worker whose threads share the loops. Same bits either way.
+pub fn domains(
+    threads: Option<usize>,
+    elements: usize,
+    cores: usize,
+    splits: bool,
+    bodies: usize,
+) -> (usize, usize) {
     let total = threads.unwrap_or(cores).max(1);
-    (total.min(elements / UNIT_ELEMENTS).max(1), 1)
+    let units = total.min(elements / UNIT_ELEMENTS).max(1);
+    if splits || bodies >= 2 * units {
+        (units, 1)
+    } else {
+        (1, total)
+    }
 }
 
 /// `oversubscription` for `workers` in-process workers of `threads` threads each (they
@@ -80,24 +94,23 @@ mod tests {
 
     #[test]
     fn a_domain_per_thread_for_scenes_large_enough() {
+        assert_eq!(domains(None, 24_080, 2, true, 2), (2, 1), "the showcase");
+        assert_eq!(domains(Some(1), 24_080, 2, true, 2), (1, 1));
         assert_eq!(
-            domains(None, 24_080, 2),
-            (2, 1),
-            "the showcase: one per core"
-        );
-        assert_eq!(domains(Some(1), 24_080, 2), (1, 1));
-        assert_eq!(
-            domains(Some(4), 24_080, 2),
+            domains(Some(4), 24_080, 2, true, 2),
             (4, 1),
-            "asked for: the note says"
+            "the note says"
         );
+        assert_eq!(domains(None, 3_000, 8, true, 2), (2, 1), "fewer domains");
         assert_eq!(
-            domains(None, 3_000, 8),
-            (2, 1),
-            "a small scene: fewer domains"
+            domains(None, 1_000, 2, true, 2),
+            (1, 1),
+            "a tiny scene: one"
         );
-        assert_eq!(domains(None, 1_000, 2), (1, 1), "a tiny one: one");
-        assert_eq!(domains(None, 0, 0), (1, 1));
+        assert_eq!(domains(None, 0, 0, true, 0), (1, 1));
+        // no split: one body on a kinematic wall shares the loops, ten spheres spread
+        assert_eq!(domains(None, 24_080, 2, false, 1), (1, 2));
+        assert_eq!(domains(None, 16_000, 2, false, 10), (2, 1));
     }
 
     #[test]
