@@ -2,9 +2,10 @@
 # One sitting of the single-node figures of docs/performance.md (issue 17), in the order
 # they are quoted: the element kernels (criterion medians of the 100k-element plates,
 # ns per element-cycle), the stages of the showcase and of the OpenRadioss models at 1
-# and 2 threads, and frames every 50 steps (f64, f32). Run it on an otherwise idle
+# and 2 threads, frames every 50 steps (f64, f32), and the showcase as `crash run
+# --threads 2` runs it (two domains) beside two threads sharing the loops. Run it on an otherwise idle
 # machine (figures taken while something else runs are 30-70 % off); it prints the
-# load before and after. About 12 minutes on 2 cores.
+# load before and after. About 14 minutes on 2 cores.
 # Usage: scripts/sitting.sh [REPS]   (repetitions of the stage and output runs, default 3)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,3 +38,8 @@ for p in f64 f32; do
   bash scripts/output-overhead.sh 2e-3 50 "$REPS" "$p"
   echo "== load: $(cut -d' ' -f1-3 /proc/loadavg)"
 done
+# the showcase as `crash run --threads 2` runs it (a domain per thread, since session 32)
+# beside one worker whose two threads share the loops (the stages bench's 2 threads)
+cargo bench -p crash-tests --bench scaling -- scenes/sphere-on-plate.toml 5e-3 "$REPS" 0,1,6 \
+  2>/dev/null | grep -v '^rep '
+echo "== load: $(cut -d' ' -f1-3 /proc/loadavg)"
