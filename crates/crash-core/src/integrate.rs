@@ -9,7 +9,6 @@
 
 use crate::body::{Body, BodyDef, NO_PROGRAM};
 use crate::contact::figures::{ChunkFigures, NodeFigures};
-use crate::contact::speeds::SpeedBoxes;
 use crate::contact::sweep::Momentum;
 use crate::element::simd::prefetch;
 use crate::error::Fault;
@@ -250,7 +249,7 @@ pub struct StepClock {
 impl Body {
     /// Advance the nodes of this body from x_n to x_{n+1} (all but a part's halo nodes).
     pub fn integrate(&mut self, clock: &StepClock, gravity: Vec3) -> Result<NodeSums, Fault> {
-        self.integrate_taking(clock, gravity, None).map(|(s, _)| s)
+        self.integrate_taking(clock, gravity, false).map(|(s, _)| s)
     }
 
     /// `integrate`, with the contact stage's figures of the new nodes taken in the same
@@ -260,53 +259,26 @@ impl Body {
         clock: &StepClock,
         gravity: Vec3,
     ) -> Result<(NodeSums, Option<NodeFigures>), Fault> {
-        // the momentum's scale needs the whole body's mass first (a sum in node order)
-        let taking = !self.def.kinematic && self.def.contact && self.def.halo_nodes == 0;
-        let mass_scale = taking.then(|| {
-            let m = self.total_mass();
-            (m, Momentum::scale(m))
-        });
-        let (total, figs) = self.integrate_taking(clock, gravity, mass_scale.map(|(_, sc)| sc))?;
-        let figures = mass_scale
-            .map(|(m, sc)| NodeFigures::gather(&figs, m, sc, total.max_move, (total.lo, total.hi)));
-        Ok((total, figures))
+        self.integrate_taking(clock, gravity, true)
     }
 
-    /// `integrate` for a part of a split body: with its owned nodes' momentum on the
-    /// whole body's momentum `scale` and their velocity boxes, taken in the same loop
-    /// (the closing speed's figures of the part, `partition::closing`; the bits of
-    /// `Momentum::of` and `SpeedBoxes::of` over the owned nodes).
-    pub fn integrate_part(
-        &mut self,
-        clock: &StepClock,
-        gravity: Vec3,
-        scale: f64,
-    ) -> Result<(NodeSums, Momentum, SpeedBoxes), Fault> {
-        let (total, figs) = self.integrate_taking(clock, gravity, Some(scale))?;
-        let owned = self.state.v.len() - self.def.halo_nodes;
-        Ok(if self.def.kinematic {
-            // no figures from the kinematic loop: their own passes
-            let v = &self.state.v[..owned];
-            let m = &self.def.mass[..owned];
-            (total, Momentum::of(v, m, scale), SpeedBoxes::of(v))
-        } else {
-            let (momentum, speeds) = NodeFigures::part(&figs);
-            (total, momentum, speeds)
-        })
-    }
-
-    /// The node loop; with a momentum `scale`, the contact figures of each chunk of
-    /// the nodes it advances (none for a kinematic body).
     fn integrate_taking(
         &mut self,
         clock: &StepClock,
         gravity: Vec3,
-        scale: Option<f64>,
-    ) -> Result<(NodeSums, Vec<ChunkFigures>), Fault> {
+        figures: bool,
+    ) -> Result<(NodeSums, Option<NodeFigures>), Fault> {
         if self.def.kinematic {
             // the same bits without the per-node program and force terms (kinematic.rs)
-            return Ok((self.integrate_kinematic(clock, gravity)?, Vec::new()));
+            return Ok((self.integrate_kinematic(clock, gravity)?, None));
         }
+        // the momentum's scale needs the whole body's mass first (a sum in node order)
+        let taking = figures && self.def.contact && self.def.halo_nodes == 0;
+        let mass_scale = taking.then(|| {
+            let m = self.total_mass();
+            (m, Momentum::scale(m))
+        });
+        let scale = mass_scale.map(|(_, sc)| sc);
         let h = clock.h;
         let hbar = 0.5 * (clock.h_prev + h);
         let c = self.def.mass_damping;
@@ -424,7 +396,11 @@ impl Body {
         let (sums, figs): (Vec<NodeSums>, Vec<Option<ChunkFigures>>) = parts.into_iter().unzip();
         let total = NodeSums::total(&sums, clock.step, self.def.id)?;
         self.book(h, &total);
-        Ok((total, figs.into_iter().flatten().collect()))
+        let figures = mass_scale.map(|(m, sc)| {
+            let figs: Vec<ChunkFigures> = figs.into_iter().flatten().collect();
+            NodeFigures::gather(&figs, m, sc, total.max_move, (total.lo, total.hi))
+        });
+        Ok((total, figures))
     }
 
     /// The step's sums into the energy record (a step of length h).

@@ -119,32 +119,23 @@ impl NodeFigures {
                 }
             })
             .collect();
-        let (momentum, speeds) = Self::part(parts);
+        let boxes = parts
+            .iter()
+            .flat_map(|c| c.boxes[..c.count].iter().copied())
+            .collect();
+        let momentum = parts
+            .iter()
+            .fold(Momentum::default(), |a, c| a + c.momentum);
         // x + h v rounds by at most half an ulp of the largest coordinate
         let reach = lo.abs().max().max(hi.abs().max());
         Self {
             chunks,
-            speeds,
+            speeds: SpeedBoxes::from_boxes(boxes),
             momentum,
             mass,
             scale,
             max_move: max_move + 4.0 * f64::EPSILON * reach,
         }
-    }
-
-    /// A split body's part's momentum and velocity boxes over its owned nodes from its
-    /// chunks' figures (in node order): integer sums and the boxes of the same 64-node
-    /// runs (the chunks start at node 0), the bits of `Momentum::of` and
-    /// `SpeedBoxes::of` over those nodes.
-    pub(crate) fn part(parts: &[ChunkFigures]) -> (Momentum, SpeedBoxes) {
-        let momentum = parts
-            .iter()
-            .fold(Momentum::default(), |a, c| a + c.momentum);
-        let boxes = parts
-            .iter()
-            .flat_map(|c| c.boxes[..c.count].iter().copied())
-            .collect();
-        (momentum, SpeedBoxes::from_boxes(boxes))
     }
 
     /// The mass-weighted mean velocity (`sweep::mean_velocity`'s bits).

@@ -149,13 +149,11 @@ fn fold_first_seen<T: Copy, K: Ord>(
 
 /// Each pair's closing-speed figures over the owned nodes of the parts computed here
 /// (`split.mine`; pairs with no part here: none), relative to the bodies' mean
-/// velocities `means`. `taken[i][q]`: part q of body i's velocity boxes from its
-/// integration (taken from there; a part without them gets them from its velocities).
+/// velocities `means`.
 pub(super) fn pair_speeds(
     split: &GroupSplit,
     pairs: &[(usize, usize)],
     means: &[Vec3],
-    taken: &mut [Vec<Option<SpeedBoxes>>],
 ) -> Vec<PairSpeed> {
     // the velocity boxes of each owned part here, and its largest speed relative to
     // its body's mean, once per pass (a floor's parts are in a pair with every body on
@@ -174,11 +172,10 @@ pub(super) fn pair_speeds(
                     .parts
                     .iter()
                     .zip(&split.mine[i])
-                    .zip(taken[i].iter_mut())
-                    .filter(|((_, &m), _)| m)
-                    .map(|((p, _), t)| {
+                    .filter(|(_, &m)| m)
+                    .map(|(p, _)| {
                         let v = &p.body.state.v[..p.owned];
-                        (v, t.take().unwrap_or_else(|| SpeedBoxes::of(v)))
+                        (v, SpeedBoxes::of(v))
                     })
                     .collect();
                 let own = b

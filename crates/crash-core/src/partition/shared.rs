@@ -41,7 +41,6 @@ use super::report::{add_reaction, element_in_whole, node_in_whole};
 use super::GroupSplit;
 use crate::body::Body;
 use crate::clock::Clock;
-use crate::contact::speeds::SpeedBoxes;
 use crate::contact::sweep::Momentum;
 use crate::contact::{check_moves, ContactConfig};
 use crate::error::{CoreError, Fault};
@@ -106,9 +105,6 @@ pub struct SharedGroup {
     pub export: Vec<Vec<Vec<u32>>>,
     /// Per body and part: the figures of the last integration (own parts only).
     figures: Vec<Vec<Option<PartFigures>>>,
-    /// The velocity boxes of each part integrated here in this step (the closing
-    /// speed's figures, taken in the integration's loop; used once, by `forces`).
-    speeds: Vec<Vec<Option<SpeedBoxes>>>,
     /// The next integration sends every owned node (a view build follows it).
     due: bool,
     /// The last integration sent every owned node.
@@ -183,7 +179,6 @@ impl SharedGroup {
         let sums = parts.iter().map(|&k| vec![None; k]).collect();
         let forces = parts.iter().map(|&k| vec![None; k]).collect();
         let figures = parts.iter().map(|&k| vec![None; k]).collect();
-        let speeds = parts.iter().map(|&k| vec![None; k]).collect();
         let ids = bodies.iter().map(|b| b.def.id).collect();
         let budget = bodies
             .iter()
@@ -211,7 +206,6 @@ impl SharedGroup {
             pending: None,
             export,
             figures,
-            speeds,
             due: contact.enabled,
             sent_full: false,
             rebuild: false,
@@ -279,28 +273,16 @@ impl SharedGroup {
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
                 self.figures[i][q] = None;
-                self.speeds[i][q] = None;
                 if !self.split.mine[i][q] {
                     continue;
                 }
-                // the closing speed's figures in the node loop, where they are read
-                let stepped = if closing {
-                    p.body
-                        .integrate_part(&sc, gravity, scale)
-                        .map(|(n, m, s)| (n, m, Some(s)))
-                } else {
-                    p.body
-                        .integrate(&sc, gravity)
-                        .map(|n| (n, Momentum::default(), None))
-                };
-                let (n, momentum, speeds) = match stepped {
+                let n = match p.body.integrate(&sc, gravity) {
                     Ok(n) => n,
                     Err(f) => {
                         fault = Some(Fault::first_of(fault, node_in_whole(f, &p.node)));
                         continue;
                     }
                 };
-                self.speeds[i][q] = speeds;
                 let st = &p.body.state;
                 let o = p.owned;
                 // the integration's box is the owned nodes' (it skips the halo)
@@ -340,7 +322,11 @@ impl SharedGroup {
                     far,
                     max_move: n.max_move,
                     max_move_node: p.node[n.max_move_node],
-                    momentum,
+                    momentum: if closing {
+                        Momentum::of(&st.v[..o], &p.body.def.mass[..o], scale)
+                    } else {
+                        Momentum::default()
+                    },
                 };
                 out.push(PartState {
                     id: self.ids[i],
@@ -531,7 +517,7 @@ impl SharedGroup {
                 p.mean(m, scale)
             })
             .collect();
-        let speeds = pair_speeds(&self.split, &pairs, &means, &mut self.speeds);
+        let speeds = pair_speeds(&self.split, &pairs, &means);
         let mut shares = Vec::new();
         for (i, s) in self.split.splits.iter().enumerate() {
             let mut r: Option<BodyReport> = None;
