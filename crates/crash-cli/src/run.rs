@@ -277,8 +277,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         ),
         None => {
             // crash-master splits no group that holds a kinematic copy or a history node
+            // (nor any with --split off)
             let deformable = input.briefs.iter().filter(|b| !b.kinematic).count();
-            let splits = deformable == input.briefs.len() && input.results.history.is_empty();
+            let splits = args.split != crash_master::SplitMode::Off
+                && deformable == input.briefs.len()
+                && input.results.history.is_empty();
             let elements = input.size().elements;
             crash_core::threads::domains(args.threads, elements, cores, splits, deformable)
         }
