@@ -27,7 +27,8 @@ pub struct RunArgs {
     /// group larger than its share split by elements, see --split): a shared-memory
     /// domain decomposition. Results are bit-identical for any number. [default: one
     /// worker of one thread per core (or per --threads), fewer for a scene of fewer than
-    /// 1 024 elements a worker]
+    /// 1 024 elements a worker; one worker whose threads share the loops where the
+    /// groups cannot spread over workers (docs/architecture-cluster.md, "Local mode")]
     #[arg(long)]
     pub workers: Option<usize>,
     /// Compute threads: with --workers, per worker, for its element and node loops
