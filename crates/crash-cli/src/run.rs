@@ -272,17 +272,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     // every in-process worker computes on a pool of its own (the last on this one)
     let cores = crash_core::threads::cores();
     let (workers, threads) = match args.workers {
-        Some(w) => (
-            w.max(1),
-            crash_core::threads::per_worker(args.threads, w.max(1), cores),
-        ),
+        Some(w) => {
+            let w = w.max(1);
+            (w, crash_core::threads::per_worker(args.threads, w, cores))
+        }
         None => {
-            // crash-master splits no group that holds a kinematic copy or a history node
-            // (nor any with --split off)
+            let splits = input.groups_may_split(args.split);
             let deformable = input.briefs.iter().filter(|b| !b.kinematic).count();
-            let splits = args.split != crash_master::SplitMode::Off
-                && deformable == input.briefs.len()
-                && input.results.history.is_empty();
             let elements = input.size().elements;
             crash_core::threads::domains(args.threads, elements, cores, splits, deformable)
         }

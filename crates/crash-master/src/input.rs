@@ -105,6 +105,16 @@ pub struct RunSize {
 }
 
 impl RunInput {
+    /// Whether the master may split this scene's groups under `mode`: the scene-wide
+    /// form of the split planner's refusals (master/split.rs `plan`: no group holding a
+    /// kinematic body or copy, none while history nodes are asked for). `crash run`
+    /// reads it to choose between domains and shared loops.
+    pub fn groups_may_split(&self, mode: SplitMode) -> bool {
+        mode != SplitMode::Off
+            && self.results.history.is_empty()
+            && self.briefs.iter().all(|b| !b.kinematic)
+    }
+
     /// Body names in the order of `ids` ("body ID" where the scene gave none).
     pub fn names_by_id(&self, ids: &[u32]) -> Vec<String> {
         let by_id: std::collections::BTreeMap<u32, &str> = self

@@ -188,6 +188,8 @@ impl<L: WorkerLink> Master<'_, L> {
         boxes: &dyn Fn(u32) -> Option<(Vec3, Vec3)>,
     ) -> Option<SplitGroup> {
         let k = live.len();
+        // (RunInput::groups_may_split is the scene-wide form of these refusals: keep
+        // the two together)
         if k < 2 || !copies.is_empty() || !self.results.history.is_empty() {
             return None;
         }
