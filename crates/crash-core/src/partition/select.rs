@@ -23,19 +23,33 @@
 
 use crate::body::Body;
 use crate::Vec3;
-use rstar::primitives::Rectangle;
+use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
 /// Element (or point) boxes per body of the group (None: none of that body), each
-/// body's in its own R-tree with the box around them all: a query for a body far from
+/// body's in its own tree with the box around them all: a query for a body far from
 /// a point ends at that box, and never walks the point's own body's elements (one tree
 /// of every body tagged by body cost the floor scene's split 3 % of its run).
 pub(super) struct Boxes {
     trees: Vec<Option<Tree>>,
 }
 
-/// One body's boxes and the box around them.
-type Tree = (RTree<Rectangle<[f64; 3]>>, (Vec3, Vec3));
+/// Boxes per leaf of a body's tree: `CHUNK` consecutive boxes (elements or points in
+/// index order, which meshes keep close in space) share one leaf box, and a query
+/// tests the boxes of each leaf it meets. Why: a view build loads a tree of every
+/// element of the group on every holder, and bulk-loading one leaf per element took
+/// three quarters of a build (the showcase: 15 ms, 2.7 % of a split run's compute);
+/// a leaf per 8 elements loads 8 times fewer. The answers are the same: a box meets
+/// some element box exactly when it meets that element's leaf box and the box itself.
+const CHUNK: usize = 8;
+
+/// One body's boxes, its tree of leaf boxes (leaf k: boxes `CHUNK k..`) and the box
+/// around them all.
+struct Tree {
+    boxes: Vec<(Vec3, Vec3)>,
+    leaves: RTree<GeomWithData<Rectangle<[f64; 3]>, u32>>,
+    env: (Vec3, Vec3),
+}
 
 impl Boxes {
     /// Node boxes of the elements `lists[j]` of each body j (None: none) at their
@@ -46,8 +60,9 @@ impl Boxes {
             .zip(lists)
             .map(|(b, l)| {
                 let l = l.as_ref().filter(|l| !l.is_empty())?;
-                let boxes: Vec<(Vec3, Vec3)> = l.iter().map(|&e| node_box(b, e as usize)).collect();
-                Some(tree_of(&boxes))
+                Some(Tree::of(
+                    l.iter().map(|&e| node_box(b, e as usize)).collect(),
+                ))
             })
             .collect();
         Self { trees }
@@ -67,7 +82,7 @@ impl Boxes {
                     .filter(|(_, k)| **k)
                     .map(|(p, _)| (*p, *p))
                     .collect();
-                (!boxes.is_empty()).then(|| tree_of(&boxes))
+                (!boxes.is_empty()).then(|| Tree::of(boxes))
             })
             .collect();
         Self { trees }
@@ -79,43 +94,58 @@ impl Boxes {
         self.trees
             .iter()
             .enumerate()
-            .filter_map(|(k, t)| {
-                let (blo, bhi) = t.as_ref()?.1;
-                meets((lo - pad, hi + pad), (blo, bhi)).then_some(k)
-            })
+            .filter_map(|(k, t)| meets((lo - pad, hi + pad), t.as_ref()?.env).then_some(k))
             .collect()
     }
 
     /// Does the box (lo, hi) grown by r meet a box of body k?
     pub(super) fn near(&self, k: usize, (lo, hi): (Vec3, Vec3), r: f64) -> bool {
-        let Some((tree, env)) = self.trees.get(k).and_then(Option::as_ref) else {
+        let Some(t) = self.trees.get(k).and_then(Option::as_ref) else {
             return false;
         };
         let pad = Vec3::repeat(r);
-        let (lo, hi) = (lo - pad, hi + pad);
-        if !meets((lo, hi), *env) {
+        let q = (lo - pad, hi + pad);
+        if !meets(q, t.env) {
             return false;
         }
-        let q = AABB::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]);
-        tree.locate_in_envelope_intersecting(&q).next().is_some()
+        let aabb = AABB::from_corners([q.0.x, q.0.y, q.0.z], [q.1.x, q.1.y, q.1.z]);
+        t.leaves.locate_in_envelope_intersecting(&aabb).any(|leaf| {
+            let first = leaf.data as usize * CHUNK;
+            let last = (first + CHUNK).min(t.boxes.len());
+            t.boxes[first..last].iter().any(|&b| meets(q, b))
+        })
+    }
+}
+
+impl Tree {
+    fn of(boxes: Vec<(Vec3, Vec3)>) -> Self {
+        let hull = |bs: &[(Vec3, Vec3)]| {
+            bs.iter()
+                .fold(crate::mesh::bounds(&[]), |(lo, hi), (l, h)| {
+                    (lo.inf(l), hi.sup(h))
+                })
+        };
+        let leaves = boxes
+            .chunks(CHUNK)
+            .enumerate()
+            .map(|(k, c)| {
+                let (lo, hi) = hull(c);
+                GeomWithData::new(
+                    Rectangle::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]),
+                    k as u32,
+                )
+            })
+            .collect();
+        Self {
+            env: hull(&boxes),
+            leaves: RTree::bulk_load(leaves),
+            boxes,
+        }
     }
 }
 
 fn meets((alo, ahi): (Vec3, Vec3), (blo, bhi): (Vec3, Vec3)) -> bool {
     (0..3).all(|d| alo[d] <= bhi[d] && blo[d] <= ahi[d])
-}
-
-fn tree_of(boxes: &[(Vec3, Vec3)]) -> Tree {
-    let env = boxes
-        .iter()
-        .fold(crate::mesh::bounds(&[]), |(lo, hi), (l, h)| {
-            (lo.inf(l), hi.sup(h))
-        });
-    let rects = boxes
-        .iter()
-        .map(|(lo, hi)| Rectangle::from_corners([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]))
-        .collect();
-    (RTree::bulk_load(rects), env)
 }
 
 /// What a view is selected against: every contact body's element boxes (`all`), the
