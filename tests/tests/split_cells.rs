@@ -3,7 +3,7 @@
 //! computes it and that part's worker. Invariants on the showcase split over 2
 //! in-process workers (the sphere and the plate each cut in 2): each body's elements
 //! fall in parts 0 and 1, each part on one worker, the two on different workers, the
-//! cut balanced, part 0 on the group's home; the frames read back as written; groups.csv
+//! cut balanced by what each part computes, part 0 on the group's home; the frames read back as written; groups.csv
 //! and summary.json list the group once per holder with the elements computed there.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
@@ -48,9 +48,15 @@ fn every_element_of_a_split_body_names_its_part_and_that_parts_worker() {
             "{worker_of_part:?}"
         );
         assert_ne!(worker_of_part[0], worker_of_part[1]);
-        // RCB by cost halves each body's elements (one kind each: equal weights)
+        // RCB balances what each part computes (crash-core `computed_costs`: a part
+        // also computes the cut elements at the nodes it owns), so the elements each
+        // is given differ by at most those on the cut (under 2 % of the body's here)
         let in0 = cells.part.iter().filter(|&&q| q == 0).count();
-        assert!(in0.abs_diff(n - in0) <= 1, "parts of {in0} and {}", n - in0);
+        assert!(
+            in0.abs_diff(n - in0) <= n / 50,
+            "parts of {in0} and {}",
+            n - in0
+        );
         // part 0 on the group's home
         let home = body.placement.unwrap().worker;
         assert!(worker_of_part[0].contains(&home), "home {home}");
