@@ -22,6 +22,7 @@ use crate::contact::stage::{closing_dt_of, has_reference};
 use crate::contact::sweep::closing_of;
 use crate::contact::PenaltyKind;
 use crate::Vec3;
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 /// A pair's closing-speed figures over some nodes of its bodies: the body ids (in the
@@ -149,16 +150,18 @@ fn fold_first_seen<T: Copy, K: Ord>(
 
 /// Each pair's closing-speed figures over the owned nodes of the parts computed here
 /// (`split.mine`; pairs with no part here: none), relative to the bodies' mean
-/// velocities `means`.
+/// velocities `means`; `taken[i][q]`: part q of body i's velocity boxes when the
+/// integration took them.
 pub(super) fn pair_speeds(
     split: &GroupSplit,
     pairs: &[(usize, usize)],
     means: &[Vec3],
+    taken: &[Vec<Option<SpeedBoxes>>],
 ) -> Vec<PairSpeed> {
     // the velocity boxes of each owned part here, and its largest speed relative to
     // its body's mean, once per pass (a floor's parts are in a pair with every body on
     // it)
-    type Boxes<'a> = Vec<(&'a [Vec3], SpeedBoxes)>;
+    type Boxes<'a> = Vec<(&'a [Vec3], Cow<'a, SpeedBoxes>)>;
     let mut boxes: BTreeMap<usize, (Boxes, f64)> = BTreeMap::new();
     let mut out = Vec::new();
     for &(ia, ib) in pairs {
@@ -172,10 +175,15 @@ pub(super) fn pair_speeds(
                     .parts
                     .iter()
                     .zip(&split.mine[i])
-                    .filter(|(_, &m)| m)
-                    .map(|(p, _)| {
+                    .enumerate()
+                    .filter(|(_, (_, &m))| m)
+                    .map(|(q, (p, _))| {
                         let v = &p.body.state.v[..p.owned];
-                        (v, SpeedBoxes::of(v))
+                        let given = taken.get(i).and_then(|t| t.get(q)).and_then(Option::as_ref);
+                        (
+                            v,
+                            given.map_or_else(|| Cow::Owned(SpeedBoxes::of(v)), Cow::Borrowed),
+                        )
                     })
                     .collect();
                 let own = b

@@ -41,6 +41,7 @@ use super::report::{add_reaction, element_in_whole, node_in_whole};
 use super::GroupSplit;
 use crate::body::Body;
 use crate::clock::Clock;
+use crate::contact::speeds::SpeedBoxes;
 use crate::contact::sweep::Momentum;
 use crate::contact::{check_moves, ContactConfig};
 use crate::error::{CoreError, Fault};
@@ -105,6 +106,10 @@ pub struct SharedGroup {
     pub export: Vec<Vec<Vec<u32>>>,
     /// Per body and part: the figures of the last integration (own parts only).
     figures: Vec<Vec<Option<PartFigures>>>,
+    /// Per body and part: the owned velocities' boxes when the last integration took
+    /// them (a part that is a whole body: `Body::integrate_with_figures`); else
+    /// `pair_speeds` makes them.
+    speeds: Vec<Vec<Option<SpeedBoxes>>>,
     /// The next integration sends every owned node (a view build follows it).
     due: bool,
     /// The last integration sent every owned node.
@@ -206,6 +211,7 @@ impl SharedGroup {
             pending: None,
             export,
             figures,
+            speeds: parts.iter().map(|&k| vec![None; k]).collect(),
             due: contact.enabled,
             sent_full: false,
             rebuild: false,
@@ -273,10 +279,20 @@ impl SharedGroup {
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
                 self.figures[i][q] = None;
+                self.speeds[i][q] = None;
                 if !self.split.mine[i][q] {
                     continue;
                 }
-                let n = match p.body.integrate(&sc, gravity) {
+                // a part that is its whole body (a floor's spheres) takes its momentum
+                // and velocity boxes in the node loop, as a whole group's bodies do: the
+                // same values (an integer sum; boxes per chunk) without two more passes
+                let whole = p.body.def.halo_nodes == 0;
+                let integrated = if closing && whole {
+                    p.body.integrate_with_figures(&sc, gravity)
+                } else {
+                    p.body.integrate(&sc, gravity).map(|n| (n, None))
+                };
+                let (n, taken) = match integrated {
                     Ok(n) => n,
                     Err(f) => {
                         fault = Some(Fault::first_of(fault, node_in_whole(f, &p.node)));
@@ -322,12 +338,13 @@ impl SharedGroup {
                     far,
                     max_move: n.max_move,
                     max_move_node: p.node[n.max_move_node],
-                    momentum: if closing {
-                        Momentum::of(&st.v[..o], &p.body.def.mass[..o], scale)
-                    } else {
-                        Momentum::default()
+                    momentum: match &taken {
+                        Some(t) if closing => t.momentum,
+                        _ if closing => Momentum::of(&st.v[..o], &p.body.def.mass[..o], scale),
+                        _ => Momentum::default(),
                     },
                 };
+                self.speeds[i][q] = taken.map(|t| t.speeds);
                 out.push(PartState {
                     id: self.ids[i],
                     part: q as u32,
@@ -517,7 +534,7 @@ impl SharedGroup {
                 p.mean(m, scale)
             })
             .collect();
-        let speeds = pair_speeds(&self.split, &pairs, &means);
+        let speeds = pair_speeds(&self.split, &pairs, &means, &self.speeds);
         let mut shares = Vec::new();
         for (i, s) in self.split.splits.iter().enumerate() {
             let mut r: Option<BodyReport> = None;
