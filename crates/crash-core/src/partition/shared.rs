@@ -276,6 +276,8 @@ impl SharedGroup {
                 && self.split.contact.speed_rule == crate::contact::SpeedRule::LimitDt;
             // every part of the body, then the fault one process would name
             let mut fault = None;
+            // a body in one part is the whole body (the momentum's scale is its mass)
+            let single = s.parts.len() == 1;
             for (q, p) in s.parts.iter_mut().enumerate() {
                 self.sums[i][q] = None;
                 self.figures[i][q] = None;
@@ -286,7 +288,7 @@ impl SharedGroup {
                 // a part that is its whole body (a floor's spheres) takes its momentum
                 // and velocity boxes in the node loop, as a whole group's bodies do: the
                 // same values (an integer sum; boxes per chunk) without two more passes
-                let whole = p.body.def.halo_nodes == 0;
+                let whole = single && p.body.def.halo_nodes == 0;
                 let integrated = if closing && whole {
                     p.body.integrate_with_figures(&sc, gravity)
                 } else {
