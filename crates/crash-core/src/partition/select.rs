@@ -283,3 +283,57 @@ pub(super) fn corners_and_ring(
     let element = (0..ne as u32).filter(|&e| take[e as usize]).collect();
     (node, element)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A leaf per `CHUNK` boxes answers every query as a test of each box would: boxes
+    /// scattered by a fixed sequence (so leaves of far-apart boxes overlap many
+    /// queries), queries of every size, touching corners counted as meeting.
+    #[test]
+    fn leaves_of_chunked_boxes_answer_as_every_box_would() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut boxes = Vec::new();
+        for _ in 0..203 {
+            let lo = Vec3::new(next(), next(), next());
+            let size = Vec3::new(next(), next(), next()) * 0.05;
+            boxes.push((lo, lo + size));
+        }
+        let t = Tree::of(boxes.clone());
+        let b = Boxes {
+            trees: vec![None, Some(t)],
+        };
+        let (mut met, mut missed) = (0, 0);
+        for k in 0..2000 {
+            let p = Vec3::new(next(), next(), next());
+            let r = 0.02 * next();
+            // the corner of a box, exactly: a closed box meets it
+            let p = if k % 10 == 0 {
+                boxes[k % boxes.len()].1
+            } else {
+                p
+            };
+            let brute = boxes
+                .iter()
+                .any(|&bx| meets((p - Vec3::repeat(r), p + Vec3::repeat(r)), bx));
+            assert_eq!(b.near(1, (p, p), r), brute, "query {k} at {p:?}, r {r}");
+            assert!(!b.near(0, (p, p), r), "no boxes of body 0");
+            if brute {
+                met += 1;
+            } else {
+                missed += 1;
+            }
+        }
+        assert!(
+            met > 100 && missed > 100,
+            "both answers tried: {met} / {missed}"
+        );
+    }
+}
