@@ -52,6 +52,21 @@ impl Partition {
             .collect()
     }
 
+    /// The part owning each node of `def`: the part of its lowest-index element
+    /// (u32::MAX for a node of no element). A part computes the elements of the nodes
+    /// it owns (`Split::new`).
+    pub fn owners(&self, def: &BodyDef) -> Vec<u32> {
+        let mut owner = vec![u32::MAX; def.node_count()];
+        for (e, &p) in self.part_of.iter().enumerate() {
+            for &n in def.element_nodes(e) {
+                if owner[n as usize] == u32::MAX {
+                    owner[n as usize] = p;
+                }
+            }
+        }
+        owner
+    }
+
     /// Summed weight of each part.
     pub fn weights(&self, weight: &[f64]) -> Vec<f64> {
         let mut w = vec![0.0; self.parts];
@@ -134,16 +149,9 @@ pub fn partition_body(def: &BodyDef, k: usize) -> Result<Partition, CoreError> {
 
 /// What each part of `part` computes a step: the weights of the elements it holds
 /// (its own and every element at a node it owns; a node is owned by the part of its
-/// lowest-index element, as `Split::new` has it) and `NODE_COST` per owned node.
+/// lowest-index element: `Partition::owners`) and `NODE_COST` per owned node.
 pub fn computed_costs(def: &BodyDef, part: &Partition, weight: &[f64]) -> Vec<f64> {
-    let mut owner = vec![u32::MAX; def.node_count()];
-    for (e, &p) in part.part_of.iter().enumerate() {
-        for &n in def.element_nodes(e) {
-            if owner[n as usize] == u32::MAX {
-                owner[n as usize] = p;
-            }
-        }
-    }
+    let owner = part.owners(def);
     let mut cost = vec![0.0; part.parts];
     for &o in owner.iter().filter(|&&o| o != u32::MAX) {
         cost[o as usize] += NODE_COST;

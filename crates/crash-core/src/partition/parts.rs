@@ -61,15 +61,7 @@ impl Split {
             )));
         }
         let nodes_of = |e: usize| d.element_nodes(e);
-        // owner of each node: the part of its lowest-index element
-        let mut owner_part = vec![u32::MAX; nn];
-        for e in 0..ne {
-            for &n in nodes_of(e) {
-                if owner_part[n as usize] == u32::MAX {
-                    owner_part[n as usize] = p.part_of[e];
-                }
-            }
-        }
+        let owner_part = p.owners(d);
         if let Some(n) = owner_part.iter().position(|&q| q == u32::MAX) {
             return Err(err(format!("node {n} belongs to no element")));
         }
