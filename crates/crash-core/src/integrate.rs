@@ -7,15 +7,13 @@
 //! Mass damping c (f = -c m v_n, v_n the mean of the two half-step velocities) is
 //! integrated implicitly: v_{n+1/2} = ((1 - c hbar/2) v_{n-1/2} + hbar a) / (1 + c hbar/2).
 
-use crate::body::{Body, BodyDef, NO_PROGRAM};
+use crate::body::{Body, BodyDef};
 use crate::contact::figures::{ChunkFigures, NodeFigures};
 use crate::contact::sweep::Momentum;
-use crate::element::simd::prefetch;
+use crate::element::simd::dispatch;
 use crate::error::Fault;
 use crate::forces::CHUNK;
-
-/// How many nodes ahead the integration prefetches force slots.
-const PREFETCH: usize = 8;
+use crate::node_loop::{NodeChunk, NodeStep};
 use crate::Vec3;
 use rayon::prelude::*;
 
@@ -272,130 +270,51 @@ impl Body {
             // the same bits without the per-node program and force terms (kinematic.rs)
             return Ok((self.integrate_kinematic(clock, gravity)?, None));
         }
-        // the momentum's scale needs the whole body's mass first (a sum in node order)
-        let taking = figures && self.def.contact && self.def.halo_nodes == 0;
-        let mass_scale = taking.then(|| {
-            let m = self.total_mass();
-            (m, Momentum::scale(m))
-        });
-        let scale = mass_scale.map(|(_, sc)| sc);
-        let h = clock.h;
-        let hbar = 0.5 * (clock.h_prev + h);
-        let c = self.def.mass_damping;
-        let (dn, dd) = (1.0 - 0.5 * c * hbar, 1.0 / (1.0 + 0.5 * c * hbar));
-        let gs = &self.def.gather_start;
-        let gi = &self.def.gather_slot;
-        // the force slots and, with Kelvin damping, the Kelvin part of each (empty
-        // otherwise: an undamped body reads nothing more)
-        let (slots, kelvin) = self.state.slots.split_at(gi.len());
-        let kelvin = kelvin
-            .get(..self.def.slot_count() - gi.len())
-            .unwrap_or_default();
-        let fc = &self.state.f_contact;
-        let d = &*self.def;
-        let programs = &self.def.programs;
-        let curves = &self.def.curves;
-        let (mass, inertia, fixed, program) = (
-            &self.def.mass,
-            &self.def.inertia,
-            &self.def.fixed,
-            &self.def.program,
+        let mass_scale = self.mass_scale(figures);
+        let step = NodeStep::of(
+            &self.def,
+            &self.state.slots,
+            &self.state.f_contact,
+            clock,
+            gravity,
+            mass_scale,
         );
-        let t = clock.t;
         let (x, v, w) = (&mut self.state.x, &mut self.state.v, &mut self.state.w);
         let parts = node_chunks(x, v, w, self.def.halo_nodes, |ci, xs, vs, ws| {
-            let mut s = NodeSums::default();
-            for k in 0..xs.len() {
-                let i = ci * CHUNK + k;
-                // the force slots of a node a few places ahead (see `prefetch`)
-                if let Some(range) = gs.get(i + PREFETCH..i + PREFETCH + 2) {
-                    for &sl in &gi[range[0] as usize..range[1] as usize] {
-                        // a 48-byte slot starts at byte 0, 16, 32 or 48 of a
-                        // line: it may end on the next one
-                        let q = &slots[sl as usize];
-                        prefetch(&q[0]);
-                        prefetch(&q[5]);
-                    }
-                }
-                let m = mass[i];
-                let inr = inertia[i];
-                // forces: external (gravity, loads), contact, minus internal
-                let (mut f, mut mom) = d.external_at(i, gravity * m, t);
-                let (fe, me) = (f, mom);
-                let mut fcon = Vec3::zeros();
-                if !fc.is_empty() {
-                    fcon = fc[i];
-                    f += fcon;
-                }
-                let mut fi = Vec3::zeros();
-                let mut mi = Vec3::zeros();
-                let mut fd = Vec3::zeros();
-                let mut md = Vec3::zeros();
-                for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
-                    let q = &slots[sl as usize];
-                    fi += Vec3::new(q[0], q[1], q[2]);
-                    mi += Vec3::new(q[3], q[4], q[5]);
-                }
-                f -= fi;
-                mom -= mi;
-                if !kelvin.is_empty() {
-                    for &sl in &gi[gs[i] as usize..gs[i + 1] as usize] {
-                        let q = &kelvin[sl as usize];
-                        fd += Vec3::new(q[0], q[1], q[2]);
-                        md += Vec3::new(q[3], q[4], q[5]);
-                    }
-                }
-                let v_old = vs[k];
-                let w_old = ws[k];
-                let mut v_new = (v_old * dn + f * (hbar / m)) * dd;
-                let mut w_new = (w_old * dn + mom * (hbar / inr)) * dd;
-                let free_v = v_new;
-                let free_w = w_new;
-                let fx = fixed[i];
-                if fx != 0 {
-                    let (pv, pw) = match program[i] {
-                        NO_PROGRAM => (Vec3::zeros(), Vec3::zeros()),
-                        p => programs[p as usize].over_step(t, h, curves),
-                    };
-                    for d in 0..3 {
-                        if fx & (1 << d) != 0 {
-                            v_new[d] = pv[d];
-                        }
-                        if fx & (8 << d) != 0 {
-                            w_new[d] = pw[d];
-                        }
-                    }
-                }
-                let vn = (v_old + v_new) * 0.5;
-                let wn = (w_old + w_new) * 0.5;
-                s.kinetic += 0.5 * (m * v_new.norm_squared() + inr * w_new.norm_squared());
-                s.external += hbar * (fe.dot(&vn) + me.dot(&wn));
-                s.contact += hbar * fcon.dot(&vn);
-                s.internal_power += fi.dot(&v_new) + mi.dot(&w_new);
-                if !kelvin.is_empty() {
-                    // the Kelvin force's work at the kinetic energy's time levels;
-                    // the shadow internal energy takes the elastic part only
-                    s.kelvin += hbar * (fd.dot(&vn) + md.dot(&wn));
-                    s.internal_power -= fd.dot(&v_new) + md.dot(&w_new);
-                }
-                if fx != 0 {
-                    // impulse the constraint applied, times the mean velocity
-                    // xs[k] is still x_n, the position the reaction acts at
-                    let dv = (v_new - free_v, w_new - free_w);
-                    s.add_reaction((m, inr), dv, dd, (vn, wn), hbar, &xs[k]);
-                }
-                s.add_damping(c, hbar, (m, inr), (vn, wn));
-                s.advance(i, h, (&mut xs[k], &mut vs[k], &mut ws[k]), v_new, w_new);
-            }
-            // the chunk is still in the cache: the contact stage's figures of it
-            let at = ci * CHUNK;
-            let fig =
-                scale.map(|sc| ChunkFigures::of(s.lo, s.hi, vs, &mass[at..at + vs.len()], sc));
-            (s, fig)
+            let step = &step;
+            dispatch(NodeChunk {
+                step,
+                ci,
+                xs,
+                vs,
+                ws,
+            })
         });
+        self.finish_nodes(parts, clock, mass_scale)
+    }
+
+    /// The total mass and momentum scale of a whole, deformable contact body whose
+    /// contact figures the node loop takes (`figures`); None otherwise. The scale
+    /// needs the whole body's mass first (a sum in node order).
+    pub(crate) fn mass_scale(&self, figures: bool) -> Option<(f64, f64)> {
+        let taking = figures && self.def.contact && self.def.halo_nodes == 0;
+        taking.then(|| {
+            let m = self.total_mass();
+            (m, Momentum::scale(m))
+        })
+    }
+
+    /// The node chunks' results merged in chunk order, booked; the contact figures
+    /// gathered where taken.
+    pub(crate) fn finish_nodes(
+        &mut self,
+        parts: Vec<(NodeSums, Option<ChunkFigures>)>,
+        clock: &StepClock,
+        mass_scale: Option<(f64, f64)>,
+    ) -> Result<(NodeSums, Option<NodeFigures>), Fault> {
         let (sums, figs): (Vec<NodeSums>, Vec<Option<ChunkFigures>>) = parts.into_iter().unzip();
         let total = NodeSums::total(&sums, clock.step, self.def.id)?;
-        self.book(h, &total);
+        self.book(clock.h, &total);
         let figures = mass_scale.map(|(m, sc)| {
             let figs: Vec<ChunkFigures> = figs.into_iter().flatten().collect();
             NodeFigures::gather(&figs, m, sc, total.max_move, (total.lo, total.hi))

@@ -26,6 +26,7 @@ pub mod kinematic;
 pub mod material;
 pub mod mesh;
 pub mod modal;
+mod node_loop;
 pub mod output;
 pub mod partition;
 pub mod probe;

@@ -1,5 +1,6 @@
-//! Run-time choice of the instruction set for the element loops, so that one binary
-//! runs on every x86-64 and uses what the CPU has:
+//! Run-time choice of the instruction set for the element loops (and the integration's
+//! node loop, `node_loop.rs`, which uses no lanes but gains registers and encodings), so
+//! that one binary runs on every x86-64 and uses what the CPU has:
 //!
 //! | path       | lanes per batch          | target features                                   |
 //! | ---------- | ------------------------ | ------------------------------------------------- |
@@ -195,7 +196,8 @@ pub fn force(p: Path) -> Result<(), Unsupported> {
     Ok(())
 }
 
-/// Work that runs with any lane type: an element loop, instantiated once per path.
+/// Work that runs with any lane type: an element loop (or a chunk of the node loop),
+/// instantiated once per path.
 pub trait Lanewise {
     type Output;
     /// Run with batches of `S::W` elements (and the remainder one by one).
