@@ -296,7 +296,7 @@ impl Body {
     /// The total mass and momentum scale of a whole, deformable contact body whose
     /// contact figures the node loop takes (`figures`); None otherwise. The scale
     /// needs the whole body's mass first (a sum in node order).
-    pub(crate) fn mass_scale(&self, figures: bool) -> Option<(f64, f64)> {
+    fn mass_scale(&self, figures: bool) -> Option<(f64, f64)> {
         let taking = figures && self.def.contact && self.def.halo_nodes == 0;
         taking.then(|| {
             let m = self.total_mass();
@@ -306,7 +306,7 @@ impl Body {
 
     /// The node chunks' results merged in chunk order, booked; the contact figures
     /// gathered where taken.
-    pub(crate) fn finish_nodes(
+    fn finish_nodes(
         &mut self,
         parts: Vec<(NodeSums, Option<ChunkFigures>)>,
         clock: &StepClock,

@@ -8,9 +8,10 @@
 //!   long update one node's gather chain was most of its time;
 //! - it runs through `element::simd::dispatch`, so that it is compiled once per
 //!   instruction-set path. It uses no lanes, but AVX2 and AVX-512 give it three-operand
-//!   encodings and 16 or 32 more registers (the baseline build spilled the gather's sums
-//!   to the stack). The operations are the same IEEE operations in the same order and
-//!   never a fused multiply-add (element::simd): the same bits on every path.
+//!   encodings (fewer register copies) and AVX-512 32 vector registers instead of 16
+//!   (the baseline build spilled the gather's sums to the stack). The operations are the
+//!   same IEEE operations in the same order and never a fused multiply-add
+//!   (element::simd): the same bits on every path.
 //!
 //! Without Kelvin damping or contact forces the loop is instantiated without their
 //! terms (const generics). The forces were skipped at run time before; the contact work
