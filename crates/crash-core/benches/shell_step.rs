@@ -4,31 +4,16 @@
 //! Criterion reports time per iteration = one cycle of 100 000 elements, so
 //! ns per element-cycle = reported time / 1e5 (also shown as throughput).
 
-use crash_core::shapes::{plate, ElementKind};
-use crash_core::{Body, Group, Material, Section, Stabilization, Vec3};
+use crash_core::shapes::{bench_plate, ElementKind};
+use crash_core::{Body, Group, Vec3};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::time::Duration;
 
 fn plate_body(kind: ElementKind) -> Body {
-    let (nx, ny) = match kind {
-        ElementKind::Tri => (224, 224),  // 100 352 triangles
-        ElementKind::Quad => (317, 316), // 100 172 quads
-    };
-    let mat = Material::steel();
-    let m = plate(1.0, 1.0, nx, ny, kind);
-    let mut b = Body::new(
-        0,
-        "plate",
-        &m,
-        Section::new(mat, 0.002),
-        Stabilization::default(),
-    )
-    .expect("valid");
-    for i in 0..b.state.x.len() {
-        let p = b.def.x0[i];
-        b.state.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
+    match kind {
+        ElementKind::Tri => bench_plate(224, 224, kind), // 100 352 triangles
+        ElementKind::Quad => bench_plate(317, 316, kind), // 100 172 quads
     }
-    b
 }
 
 fn bench(c: &mut Criterion) {

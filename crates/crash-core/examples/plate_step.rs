@@ -8,8 +8,8 @@
 //! (an N x N plate, default 224 x 224 triangles = 100 352 elements as in shell_step;
 //! RUNS runs of 5 steps, default 40).
 
-use crash_core::shapes::{plate, ElementKind};
-use crash_core::{Body, Clock, Group, Material, Section, Stabilization, Vec3};
+use crash_core::shapes::{bench_plate, ElementKind};
+use crash_core::{Clock, Group, Vec3};
 use std::time::Instant;
 
 fn main() {
@@ -27,15 +27,7 @@ fn main() {
         Some("quad") => ElementKind::Quad,
         Some(k) => panic!("element kind {k}: tri or quad"),
     };
-    let mesh = plate(1.0, 1.0, n, n, kind);
-    let section = Section::new(Material::steel(), 0.002);
-    let mut body =
-        Body::new(0, "plate", &mesh, section, Stabilization::default()).expect("a valid plate");
-    // the shell_step bench's velocity field
-    for i in 0..body.state.x.len() {
-        let p = body.def.x0[i];
-        body.state.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
-    }
+    let body = bench_plate(n, n, kind);
     let elements = body.element_count() as f64;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

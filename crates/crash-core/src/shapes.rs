@@ -48,6 +48,21 @@ pub fn plate(lx: f64, ly: f64, nx: usize, ny: usize, kind: ElementKind) -> Mesh 
     m
 }
 
+/// The element benchmarks' body (shell_step, the plate_step example): a 1 m x 1 m steel
+/// plate, 2 mm thick, of nx x ny cells, with a wavy transverse velocity
+/// 0.1 sin(7x) cos(5y) m/s so that every element deforms.
+pub fn bench_plate(nx: usize, ny: usize, kind: ElementKind) -> crate::Body {
+    let section = crate::Section::new(crate::Material::steel(), 0.002);
+    let stab = crate::Stabilization::default();
+    let mut b = crate::Body::new(0, "plate", &plate(1.0, 1.0, nx, ny, kind), section, stab)
+        .expect("a valid plate");
+    for i in 0..b.state.x.len() {
+        let p = b.def.x0[i];
+        b.state.v[i] = Vec3::new(0.0, 0.0, 0.1 * (7.0 * p.x).sin() * (5.0 * p.y).cos());
+    }
+    b
+}
+
 /// Sphere of the given radius: a subdivided icosahedron (near-uniform triangles,
 /// 20 * 4^level elements), outward normals. The triangles come out in subdivision
 /// order (each base face's children together, recursively), and the nodes are numbered
