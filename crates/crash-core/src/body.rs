@@ -226,6 +226,11 @@ pub struct BodyState {
     /// with the time levels of the other work terms (docs/theory.md section 6). Kept in
     /// this vector so that snapshots, migrations and checkpoints carry it unchanged.
     pub slots: Vec<Slot>,
+    /// The slots hold each node's summed force in its first slot and -0.0 in every
+    /// other (`summed`): a gather gives the same bits, the node loop reads one slot per
+    /// node. Not carried: a state rebuilt elsewhere is gathered slot by slot.
+    #[serde(skip)]
+    pub slots_summed: bool,
     /// Contact forces on nodes (written by the contact stage, zero otherwise).
     pub f_contact: Vec<Vec3>,
     pub energy: BodyEnergy,
@@ -333,6 +338,7 @@ impl Body {
                 shell: vec![ShellState::default(); ne],
                 hourglass: vec![HourglassState::default(); quads.len()],
                 slots: vec![[0.0; 6]; nslots],
+                slots_summed: false,
                 f_contact: Vec::new(),
                 energy: BodyEnergy::default(),
                 internal_now: 0.0,

@@ -1,7 +1,7 @@
 //! Pipeline stage: element internal forces, in parallel over fixed-size chunks of
 //! elements into per-element slots (no shared accumulation: thread-count independent).
 
-use crate::body::Body;
+use crate::body::{Body, BodyDef};
 use crate::element::batch::{ChunkResult, QuadChunk, TriChunk};
 use crate::element::simd::dispatch;
 use crate::element::{
@@ -48,6 +48,17 @@ pub fn stream_slots(bytes: usize) -> bool {
         _ => None,
     });
     mode.unwrap_or_else(|| bytes > last_level_cache())
+}
+
+/// The bytes the element loop of `d` reads and writes per cycle: reference data,
+/// resultant states and force slots.
+pub(crate) fn cycle_bytes(d: &BodyDef) -> usize {
+    d.slot_count() * std::mem::size_of::<Slot>()
+        + d.tris.len() * (std::mem::size_of::<TriElem>() + std::mem::size_of::<ShellState>())
+        + d.quads.len()
+            * (std::mem::size_of::<QuadElem>()
+                + std::mem::size_of::<ShellState>()
+                + std::mem::size_of::<HourglassState>())
 }
 
 /// Size of the last-level cache in bytes (Linux sysfs; 32 MiB where it cannot be read).
@@ -159,7 +170,11 @@ impl Body {
     /// every slot into the second half of `slots` (`BodyDef::slot_count`), which the
     /// integration books as dissipation.
     pub fn internal_forces(&mut self, h: f64, step: u64) -> Result<ForceSums, Fault> {
-        let done = self.no_chunks();
+        let done = if crate::summed::wanted(&self.def) {
+            self.summed_chunks(h)
+        } else {
+            self.no_chunks()
+        };
         self.finish_forces(h, done, step)
     }
 
@@ -202,6 +217,10 @@ impl Body {
             return;
         }
         let wanted = |k: usize| only.is_none_or(|m| m.get(k).copied().unwrap_or(false));
+        if (0..done.len()).any(|k| done[k].is_none() && wanted(k)) {
+            // slots of the usual form from here on (`summed`)
+            self.state.slots_summed = false;
+        }
         let (sec, stab) = (self.def.section, self.def.stab);
         let nt = self.def.tris.len();
         let ns = self.def.gather_slot.len();
@@ -220,14 +239,7 @@ impl Body {
 
         // each chunk runs on the SIMD path of this CPU (element::simd)
         let uncounted = &self.def.uncounted;
-        let stream = stream_slots(
-            want * std::mem::size_of::<Slot>()
-                + nt * (std::mem::size_of::<TriElem>() + std::mem::size_of::<ShellState>())
-                + self.def.quads.len()
-                    * (std::mem::size_of::<QuadElem>()
-                        + std::mem::size_of::<ShellState>()
-                        + std::mem::size_of::<HourglassState>()),
-        );
+        let stream = stream_slots(cycle_bytes(&self.def));
         let tri = |ci: usize,
                    els: &[TriElem],
                    states: &mut [ShellState],

@@ -31,6 +31,7 @@ pub mod output;
 pub mod partition;
 pub mod probe;
 pub mod shapes;
+pub mod summed;
 pub mod threads;
 
 /// 3-vector of f64 (nalgebra).

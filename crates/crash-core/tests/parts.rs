@@ -11,10 +11,7 @@ use crash_core::partition::{
     bisect, centroids, computed_costs, element_weights, partition_body, Split, NODE_COST,
 };
 use crash_core::shapes::{icosphere, plate, ElementKind};
-use crash_core::{
-    dof, Body, Clock, Group, Material, Mesh, NodalLoad, Section, Stabilization, Vec3,
-    VelocityProgram, NO_CURVE,
-};
+use crash_core::{dof, Body, Clock, Group, NodalLoad, Vec3, NO_CURVE};
 
 const STEPS: usize = 150;
 const SAFETY: f64 = 0.9;
@@ -51,49 +48,6 @@ fn free_tri_plate() -> (Body, Vec3) {
     let mut b = body(&plate(lx, ly, 21, 13, ElementKind::Tri), steel(), 0.002);
     transverse_start(&mut b, lx, ly);
     (b, Vec3::zeros())
-}
-
-/// Triangles on the left third, quads elsewhere; Kelvin and mass damping, one edge
-/// clamped, the opposite edge driven by a ramped velocity program, spin in the start.
-fn mixed_damped_plate() -> (Body, Vec3) {
-    let (lx, ly, nx, ny) = (0.4, 0.25, 24, 15);
-    let q = plate(lx, ly, nx, ny, ElementKind::Quad);
-    let mut m = Mesh {
-        nodes: q.nodes.clone(),
-        ..Mesh::default()
-    };
-    for (e, c) in q.quads.iter().enumerate() {
-        if e % nx < nx / 3 {
-            m.tris.push([c[0], c[1], c[2]]);
-            m.tris.push([c[0], c[2], c[3]]);
-        } else {
-            m.quads.push(*c);
-        }
-    }
-    let mat = Material::new(7800.0, 200e9, 0.3, 1e-7).expect("valid");
-    let mut b = Body::new(
-        3,
-        "mixed",
-        &m,
-        Section::new(mat, 0.002),
-        Stabilization::default(),
-    )
-    .expect("valid");
-    b.def_mut().mass_damping = 30.0;
-    for i in 0..b.node_count() {
-        let p = b.def.x0[i];
-        b.state.v[i] = Vec3::new(0.3 * p.y, 0.0, 2.0 * (9.0 * p.x).sin() * (7.0 * p.y).cos());
-        b.state.w[i] = Vec3::new(0.0, 5.0 * p.x, 0.0);
-    }
-    for n in nodes_at(&b, 0, -lx / 2.0, 1e-9) {
-        b.fix(n, dof::ALL);
-    }
-    let driven = nodes_at(&b, 0, lx / 2.0, 1e-9);
-    b.prescribe(
-        &driven,
-        VelocityProgram::ramped(Vec3::new(0.0, 0.0, 1.0), Vec3::zeros(), 1e-5),
-    );
-    (b, Vec3::new(0.0, 0.0, -9.81))
 }
 
 /// State hash after each step, the stable dt before it, and the final kinetic, internal,

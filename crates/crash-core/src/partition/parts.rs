@@ -328,6 +328,8 @@ pub(super) fn sub_body(
         shell,
         hourglass,
         slots,
+        // copies of the whole's slots: a summed whole's (`summed`) gather slot by slot
+        slots_summed: false,
         f_contact,
         energy: Default::default(),
         internal_now: 0.0,
