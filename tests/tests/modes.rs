@@ -4,7 +4,9 @@
 //! is its own test; the reference (`crash run --threads 1`) is computed once.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
-use crash_tests::cli::{crash_run as run, final_hash as hash_of, grpc_run};
+use crash_tests::cli::{
+    crash_run as run, crash_run_env, final_hash as hash_of, grpc_run, grpc_run_env,
+};
 use crash_tests::fixtures::test_scene;
 use std::sync::OnceLock;
 
@@ -41,6 +43,27 @@ fn three_in_process_workers_give_the_single_thread_state() {
 fn two_grpc_workers_give_the_single_thread_state() {
     let out = grpc_run(&test_scene(SCENE), "modes-grpc", 2, &[]);
     assert_eq!(hash_of(&out), reference());
+}
+
+/// Force slots carried as node sums (`crash_core::summed`; by default only for a body
+/// beyond the last-level cache on one thread, forced here for every whole body by
+/// CRASH_SUMMED=1): on 1 and 2 threads, over in-process workers and in gRPC workers
+/// whose bodies migrate (states of the summed form read by others), the single-thread
+/// state of the gathered slots.
+#[test]
+fn summed_force_slots_give_the_single_thread_state_in_every_mode() {
+    let env = [("CRASH_SUMMED", "1")];
+    let scene = test_scene(SCENE);
+    for (tag, args) in [
+        ("summed1", &["--threads", "1"][..]),
+        ("summed2", &["--threads", "2"]),
+        ("summed-workers3", &["--workers", "3", "--threads", "1"]),
+    ] {
+        let out = crash_run_env(&scene, &format!("modes-{tag}"), args, &env);
+        assert_eq!(hash_of(&out), reference(), "{tag}");
+    }
+    let out = grpc_run_env(&scene, "modes-summed-grpc", 2, &[], &env);
+    assert_eq!(hash_of(&out), reference(), "gRPC workers");
 }
 
 /// The segment pass (`contact.pass = "segments"`) in every mode: 2 threads, 3 in-process

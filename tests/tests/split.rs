@@ -187,6 +187,34 @@ fn groups_split_merged_back_and_split_again_keep_the_single_process_state() {
     );
 }
 
+/// Force slots carried as node sums (`crash_core::summed`), forced for every whole body
+/// in this process: wholes that ran summed are split into parts (which gather every
+/// slot), parts are assembled back into wholes, checkpoints taken and resumed; the
+/// single-process state of the gathered slots. Forcing the mode while the other tests
+/// of this file run changes none of their results: the same bits is the invariant.
+#[test]
+fn summed_force_slots_split_merged_back_and_split_again_keep_the_single_process_state() {
+    let inp = input("ten-spheres-tiny.toml");
+    let (_, reference) = driver_reference(&inp);
+    crash_core::summed::set_summed_slots(Some(true));
+    for workers in [1, 2, 3] {
+        let (hash, _) = split_run(&inp, workers, SplitMode::Always);
+        assert_eq!(hash, reference, "{workers} workers");
+    }
+    let mut sink = RecordSink::default();
+    let o = RunOptions {
+        checkpoint_every: 7,
+        ..opts(SplitMode::Always)
+    };
+    let stats = run_local(inp.clone(), 2, &mut sink, &o).unwrap();
+    assert_eq!(stats.final_hash, reference, "with checkpoints");
+    let ck = sink.checkpoints[sink.checkpoints.len() / 2].clone();
+    let mut again = RecordSink::default();
+    let resumed = resume_local(inp, ck, 2, &mut again, &opts(SplitMode::Always)).unwrap();
+    assert_eq!(resumed.final_hash, reference, "resumed");
+    crash_core::summed::set_summed_slots(None);
+}
+
 /// Bodies that leave a split group (spheres bouncing off the floor) leave the split as
 /// it is: no merge back and cut again while every MEIM group lies within the groups
 /// the workers hold; the state is still the single-process one.

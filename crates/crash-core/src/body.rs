@@ -226,11 +226,12 @@ pub struct BodyState {
     /// with the time levels of the other work terms (docs/theory.md section 6). Kept in
     /// this vector so that snapshots, migrations and checkpoints carry it unchanged.
     pub slots: Vec<Slot>,
-    /// The slots hold each node's summed force in its first slot and -0.0 in every
-    /// other (`summed`): a gather gives the same bits, the node loop reads one slot per
-    /// node. Not carried: a state rebuilt elsewhere is gathered slot by slot.
+    /// The forces carried as node sums (`summed`: one thread, a body beyond the cache):
+    /// each node's summed slots, then with Kelvin damping each node's summed Kelvin part.
+    /// While not empty the slots are not current: whatever takes the state out of its
+    /// group takes it settled (`Body::settle`, `Body::settled_state`).
     #[serde(skip)]
-    pub slots_summed: bool,
+    pub node_sums: Vec<Slot>,
     /// Contact forces on nodes (written by the contact stage, zero otherwise).
     pub f_contact: Vec<Vec3>,
     pub energy: BodyEnergy,
@@ -338,7 +339,7 @@ impl Body {
                 shell: vec![ShellState::default(); ne],
                 hourglass: vec![HourglassState::default(); quads.len()],
                 slots: vec![[0.0; 6]; nslots],
-                slots_summed: false,
+                node_sums: Vec::new(),
                 f_contact: Vec::new(),
                 energy: BodyEnergy::default(),
                 internal_now: 0.0,

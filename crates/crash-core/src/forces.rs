@@ -218,8 +218,8 @@ impl Body {
         }
         let wanted = |k: usize| only.is_none_or(|m| m.get(k).copied().unwrap_or(false));
         if (0..done.len()).any(|k| done[k].is_none() && wanted(k)) {
-            // slots of the usual form from here on (`summed`)
-            self.state.slots_summed = false;
+            // the slots carry the forces again (`summed`)
+            self.state.node_sums.clear();
         }
         let (sec, stab) = (self.def.section, self.def.stab);
         let nt = self.def.tris.len();

@@ -273,7 +273,7 @@ impl Body {
         let mass_scale = self.mass_scale(figures);
         let step = NodeStep::of(
             &self.def,
-            (&self.state.slots, self.state.slots_summed),
+            (&self.state.slots, &self.state.node_sums),
             &self.state.f_contact,
             clock,
             gravity,

@@ -35,6 +35,9 @@ fn stiffness_action(base: &Body, u: &[[f64; 6]], eps: f64) -> Vec<[f64; 6]> {
     base_f.state.v.iter_mut().for_each(|v| *v = Vec3::zeros());
     base_f.state.w.iter_mut().for_each(|v| *v = Vec3::zeros());
     let ok = b.internal_forces(1.0, 0).is_ok() && base_f.internal_forces(1.0, 0).is_ok();
+    // the slots, not node sums (`summed`): differences slot by slot
+    b.settle();
+    base_f.settle();
     let mut out = vec![[0.0; 6]; b.state.x.len()];
     if !ok {
         return out;

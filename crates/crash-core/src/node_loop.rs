@@ -36,8 +36,8 @@ pub(crate) struct NodeStep<'a> {
     /// The force slots and, with Kelvin damping, the Kelvin part of each (else empty).
     pub slots: &'a [Slot],
     pub kelvin: &'a [Slot],
-    /// The slots carry node sums (`summed`): one slot per node is read.
-    pub summed: bool,
+    /// The forces carried as node sums (`summed`; empty: gather the slots).
+    pub sums: &'a [Slot],
     /// Contact forces per node (empty: none this step).
     pub fc: &'a [Vec3],
     pub gravity: Vec3,
@@ -54,11 +54,11 @@ pub(crate) struct NodeStep<'a> {
 
 impl<'a> NodeStep<'a> {
     /// The step of `d` over `clock` from its force slots `slots` (with their Kelvin
-    /// half, if any; node sums if `summed`) and contact forces `fc`; `mass_scale` as
+    /// half, if any, or the node sums `sums` carrying them) and contact forces `fc`; `mass_scale` as
     /// `Body::mass_scale`.
     pub(crate) fn of(
         d: &'a BodyDef,
-        (slots, summed): (&'a [Slot], bool),
+        (slots, sums): (&'a [Slot], &'a [Slot]),
         fc: &'a [Vec3],
         clock: &StepClock,
         gravity: Vec3,
@@ -77,7 +77,7 @@ impl<'a> NodeStep<'a> {
             d,
             slots,
             kelvin,
-            summed,
+            sums,
             fc,
             gravity,
             t: clock.t,
@@ -121,7 +121,7 @@ impl NodeChunk<'_, '_> {
             d,
             slots,
             kelvin,
-            summed,
+            sums,
             fc,
             gravity,
             t,
@@ -135,12 +135,23 @@ impl NodeChunk<'_, '_> {
         let (xs, vs, ws) = (self.xs, self.vs, self.ws);
         let at = self.ci * CHUNK;
         let n = xs.len();
-        let collect = if summed { first } else { gather };
+        // the slots' sums per node, or the sums the element stage carried (`summed`)
+        let nn = d.x0.len();
+        let collect = |out: &mut [[Vec3; 2]; CHUNK], slots: &[Slot], half: usize| {
+            if sums.is_empty() {
+                gather(out, slots, d, at, n)
+            } else {
+                let from = half * nn + at;
+                for (o, q) in out.iter_mut().zip(&sums[from..from + n]) {
+                    *o = [Vec3::new(q[0], q[1], q[2]), Vec3::new(q[3], q[4], q[5])];
+                }
+            }
+        };
         let mut fim = [[Vec3::zeros(); 2]; CHUNK];
-        collect(&mut fim, slots, d, at, n);
+        collect(&mut fim, slots, 0);
         let fdm = KELVIN.then(|| {
             let mut fdm = [[Vec3::zeros(); 2]; CHUNK];
-            collect(&mut fdm, kelvin, d, at, n);
+            collect(&mut fdm, kelvin, 1);
             fdm
         });
         let mut s = NodeSums::default();
@@ -234,30 +245,5 @@ fn gather(out: &mut [[Vec3; 2]; CHUNK], slots: &[Slot], d: &BodyDef, at: usize, 
             m += Vec3::new(q[3], q[4], q[5]);
         }
         *o = [f, m];
-    }
-}
-
-/// `gather` for slots that carry node sums (`summed`): each node's first slot (the
-/// sum the gather would give), zero for a node without slots.
-#[inline(always)]
-fn first(out: &mut [[Vec3; 2]; CHUNK], slots: &[Slot], d: &BodyDef, at: usize, n: usize) {
-    let (gs, gi) = (&d.gather_start, &d.gather_slot);
-    let first_of = |i: usize| {
-        let (a, b) = (gs[i] as usize, gs[i + 1] as usize);
-        (a < b).then(|| &slots[gi[a] as usize])
-    };
-    for (k, o) in out.iter_mut().enumerate().take(n) {
-        let i = at + k;
-        if let Some(q) = gs
-            .get(i + PREFETCH + 1)
-            .and_then(|_| first_of(i + PREFETCH))
-        {
-            prefetch(&q[0]);
-            prefetch(&q[5]);
-        }
-        *o = match first_of(i) {
-            Some(q) => [Vec3::new(q[0], q[1], q[2]), Vec3::new(q[3], q[4], q[5])],
-            None => [Vec3::zeros(); 2],
-        };
     }
 }

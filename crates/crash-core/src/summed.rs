@@ -1,27 +1,29 @@
 //! Pipeline stage (element forces, one thread, large bodies): the element forces carried
-//! to the node loop as per-node sums in the force slots themselves.
+//! to the node loop as per-node sums instead of per-element slots.
 //!
 //! The element stage normally writes every element's force slots (3 or 4 per element,
 //! 48 bytes each) and the node loop gathers them per node in element order. When a
 //! body's per-cycle data exceed the last-level cache (`forces::stream_slots`) that is a
 //! round trip to memory of the whole slot array each cycle. On one thread the element
 //! chunks can instead be computed in order into a small buffer and added at once into
-//! one slot per node, the node's first in gather order: every node's sum then takes the
-//! same additions in the same order as the gather (+0.0, then its slots in element
-//! order), so the node loop reads the same bits from one slot per node.
+//! a sum per node (`BodyState::node_sums`, 48 bytes per node, read in node order by the
+//! node loop): every node's sum then takes the gather's additions in the gather's order
+//! (+0.0, then its slots in element order), so a run gives the same bits either way.
 //!
-//! Every other slot holds -0.0. A sum that starts from +0.0 is never -0.0, and
+//! The slots are then not current. `Body::settle` (or `Body::settled_state` for a copy)
+//! writes them, in a form every gather reads back exactly: each node's sum in its first
+//! slot and -0.0 in every other. A sum that starts from +0.0 is never -0.0 and
 //! x + (-0.0) = x for every x, so a gather of all the slots of a node, in any order,
-//! also gives the sum: the state stays a valid state of the usual form wherever it goes
-//! (snapshots, migrations, checkpoints, a split into parts, each of which gathers all
-//! the slots of its owned nodes). `BodyState::slots_summed` marks the form; a state
-//! without the mark (rebuilt elsewhere) is gathered slot by slot.
+//! gives the sum (a part of a split body gathers all the slots of its owned nodes).
+//! Whatever takes a state out of its group (snapshots, migrations, checkpoints, a split
+//! into parts) takes it settled.
 
-use crate::body::{Body, BodyDef};
+use crate::body::{Body, BodyDef, BodyState};
 use crate::element::batch::{ChunkResult, QuadChunk, TriChunk};
 use crate::element::simd::dispatch;
 use crate::element::Slot;
 use crate::forces::{cycle_bytes, stream_slots, CHUNK};
+use std::borrow::Cow;
 use std::sync::atomic::{AtomicU8, Ordering};
 
 /// 0: by the rule (`wanted`); 1: never; 2: always for a whole body.
@@ -68,37 +70,25 @@ pub(crate) fn wanted(d: &BodyDef) -> bool {
 
 impl Body {
     /// Every element chunk in element order (triangles, then quads), each into a
-    /// buffer and then added into its nodes' first slots; the chunks' results in order.
+    /// buffer and then added into its nodes' sums; the chunks' results in order.
     pub(crate) fn summed_chunks(&mut self, h: f64) -> Vec<Option<ChunkResult>> {
         let d = &*self.def;
         let (sec, stab) = (d.section, d.stab);
-        let nt = d.tris.len();
-        let ns = d.gather_slot.len();
-        let want = d.slot_count();
+        let (nn, nt) = (d.x0.len(), d.tris.len());
+        let damped = d.slot_count() > d.gather_slot.len();
         let st = &mut self.state;
-        if st.slots.len() < want {
-            st.slots.resize(want, [0.0; 6]);
-        }
-        if !st.slots_summed {
-            // slots of the usual form: -0.0 everywhere first (each node's first slot
-            // is written whole below)
-            st.slots.fill([-0.0; 6]);
-        }
+        st.node_sums.clear();
+        st.node_sums
+            .resize(if damped { 2 * nn } else { nn }, [0.0; 6]);
+        let (sums, kelvin) = st.node_sums.split_at_mut(nn);
         let nodes = (&st.x[..], &st.v[..], &st.w[..]);
-        let (slots, kelvin) = st.slots.split_at_mut(ns);
-        let kelvin = &mut kelvin[..want - ns];
-        let damped = !kelvin.is_empty();
         let mut buf = vec![[0.0; 6]; 4 * CHUNK];
         let mut kbuf = vec![[0.0; 6]; if damped { 4 * CHUNK } else { 0 }];
         let (tri_state, quad_state) = st.shell.split_at_mut(nt);
         let uncounted = &d.uncounted;
         let mut out = Vec::with_capacity(nt.div_ceil(CHUNK) + d.quads.len().div_ceil(CHUNK));
-        for (ci, (els, states)) in d
-            .tris
-            .chunks(CHUNK)
-            .zip(tri_state.chunks_mut(CHUNK))
-            .enumerate()
-        {
+        let tris = d.tris.chunks(CHUNK).zip(tri_state.chunks_mut(CHUNK));
+        for (ci, (els, states)) in tris.enumerate() {
             let n = 3 * els.len();
             let r = dispatch(TriChunk {
                 sec: &sec,
@@ -113,18 +103,16 @@ impl Body {
                 uncounted,
                 stream: false,
             });
-            let at = 3 * ci * CHUNK;
-            let corner = |k: usize| els[k / 3].nodes[k % 3];
-            add_into(d, slots, &buf[..n], at, corner);
+            let corner = |k: usize| els[k / 3].nodes[k % 3] as usize;
+            add_into(sums, &buf[..n], corner);
             if damped {
-                add_into(d, kelvin, &kbuf[..n], at, corner);
+                add_into(kelvin, &kbuf[..n], corner);
             }
             out.push(Some(r));
         }
-        let quad_slots = 3 * nt;
-        let chunks = d.quads.chunks(CHUNK).zip(quad_state.chunks_mut(CHUNK));
+        let quads = d.quads.chunks(CHUNK).zip(quad_state.chunks_mut(CHUNK));
         for (ci, ((els, states), hourglass)) in
-            chunks.zip(st.hourglass.chunks_mut(CHUNK)).enumerate()
+            quads.zip(st.hourglass.chunks_mut(CHUNK)).enumerate()
         {
             let n = 4 * els.len();
             let r = dispatch(QuadChunk {
@@ -141,38 +129,75 @@ impl Body {
                 uncounted,
                 stream: false,
             });
-            let at = quad_slots + 4 * ci * CHUNK;
-            let corner = |k: usize| els[k / 4].nodes[k % 4];
-            add_into(d, slots, &buf[..n], at, corner);
+            let corner = |k: usize| els[k / 4].nodes[k % 4] as usize;
+            add_into(sums, &buf[..n], corner);
             if damped {
-                add_into(d, kelvin, &kbuf[..n], at, corner);
+                add_into(kelvin, &kbuf[..n], corner);
             }
             out.push(Some(r));
         }
-        st.slots_summed = true;
         out
+    }
+
+    /// Write the slots from the node sums, if the forces are carried as node sums
+    /// (module doc); the state is then of the usual form.
+    pub fn settle(&mut self) {
+        if let Cow::Owned(slots) = slots_of(&self.def, &self.state) {
+            self.state.slots = slots;
+        }
+        self.state.node_sums.clear();
+    }
+
+    /// A copy of the state, settled: what leaves the group (snapshots, migrations,
+    /// checkpoints).
+    pub fn settled_state(&self) -> BodyState {
+        match slots_of(&self.def, &self.state) {
+            Cow::Borrowed(_) => self.state.clone(),
+            Cow::Owned(slots) => {
+                let s = &self.state;
+                BodyState {
+                    x: s.x.clone(),
+                    v: s.v.clone(),
+                    w: s.w.clone(),
+                    shell: s.shell.clone(),
+                    hourglass: s.hourglass.clone(),
+                    slots,
+                    node_sums: Vec::new(),
+                    f_contact: s.f_contact.clone(),
+                    energy: s.energy,
+                    internal_now: s.internal_now,
+                    hourglass_now: s.hourglass_now,
+                }
+            }
+        }
     }
 }
 
-/// Add the chunk's slots `buf` (slot `at + k` of the body is `buf[k]`, at node
-/// `corner(k)`) into their nodes' first slots. The first slot of a node is its lowest
-/// slot: the element that owns it comes first in element order, so the node's sum
-/// starts there, from +0.0, as the gather's does.
-#[inline(always)]
-fn add_into(
-    d: &BodyDef,
-    slots: &mut [Slot],
-    buf: &[Slot],
-    at: usize,
-    corner: impl Fn(usize) -> u32,
-) {
-    let (gs, gi) = (&d.gather_start, &d.gather_slot);
-    for (k, s) in buf.iter().enumerate() {
-        let first = gi[gs[corner(k) as usize] as usize] as usize;
-        let t = &mut slots[first];
-        if first == at + k {
-            *t = [0.0; 6];
+/// The force slots of state `s` of a body defined by `d`: its slots, or, where the
+/// forces are carried as node sums, the slots written from them (module doc).
+pub fn slots_of<'s>(d: &BodyDef, s: &'s BodyState) -> Cow<'s, [Slot]> {
+    if s.node_sums.is_empty() {
+        return Cow::Borrowed(&s.slots);
+    }
+    let (ns, nn) = (d.gather_slot.len(), d.x0.len());
+    let mut slots = vec![[-0.0; 6]; s.slots.len()];
+    for (half, sums) in s.node_sums.chunks(nn).enumerate() {
+        for (i, sum) in sums.iter().enumerate() {
+            let (a, b) = (d.gather_start[i] as usize, d.gather_start[i + 1] as usize);
+            if a < b {
+                slots[half * ns + d.gather_slot[a] as usize] = *sum;
+            }
         }
+    }
+    Cow::Owned(slots)
+}
+
+/// Add the chunk's slots `buf` (slot k at node `corner(k)`) into the nodes' sums, in
+/// element order.
+#[inline(always)]
+fn add_into(sums: &mut [Slot], buf: &[Slot], corner: impl Fn(usize) -> usize) {
+    for (k, s) in buf.iter().enumerate() {
+        let t = &mut sums[corner(k)];
         for c in 0..6 {
             t[c] += s[c];
         }

@@ -29,8 +29,9 @@ pub struct BodyLoad {
 }
 
 impl BodyLoad {
-    /// A whole body (definition included).
-    pub fn whole(b: Body) -> Self {
+    /// A whole body (definition included), its forces in the slots (crash_core::summed).
+    pub fn whole(mut b: Body) -> Self {
+        b.settle();
         Self {
             id: b.def.id,
             def: Some(b.def),

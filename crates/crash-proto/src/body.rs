@@ -510,7 +510,7 @@ pub fn state_from_pb(s: &pb::BodyState) -> Result<BodyState, ProtoError> {
             .chunks_exact(6)
             .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
             .collect(),
-        slots_summed: false,
+        node_sums: Vec::new(),
         f_contact: s.f_contact.chunks_exact(3).map(vec3).collect(),
         energy: energy_from_pb(energy),
         internal_now: s.internal_now,
@@ -565,7 +565,7 @@ pub fn apply_state(b: &mut Body, s: &pb::BodyState) -> Result<(), ProtoError> {
     for (slot, c) in b.state.slots.iter_mut().zip(s.slots.chunks_exact(6)) {
         slot.copy_from_slice(c);
     }
-    b.state.slots_summed = false;
+    b.state.node_sums.clear();
     b.state.f_contact = s.f_contact.chunks_exact(3).map(vec3).collect();
     b.state.energy = energy_from_pb(energy);
     b.state.internal_now = s.internal_now;

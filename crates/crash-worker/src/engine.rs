@@ -259,7 +259,7 @@ impl Engine {
             out.push(BodyLoad {
                 id: *id,
                 def: with_def.contains(id).then(|| b.def.clone()),
-                state: b.state.clone(),
+                state: b.settled_state(),
             });
         }
         Ok(Reply::Unloaded(out))
@@ -348,10 +348,14 @@ impl Engine {
         let with_def: BTreeSet<u32> = with_def.iter().copied().collect();
         Ok(Reply::Unloaded(
             out.into_iter()
-                .map(|b| BodyLoad {
-                    id: b.def.id,
-                    def: with_def.contains(&b.def.id).then_some(b.def),
-                    state: b.state,
+                .map(|mut b| {
+                    // forces carried as node sums leave in the slots (crash_core::summed)
+                    b.settle();
+                    BodyLoad {
+                        id: b.def.id,
+                        def: with_def.contains(&b.def.id).then_some(b.def),
+                        state: b.state,
+                    }
                 })
                 .collect(),
         ))
@@ -568,7 +572,7 @@ impl Engine {
         ids.iter()
             .map(|id| {
                 held.get(id)
-                    .map(|b| (*id, b.state.clone()))
+                    .map(|b| (*id, b.settled_state()))
                     .ok_or(EngineError::NotHeld {
                         id: *id,
                         what: "the state",
@@ -581,7 +585,7 @@ impl Engine {
     pub fn states(&self) -> Vec<(u32, BodyState)> {
         self.held()
             .into_iter()
-            .map(|b| (b.def.id, b.state.clone()))
+            .map(|b| (b.def.id, b.settled_state()))
             .collect()
     }
 }

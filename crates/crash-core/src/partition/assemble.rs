@@ -54,8 +54,8 @@ impl SharedGroup {
             let half = d.gather_slot.len();
             let (mut energy, mut inow, mut hnow) = (BodyEnergy::default(), 0.0, 0.0);
             let w = &mut b.state;
-            // every element's slots come from its owner part below
-            w.slots_summed = false;
+            // every element's slots come from its owner part below (`summed`)
+            w.node_sums.clear();
             let contact = s.parts.iter().any(|p| !p.body.state.f_contact.is_empty());
             if contact {
                 w.f_contact.resize(w.x.len(), Vec3::zeros());

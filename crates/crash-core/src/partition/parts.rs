@@ -308,12 +308,14 @@ pub(super) fn sub_body(
     let first_slot = |e: usize| if e < nt { 3 * e } else { 3 * nt + 4 * (e - nt) };
     let corners = |e: usize| if e < nt { 3 } else { 4 };
     let whole_half = d.gather_slot.len();
-    let halves = s.slots.len() / whole_half.max(1);
+    // a whole that carries its forces as node sums gives them settled (`summed`)
+    let whole_slots = crate::summed::slots_of(d, s);
+    let halves = whole_slots.len() / whole_half.max(1);
     let mut slots = Vec::with_capacity(halves * b.def.gather_slot.len());
     for half in 0..halves {
         for &e in element {
             let a = half * whole_half + first_slot(e as usize);
-            slots.extend_from_slice(&s.slots[a..a + corners(e as usize)]);
+            slots.extend_from_slice(&whole_slots[a..a + corners(e as usize)]);
         }
     }
     let f_contact = if s.f_contact.is_empty() {
@@ -328,8 +330,7 @@ pub(super) fn sub_body(
         shell,
         hourglass,
         slots,
-        // copies of the whole's slots: a summed whole's (`summed`) gather slot by slot
-        slots_summed: false,
+        node_sums: Vec::new(),
         f_contact,
         energy: Default::default(),
         internal_now: 0.0,
