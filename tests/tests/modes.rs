@@ -64,6 +64,18 @@ fn summed_force_slots_give_the_single_thread_state_in_every_mode() {
     }
     let out = grpc_run_env(&scene, "modes-summed-grpc", 2, &[], &env);
     assert_eq!(hash_of(&out), reference(), "gRPC workers");
+    // two spheres that meet on one worker (the group not split: parts carry slots)
+    // and leave ringing, one of them to the other worker: its forces go settled
+    const TWO: &str = "two-spheres-tiny.toml";
+    let one = crash_run_scene(TWO, "two-ref", &["--threads", "1"]);
+    let out = grpc_run_env(
+        &test_scene(TWO),
+        "modes-summed-two",
+        2,
+        &["--split", "off"],
+        &env,
+    );
+    assert_eq!(hash_of(&out), one, "a ringing sphere migrated over gRPC");
 }
 
 /// The segment pass (`contact.pass = "segments"`) in every mode: 2 threads, 3 in-process

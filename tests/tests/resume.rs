@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
 use crash_tests::fixtures::test_scene;
-use crash_tests::procs::{master, out_dir, worker};
+use crash_tests::procs::{master, out_dir, worker_env};
 use std::path::Path;
 use std::time::Duration;
 
@@ -14,8 +14,15 @@ const TIMEOUT: Duration = Duration::from_secs(180);
 
 /// crash-master over `workers` worker processes with `extra` arguments.
 fn cluster(out: &Path, workers: usize, extra: &[&str]) -> String {
+    cluster_env(out, workers, extra, &[])
+}
+
+/// As `cluster`, with these environment variables set for the workers.
+fn cluster_env(out: &Path, workers: usize, extra: &[&str], env: &[(&str, &str)]) -> String {
     let (mut m, url) = master(&test_scene(SCENE), workers, out, extra);
-    let mut w: Vec<_> = (0..workers).map(|_| worker(&url, 1, &[])).collect();
+    let mut w: Vec<_> = (0..workers)
+        .map(|_| worker_env(&url, 1, &[], env))
+        .collect();
     assert!(m.wait(TIMEOUT).success(), "{}", m.log());
     for p in &mut w {
         assert!(p.wait(Duration::from_secs(30)).success(), "{}", p.log());
@@ -39,8 +46,20 @@ fn copy_dir(from: &Path, to: &Path) {
 /// The whole run on `before` workers with checkpoints; then the run resumed from its
 /// last checkpoint (a copy of the run directory) on `after` workers.
 fn resume_changes_nothing(tag: &str, before: usize, after: usize) {
+    resume_with(tag, &[], (before, &[]), (after, &[]));
+}
+
+/// `resume_changes_nothing` with `extra` arguments for both runs and environment
+/// variables for the workers of each.
+fn resume_with(
+    tag: &str,
+    extra: &[&str],
+    before: (usize, &[(&str, &str)]),
+    after: (usize, &[(&str, &str)]),
+) {
     let full = out_dir(&format!("resume-{tag}-full"));
-    cluster(&full, before, &["--checkpoint-every", "250"]);
+    let args = [&["--checkpoint-every", "250"][..], extra].concat();
+    cluster_env(&full, before.0, &args, before.1);
     let summary = crash_io::read_summary(full.join(crash_io::SUMMARY_JSON)).unwrap();
     let ckp = crash_master::read_restart(&full.join(crash_master::RESTART_FILE)).unwrap();
     let at = ckp.master.clock.step;
@@ -49,7 +68,12 @@ fn resume_changes_nothing(tag: &str, before: usize, after: usize) {
     let resumed = out_dir(&format!("resume-{tag}-resumed"));
     copy_dir(&full, &resumed);
     let ck = resumed.join(crash_master::RESTART_FILE);
-    let log = cluster(&resumed, after, &["--resume", ck.to_str().unwrap()]);
+    let log = cluster_env(
+        &resumed,
+        after.0,
+        &["--resume", ck.to_str().unwrap()],
+        after.1,
+    );
     assert!(log.contains(&format!("resuming from step {at}")), "{log}");
     let again = crash_io::read_summary(resumed.join(crash_io::SUMMARY_JSON)).unwrap();
     assert_eq!(again.final_state_hash, summary.final_state_hash);
@@ -70,4 +94,19 @@ fn a_run_resumed_on_fewer_workers_ends_as_the_uninterrupted_run() {
 #[test]
 fn a_run_resumed_on_more_workers_ends_as_the_uninterrupted_run() {
     resume_changes_nothing("1to3", 1, 3);
+}
+
+/// Forces carried as node sums (crash_core::summed, forced in every worker by
+/// CRASH_SUMMED=1) leave in the checkpoint settled into the slots: the run resumed on
+/// workers that gather the slots (CRASH_SUMMED=0) ends as the uninterrupted run. The
+/// spheres' group is not split (parts carry slots), so the last checkpoint, after the
+/// impact, holds ringing spheres whose forces were carried as node sums.
+#[test]
+fn a_checkpoint_of_forces_carried_as_node_sums_resumes_to_the_uninterrupted_run() {
+    resume_with(
+        "summed",
+        &["--split", "off"],
+        (2, &[("CRASH_SUMMED", "1")]),
+        (1, &[("CRASH_SUMMED", "0")]),
+    );
 }

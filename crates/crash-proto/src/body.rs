@@ -166,7 +166,8 @@ pub fn def_to_pb(b: &BodyDef) -> pb::BodyDef {
     }
 }
 
-/// The evolving part of a body.
+/// The evolving part of a body: a settled state (`Body::settled_state`; node sums, which
+/// are not carried, would leave the slots stale).
 pub fn state_to_pb(id: u32, b: &BodyState) -> pb::BodyState {
     let mut shell = Vec::with_capacity(6 * b.shell.len());
     for s in &b.shell {
@@ -197,7 +198,8 @@ pub fn state_to_pb(id: u32, b: &BodyState) -> pb::BodyState {
 pub fn body_to_pb(b: &Body) -> pb::Body {
     pb::Body {
         def: Some(def_to_pb(&b.def)),
-        state: Some(state_to_pb(b.def.id, &b.state)),
+        // forces carried as node sums go in the slots (crash_core::summed)
+        state: Some(state_to_pb(b.def.id, &b.settled_state())),
     }
 }
 
