@@ -62,7 +62,7 @@ pub(crate) fn cycle_bytes(d: &BodyDef) -> usize {
 }
 
 /// Size of the last-level cache in bytes (Linux sysfs; 32 MiB where it cannot be read).
-fn last_level_cache() -> usize {
+pub(crate) fn last_level_cache() -> usize {
     static SIZE: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
     *SIZE.get_or_init(|| {
         (1..8)

@@ -22,7 +22,7 @@ use crate::body::{Body, BodyDef, BodyState};
 use crate::element::batch::{ChunkResult, QuadChunk, TriChunk};
 use crate::element::simd::dispatch;
 use crate::element::Slot;
-use crate::forces::{cycle_bytes, stream_slots, CHUNK};
+use crate::forces::{cycle_bytes, last_level_cache, CHUNK};
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU8, Ordering};
 
@@ -55,16 +55,22 @@ fn mode() -> u8 {
 }
 
 /// Whether `d`'s element stage carries its forces as node sums this cycle: a whole,
-/// deformable body whose per-cycle data exceed the last-level cache, on one thread (the
-/// chunks must run in element order). A part of a split body never does: its chunks
-/// are computed in two rounds (inner ones while the halo travels).
+/// deformable body on one thread (the chunks must run in element order) whose
+/// per-cycle data (`forces::cycle_bytes`) exceed a quarter of the last-level cache. A
+/// part of a split body never does: its chunks are computed in two rounds (inner ones
+/// while the halo travels).
+///
+/// The quarter is measured (docs/performance.md, session 35): the scalar additions into
+/// the node sums cost about 2 ns per element more than the gather of slots that are in
+/// the caches (5 000 triangles, 1.3 MB per cycle), even at 28 800 (7.6 MB), and save
+/// 8-14 ns where the slots come from memory (51 200 triangles, 13.5 MB, and more).
 pub(crate) fn wanted(d: &BodyDef) -> bool {
     let whole = !d.kinematic && d.halo_nodes == 0 && d.uncounted.is_none();
     whole
         && match mode() {
             1 => false,
             2 => true,
-            _ => rayon::current_num_threads() == 1 && stream_slots(cycle_bytes(d)),
+            _ => rayon::current_num_threads() == 1 && cycle_bytes(d) > last_level_cache() / 4,
         }
 }
 
