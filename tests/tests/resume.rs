@@ -12,12 +12,8 @@ use std::time::Duration;
 const SCENE: &str = "two-spheres-tiny.toml";
 const TIMEOUT: Duration = Duration::from_secs(180);
 
-/// crash-master over `workers` worker processes with `extra` arguments.
-fn cluster(out: &Path, workers: usize, extra: &[&str]) -> String {
-    cluster_env(out, workers, extra, &[])
-}
-
-/// As `cluster`, with these environment variables set for the workers.
+/// crash-master over `workers` worker processes with `extra` arguments and these
+/// environment variables set for the workers.
 fn cluster_env(out: &Path, workers: usize, extra: &[&str], env: &[(&str, &str)]) -> String {
     let (mut m, url) = master(&test_scene(SCENE), workers, out, extra);
     let mut w: Vec<_> = (0..workers)
