@@ -161,12 +161,19 @@ fn many_spheres_on_one_plate_split_over_two_workers_have_the_single_process_stat
 fn groups_split_merged_back_and_split_again_keep_the_single_process_state() {
     let inp = input("ten-spheres-tiny.toml");
     let (_, reference) = driver_reference(&inp);
-    for workers in [2, 3] {
-        let (hash, splits) = split_run(&inp, workers, SplitMode::Always);
-        assert!(splits >= 2, "{workers} workers: {splits} splits");
-        assert_eq!(hash, reference, "{workers} workers");
+    split_again_and_resume(&inp, reference, &[2, 3]);
+}
+
+/// `inp` split always over each count of `workers` (cut at least twice over 2 or
+/// more), then over 2 with a checkpoint every 7 steps (each assembles the split bodies
+/// at their homes) and resumed from the middle one (split again): every final state
+/// `reference`.
+fn split_again_and_resume(inp: &RunInput, reference: u64, workers: &[usize]) {
+    for &n in workers {
+        let (hash, splits) = split_run(inp, n, SplitMode::Always);
+        assert!(n < 2 || splits >= 2, "{n} workers: {splits} splits");
+        assert_eq!(hash, reference, "{n} workers");
     }
-    // checkpoints every 7 steps: each assembles the split bodies at their homes
     let mut sink = RecordSink::default();
     let o = RunOptions {
         checkpoint_every: 7,
@@ -180,7 +187,7 @@ fn groups_split_merged_back_and_split_again_keep_the_single_process_state() {
     // ends in the same state
     let ck = sink.checkpoints[sink.checkpoints.len() / 2].clone();
     let mut again = RecordSink::default();
-    let resumed = resume_local(inp, ck, 2, &mut again, &opts(SplitMode::Always)).unwrap();
+    let resumed = resume_local(inp.clone(), ck, 2, &mut again, &opts(SplitMode::Always)).unwrap();
     assert_eq!(
         resumed.final_hash, reference,
         "resumed from a split run's checkpoint"
@@ -197,21 +204,7 @@ fn summed_force_slots_split_merged_back_and_split_again_keep_the_single_process_
     let inp = input("ten-spheres-tiny.toml");
     let (_, reference) = driver_reference(&inp);
     crash_core::summed::set_summed_slots(Some(true));
-    for workers in [1, 2, 3] {
-        let (hash, _) = split_run(&inp, workers, SplitMode::Always);
-        assert_eq!(hash, reference, "{workers} workers");
-    }
-    let mut sink = RecordSink::default();
-    let o = RunOptions {
-        checkpoint_every: 7,
-        ..opts(SplitMode::Always)
-    };
-    let stats = run_local(inp.clone(), 2, &mut sink, &o).unwrap();
-    assert_eq!(stats.final_hash, reference, "with checkpoints");
-    let ck = sink.checkpoints[sink.checkpoints.len() / 2].clone();
-    let mut again = RecordSink::default();
-    let resumed = resume_local(inp, ck, 2, &mut again, &opts(SplitMode::Always)).unwrap();
-    assert_eq!(resumed.final_hash, reference, "resumed");
+    split_again_and_resume(&inp, reference, &[1, 2, 3]);
     crash_core::summed::set_summed_slots(None);
 }
 

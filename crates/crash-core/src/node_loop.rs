@@ -54,8 +54,8 @@ pub(crate) struct NodeStep<'a> {
 
 impl<'a> NodeStep<'a> {
     /// The step of `d` over `clock` from its force slots `slots` (with their Kelvin
-    /// half, if any, or the node sums `sums` carrying them) and contact forces `fc`; `mass_scale` as
-    /// `Body::mass_scale`.
+    /// half, if any), or the node sums `sums` that carry them, and contact forces `fc`;
+    /// `mass_scale` as `Body::mass_scale`.
     pub(crate) fn of(
         d: &'a BodyDef,
         (slots, sums): (&'a [Slot], &'a [Slot]),

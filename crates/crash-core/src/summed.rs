@@ -60,10 +60,11 @@ fn mode() -> u8 {
 /// part of a split body never does: its chunks are computed in two rounds (inner ones
 /// while the halo travels).
 ///
-/// The quarter is measured (docs/performance.md, session 35): the scalar additions into
-/// the node sums cost about 2 ns per element more than the gather of slots that are in
-/// the caches (5 000 triangles, 1.3 MB per cycle), even at 28 800 (7.6 MB), and save
-/// 8-14 ns where the slots come from memory (51 200 triangles, 13.5 MB, and more).
+/// The quarter is measured (docs/performance.md, session 35): where the slots stay in
+/// the caches the scalar additions into the node sums cost up to 2 ns per element more
+/// than the gather (5 000 triangles, 1.3 MB per cycle) or the same (28 800, 7.6 MB);
+/// where the slots come from memory they save 8-14 ns (51 200 triangles, 13.5 MB, and
+/// more).
 pub(crate) fn wanted(d: &BodyDef) -> bool {
     let whole = !d.kinematic && d.halo_nodes == 0 && d.uncounted.is_none();
     whole
@@ -83,6 +84,11 @@ impl Body {
         let (nn, nt) = (d.x0.len(), d.tris.len());
         let damped = d.slot_count() > d.gather_slot.len();
         let st = &mut self.state;
+        if st.slots.len() < d.slot_count() {
+            // Kelvin damping given after the body was built (as `element_chunks`): the
+            // node loop books the Kelvin work when the slots have their Kelvin half
+            st.slots.resize(d.slot_count(), [0.0; 6]);
+        }
         st.node_sums.clear();
         st.node_sums
             .resize(if damped { 2 * nn } else { nn }, [0.0; 6]);
