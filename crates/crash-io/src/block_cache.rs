@@ -8,9 +8,10 @@
 //! The raw bytes are compared in full (no hash: a frame must never show another frame's
 //! data); memory is capped at `CAP` bytes, blocks beyond it are compressed every time.
 //!
-//! It also remembers how well each array compressed: Float64 stresses, velocities and
-//! resultants shrink by only 5-10% at zlib level 1 (a showcase frame: velocity 0.93,
-//! von Mises 0.93, N and M 0.95; displacement 0.78), yet were most of the writer's
+//! It also remembers how well each array compressed: float stresses, velocities and
+//! resultants shrink little (a Float32 showcase frame at level 2: velocity and M 1.00,
+//! von Mises and N 0.89, displacement 0.82, positions 0.75; Float64 at level 1: velocity
+//! 0.93, von Mises 0.93, N and M 0.95, displacement 0.78), yet were most of the writer's
 //! work. An array whose last measured ratio is at least `POOR` is stored (zlib level 0:
 //! the same format, readers see no difference) and measured again every `REMEASURE`
 //! frames.

@@ -26,9 +26,15 @@ pub const BLOCK: usize = 1 << 16;
 /// Staged data kept in memory before the spill moves to its file.
 pub const SPILL_MEMORY: usize = 16 << 20;
 
-/// zlib level 1 (fastest): on a showcase frame the default level 6 saves 0.3% of the
-/// bytes for 1.6x the time (docs/performance-history.md, Output).
-const LEVEL: u32 = 1;
+/// zlib level of the arrays that change every frame. zlib-rs's level 1 (its quick
+/// mode) left the showcase's Float32 positions, displacements, von Mises stresses and
+/// membrane forces within 10 % of their raw size, so they were stored; level 2 shrinks
+/// them by 11-25 % (the whole 5 ms showcase with `precision = "f32"`: 65.0 MB against
+/// 75.1 MB; docs/output.md, docs/performance.md session 35).
+const LEVEL: u32 = 2;
+/// zlib level of the arrays that rarely change (`ArrayDef::steady`): compressed once and
+/// kept (`BlockCache`), so the best level costs once.
+const STEADY_LEVEL: u32 = 9;
 
 /// Where compressed blocks wait until the XML is written.
 #[derive(Debug)]
@@ -384,11 +390,15 @@ impl Out<'_> {
             }
             None if self.compress => {
                 self.scratch.clear();
-                let level = self.cache.level(s.index, LEVEL);
+                let level = if s.steady {
+                    STEADY_LEVEL
+                } else {
+                    self.cache.level(s.index, LEVEL)
+                };
                 let mut z = ZlibEncoder::new(std::mem::take(self.scratch), Compression::new(level));
                 z.write_all(&s.buf)?;
                 *self.scratch = z.finish()?;
-                if level == LEVEL {
+                if !s.steady && level == LEVEL {
                     self.cache
                         .measured(s.index, s.buf.len(), self.scratch.len());
                 }
