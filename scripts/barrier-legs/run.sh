@@ -1,19 +1,17 @@
 #!/bin/bash
-# Session 12 (docs/scaling.md, "The barrier taken apart"): run master + 2 workers of the
-# binaries in BINDIR on SCENE to END with CRASH_LEGS set (binaries built with
-# stamps.patch applied write per-step timestamps; analyse with legs.py /tmp/legs-TAG).
-# usage: barrier_legs.sh BINDIR SCENE END TAG [extra master/worker args]
-BIN=$1; SCENE=$2; END=$3; TAG=$4; shift 4
-EXTRA="$@"
-OUT=/tmp/bl-out-$TAG; rm -rf $OUT /tmp/legs-$TAG.*
-export CRASH_LEGS=/tmp/legs-$TAG RUST_LOG=warn
-$BIN/crash-master $SCENE --listen 127.0.0.1:0 --split off --workers 2 --out $OUT --end-time $END --output-interval $END $EXTRA 2> /tmp/bl-master-$TAG.err &
-MP=$!
-for i in $(seq 50); do ADDR=$(grep -o 'listening on .*' /tmp/bl-master-$TAG.err | awk '{print $3}'); [ -n "$ADDR" ] && break; sleep 0.1; done
-$BIN/crash-worker --master http://$ADDR --threads 1 $EXTRA 2>/dev/null &
-W1=$!
-$BIN/crash-worker --master http://$ADDR --threads 1 $EXTRA 2>/dev/null &
-W2=$!
-wait $MP; wait $W1; wait $W2
-python3 -c "
-import json;s=json.load(open('$OUT/summary.json'));print('wall',s['wall_time_s'],'steps',s['steps'],'hash',s.get('final_state_hash',s.get('state_hash')));print(s['barrier_us_per_step'])"
+# Session 36 (docs/performance.md, "Session 36"): run crash-master --split auto + 2
+# crash-worker x 1 thread of the binaries in BINDIR on SCENE to END with CRASH_STAMPS set
+# (binaries built with stamps.patch applied: `git apply scripts/barrier-legs/stamps.patch
+# && cargo build --release -p crash-master -p crash-worker`, BINDIR a copy of
+# target/release), then print the legs (legs.py).
+# usage: run.sh BINDIR SCENE END
+BIN=$1; SCENE=$2; END=$3
+OUT=$(mktemp -d); ST=$(mktemp -d)
+export CRASH_STAMPS=$ST
+$BIN/crash-master "$SCENE" --listen 127.0.0.1:7496 --split auto --workers 2 --out $OUT/run --end-time $END --output-interval $END 2>$OUT/master.log &
+sleep 0.3
+$BIN/crash-worker --master http://127.0.0.1:7496 --threads 1 2>/dev/null &
+$BIN/crash-worker --master http://127.0.0.1:7496 --threads 1 2>/dev/null &
+wait
+python3 "$(dirname "$0")/legs.py" $ST
+rm -rf $OUT $ST
