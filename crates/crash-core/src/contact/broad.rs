@@ -73,9 +73,12 @@ fn finite(b: &BodyBox) -> bool {
     b.lo.iter().chain(b.hi.iter()).all(|v| v.is_finite()) && b.thickness.is_finite()
 }
 
+/// A box's (lo, hi) corners.
+type Corners = ([f64; 3], [f64; 3]);
+
 /// The inflated box with its corners ordered per axis, as the tree's rectangles and
 /// envelopes order them (`from_corners`).
-fn ordered(b: &BodyBox, margin: f64) -> ([f64; 3], [f64; 3]) {
+fn ordered(b: &BodyBox, margin: f64) -> Corners {
     let (lo, hi) = b.inflated(margin);
     (
         std::array::from_fn(|d| lo[d].min(hi[d])),
@@ -85,7 +88,7 @@ fn ordered(b: &BodyBox, margin: f64) -> ([f64; 3], [f64; 3]) {
 
 /// Every two boxes tested, with the tree's test (closed boxes: touching faces overlap).
 pub fn pairs_direct(boxes: &[BodyBox], margin: f64) -> Vec<(u32, u32)> {
-    let live: Vec<(u32, ([f64; 3], [f64; 3]))> = boxes
+    let live: Vec<(u32, Corners)> = boxes
         .iter()
         .filter(|b| finite(b))
         .map(|b| (b.id, ordered(b, margin)))
