@@ -1,5 +1,6 @@
-//! Level i of the search: bodies. Each body's box, inflated by half its thickness and
-//! half the search margin, goes into an R-tree; overlapping boxes are candidate pairs.
+//! Level i of the search: bodies. Each body's box is inflated by half its thickness and
+//! half the search margin; overlapping boxes are candidate pairs, found by testing every
+//! two boxes up to `DIRECT_MAX` bodies and with an R-tree beyond.
 //! The same list feeds the master's interaction graph (MEIM) and the narrow phase.
 
 use crate::body::Body;
