@@ -145,6 +145,16 @@ mod tests {
         }
     }
 
+    /// Uniform numbers in [0, 1) from a linear congruential generator.
+    fn lcg(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     #[test]
     fn pairs_follow_the_inflated_gap_and_are_sorted() {
         // each box grows by (0.1 + 0.04) / 2, so boxes pair up to a gap of 0.14:
@@ -157,14 +167,8 @@ mod tests {
             cube(4, 6.0),
         ];
         assert_eq!(candidate_pairs(&boxes, 0.04), vec![(1, 2), (2, 3)]);
-        // brute force agrees on a pseudo-random cloud (LCG)
-        let mut seed = 12345u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        // brute force agrees on a pseudo-random cloud
+        let mut rnd = lcg(12345);
         let many: Vec<BodyBox> = (0..80)
             .map(|i| {
                 let lo = Vec3::new(6.0 * rnd(), 6.0 * rnd(), 6.0 * rnd());
@@ -197,13 +201,7 @@ mod tests {
     /// boxes (negative margin and thickness), repeated ids and non-finite corners.
     #[test]
     fn direct_and_tree_searches_give_the_same_pairs() {
-        let mut seed = 987654321u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = lcg(987654321);
         for n in [0usize, 1, 2, 7, 65, DIRECT_MAX, DIRECT_MAX + 1, 300] {
             let mut boxes: Vec<BodyBox> = (0..n)
                 .map(|i| {
