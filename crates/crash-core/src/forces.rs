@@ -203,6 +203,16 @@ impl Body {
             .collect()
     }
 
+    /// The force slots sized for the definition: Kelvin damping given after the body was
+    /// built needs the slots' Kelvin half (the node loop books the Kelvin work when the
+    /// slots have it). Both element stages (`element_chunks`, `summed_chunks`) call it.
+    pub(crate) fn fit_slots(&mut self) {
+        let want = self.def.slot_count();
+        if self.state.slots.len() < want {
+            self.state.slots.resize(want, [0.0; 6]);
+        }
+    }
+
     /// Compute the element chunks not yet in `done` (`None`) and, if given, marked in
     /// `only`, in parallel, into it. Each chunk writes only its own elements' states and
     /// slots, so chunks may be computed at different times (a part's inner chunks while
@@ -224,11 +234,8 @@ impl Body {
         let (sec, stab) = (self.def.section, self.def.stab);
         let nt = self.def.tris.len();
         let ns = self.def.gather_slot.len();
+        self.fit_slots();
         let want = self.def.slot_count();
-        if self.state.slots.len() < want {
-            // Kelvin damping given after the body was built
-            self.state.slots.resize(want, [0.0; 6]);
-        }
         let nodes = (&self.state.x[..], &self.state.v[..], &self.state.w[..]);
         let (slots, kelvin) = self.state.slots.split_at_mut(ns);
         let (tri_slots, quad_slots) = slots.split_at_mut(3 * nt);

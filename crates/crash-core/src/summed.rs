@@ -79,16 +79,12 @@ impl Body {
     /// Every element chunk in element order (triangles, then quads), each into a
     /// buffer and then added into its nodes' sums; the chunks' results in order.
     pub(crate) fn summed_chunks(&mut self, h: f64) -> Vec<Option<ChunkResult>> {
+        self.fit_slots();
         let d = &*self.def;
         let (sec, stab) = (d.section, d.stab);
         let (nn, nt) = (d.x0.len(), d.tris.len());
         let damped = d.slot_count() > d.gather_slot.len();
         let st = &mut self.state;
-        if st.slots.len() < d.slot_count() {
-            // Kelvin damping given after the body was built (as `element_chunks`): the
-            // node loop books the Kelvin work when the slots have their Kelvin half
-            st.slots.resize(d.slot_count(), [0.0; 6]);
-        }
         st.node_sums.clear();
         st.node_sums
             .resize(if damped { 2 * nn } else { nn }, [0.0; 6]);
