@@ -10,7 +10,7 @@ use crate::sink::Sink;
 use crash_core::hash::StateHasher;
 use crash_io::FrameBody;
 use crash_link::{Command, LinkError, Reply, WorkerLink};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
 
 /// A piece of a frame: consecutive bodies asked of one worker, or a split body from
@@ -54,7 +54,10 @@ impl<L: WorkerLink> Master<'_, L> {
     /// Stream the frame of every body now to the sink (None: only hash it); returns
     /// its state hash when `hashed`. Split bodies come from their parts' shares when
     /// they can (`frames_from_parts`; their pending contact pass has run), else from
-    /// their home after an assembly.
+    /// their home after an assembly. The workers build their pieces at the same time:
+    /// each round asks every worker that holds no piece yet for its next one, and the
+    /// pieces go to the sink in body order as they are complete, so the master holds
+    /// at most one piece per worker.
     fn stream_frame(
         &mut self,
         mut sink: Option<&mut dyn Sink>,
@@ -71,31 +74,32 @@ impl<L: WorkerLink> Master<'_, L> {
         } else {
             BTreeMap::new()
         };
-        for piece in self.frame_pieces(&split) {
+        let pieces = self.frame_pieces(&split);
+        // each worker's pieces, in body order
+        let mut queues: Vec<VecDeque<usize>> = vec![VecDeque::new(); nw];
+        for (i, piece) in pieces.iter().enumerate() {
+            if let Piece::Worker(w, _) = piece {
+                queues[*w].push_back(i);
+            }
+        }
+        let mut ready: BTreeMap<usize, (usize, Vec<FrameBody>)> = BTreeMap::new();
+        for (i, piece) in pieces.iter().enumerate() {
             let (w, bodies) = match piece {
-                Piece::Worker(w, ids) => {
-                    let mut cmds = vec![Vec::new(); nw];
-                    cmds[w].push(Command::Frame(ids.clone()));
-                    let Some(Reply::Frame(bodies)) = self.exchange(cmds)?.swap_remove(w).pop()
-                    else {
-                        return Err(self.bad_reply(w, "Frame"));
-                    };
-                    if !bodies.iter().map(|b| b.id).eq(ids.iter().copied()) {
-                        return Err(self.worker_error(
-                            w,
-                            LinkError::Protocol(
-                                "a frame piece holds other bodies than asked".into(),
-                            ),
-                        ));
-                    }
-                    (w, bodies)
-                }
                 Piece::Split(id) => {
-                    let w = self.split_home(id);
-                    let Some(b) = split.remove(&id) else {
+                    let w = self.split_home(*id);
+                    let Some(b) = split.remove(id) else {
                         return Err(self.implausible(w, &format!("no frame of body {id}")));
                     };
                     (w, vec![b])
+                }
+                Piece::Worker(w, _) => {
+                    if !ready.contains_key(&i) {
+                        self.frame_round(&pieces, &mut queues, &mut ready)?;
+                    }
+                    match ready.remove(&i) {
+                        Some(got) => got,
+                        None => return Err(self.bad_reply(*w, "Frame")),
+                    }
                 }
             };
             if let Err(what) = self.check_frame(&bodies) {
@@ -126,6 +130,48 @@ impl<L: WorkerLink> Master<'_, L> {
             sink.frame_end().map_err(MasterError::sink)?;
         }
         Ok(hashed.then(|| hash.finish()))
+    }
+
+    /// One round of a frame's pieces: every worker that holds no received piece gets
+    /// its next one asked of it (all at once); the replies, checked to hold the bodies
+    /// asked for, go into `ready` by piece index.
+    fn frame_round(
+        &mut self,
+        pieces: &[Piece],
+        queues: &mut [VecDeque<usize>],
+        ready: &mut BTreeMap<usize, (usize, Vec<FrameBody>)>,
+    ) -> Result<(), MasterError> {
+        let nw = self.links.len();
+        let mut cmds = vec![Vec::new(); nw];
+        let mut asked = vec![None; nw];
+        for (w, q) in queues.iter_mut().enumerate() {
+            if ready.values().any(|(hw, _)| *hw == w) {
+                continue;
+            }
+            if let Some(i) = q.pop_front() {
+                if let Piece::Worker(_, ids) = &pieces[i] {
+                    cmds[w].push(Command::Frame(ids.clone()));
+                    asked[w] = Some(i);
+                }
+            }
+        }
+        for (w, mut replies) in self.exchange(cmds)?.into_iter().enumerate() {
+            let Some(i) = asked[w] else { continue };
+            let Piece::Worker(_, ids) = &pieces[i] else {
+                continue;
+            };
+            let Some(Reply::Frame(bodies)) = replies.pop() else {
+                return Err(self.bad_reply(w, "Frame"));
+            };
+            if !bodies.iter().map(|b| b.id).eq(ids.iter().copied()) {
+                return Err(self.worker_error(
+                    w,
+                    LinkError::Protocol("a frame piece holds other bodies than asked".into()),
+                ));
+            }
+            ready.insert(i, (w, bodies));
+        }
+        Ok(())
     }
 
     /// Whether an output time is reached at `time` (one rule for the frame and for the
