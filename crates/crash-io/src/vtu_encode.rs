@@ -26,12 +26,19 @@ pub const BLOCK: usize = 1 << 16;
 /// Staged data kept in memory before the spill moves to its file.
 pub const SPILL_MEMORY: usize = 16 << 20;
 
-/// zlib level of the arrays that change every frame. zlib-rs's level 1 (its quick
-/// mode) left the showcase's Float32 positions, displacements, von Mises stresses and
-/// membrane forces within 10 % of their raw size, so they were stored; level 2 shrinks
-/// them by 11-25 % (the whole 5 ms showcase with `precision = "f32"`: 65.0 MB against
-/// 75.1 MB; docs/output.md, docs/performance.md session 35).
-const LEVEL: u32 = 2;
+/// zlib level of the Float32 arrays that change every frame. zlib-rs's level 1 (its
+/// quick mode) left the showcase's Float32 positions, displacements, von Mises stresses
+/// and membrane forces within 10 % of their raw size, so they were stored; level 2
+/// shrinks them by 11-25 % (the whole 5 ms showcase with `precision = "f32"`: 65.0 MB
+/// against 75.1 MB; docs/output.md, docs/performance.md session 35).
+const LEVEL_F32: u32 = 2;
+/// zlib level of the other arrays that change every frame (Float64, Int64). On Float64
+/// level 1 keeps most of level 2's gain at half its time or less: the floor's positions
+/// 0.849 against 0.767 of their size in 4.0 against 10.3 ms a frame, displacements
+/// 0.844 against 0.766 in 4.0 against 7.2 ms (docs/performance.md, session 37). The
+/// writer's CPU is taken from the step loop when every core steps (two domains, the
+/// cluster's master beside its workers).
+const LEVEL_OTHER: u32 = 1;
 /// zlib level of the arrays that rarely change (`ArrayDef::steady`): compressed once and
 /// kept (`BlockCache`), so the best level costs once.
 const STEADY_LEVEL: u32 = 9;
@@ -146,6 +153,8 @@ struct ArrayStream {
     /// Index in `ARRAYS`, and whether its blocks go through the `BlockCache`.
     index: usize,
     steady: bool,
+    /// zlib level of its blocks (`STEADY_LEVEL`, `LEVEL_F32` or `LEVEL_OTHER`).
+    level: u32,
 }
 
 /// A frame being encoded.
@@ -195,6 +204,13 @@ impl FrameEncoder {
                     type_name,
                     index,
                     steady: def.steady,
+                    level: if def.steady {
+                        STEADY_LEVEL
+                    } else if float32 {
+                        LEVEL_F32
+                    } else {
+                        LEVEL_OTHER
+                    },
                 }
             })
             .collect();
@@ -384,21 +400,17 @@ impl Out<'_> {
         };
         let stored = match cached {
             Some(z) => z,
-            None if self.compress && self.cache.level(s.index, LEVEL) == 0 => {
+            None if self.compress && self.cache.level(s.index, s.level) == 0 => {
                 stored_zlib(&s.buf, self.scratch);
                 &self.scratch[..]
             }
             None if self.compress => {
                 self.scratch.clear();
-                let level = if s.steady {
-                    STEADY_LEVEL
-                } else {
-                    self.cache.level(s.index, LEVEL)
-                };
+                let level = self.cache.level(s.index, s.level);
                 let mut z = ZlibEncoder::new(std::mem::take(self.scratch), Compression::new(level));
                 z.write_all(&s.buf)?;
                 *self.scratch = z.finish()?;
-                if !s.steady && level == LEVEL {
+                if !s.steady {
                     self.cache
                         .measured(s.index, s.buf.len(), self.scratch.len());
                 }
