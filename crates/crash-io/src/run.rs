@@ -14,12 +14,29 @@ use crate::render::sheet::sheet_from_cells;
 use crate::render::zone_views::{section_view, view_from_below};
 use crate::series::{read_pvd, PVD_FILE};
 use crate::vtu_read::read_vtu;
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// Sub-directory of the output directory that receives the pictures.
 pub const PICTURES_DIR: &str = "pictures";
 /// Size of one panel of the contact sheet [px].
 pub const CELL: (u32, u32) = (480, 360);
+
+/// What pass 1 takes of one frame.
+struct FrameFacts {
+    fit: Fit,
+    time: f64,
+    force: f64,
+    names: Vec<(u32, String)>,
+}
+
+/// What pass 2 makes of one frame: the files written (its snapshot, and at the peak
+/// the contact zone's views), its sheet panel and its zone panels.
+struct FramePictures {
+    written: Vec<PathBuf>,
+    cell: Option<crate::render::Image>,
+    zone: Vec<crate::render::Image>,
+}
 
 /// Sum of the magnitudes of a frame's nodal contact forces, halved (each contact force
 /// acts on both bodies): the contact-force history when contacts.csv is missing.
@@ -59,26 +76,39 @@ pub fn render_run(out_dir: impl AsRef<Path>) -> Result<Vec<PathBuf>, IoError> {
     let pics = dir.join(PICTURES_DIR);
     std::fs::create_dir_all(&pics).at(&pics)?;
     let mut written = Vec::new();
-    let mut save = |img: crate::render::Image, name: &str| -> Result<(), IoError> {
+    let save = |img: crate::render::Image, name: &str| -> Result<PathBuf, IoError> {
         let path = pics.join(name);
         img.save_png(&path)?;
-        written.push(path);
-        Ok(())
+        Ok(path)
     };
 
     // Pass 1: common camera, frame times and contact forces, body names (frames are
-    // read twice to bound memory).
+    // read twice to bound memory). Frames in parallel (each read on its own), taken in
+    // order: the same camera, times and names as one after the other.
+    let firsts: Vec<FrameFacts> = entries
+        .par_iter()
+        .map(|e| {
+            let f = read_vtu(&dir.join(&e.file))?;
+            let mut fit = Fit::three_quarter();
+            fit.add_frame(&f);
+            Ok(FrameFacts {
+                fit,
+                time: f.time,
+                force: frame_contact_force(&f),
+                names: f.bodies.iter().map(|b| (b.id, b.name.clone())).collect(),
+            })
+        })
+        .collect::<Result<_, IoError>>()?;
     let mut fit = Fit::three_quarter();
     let (mut times, mut frame_force) = (Vec::new(), Vec::new());
     let mut names: Vec<(u32, String)> = Vec::new();
-    for e in &entries {
-        let f = read_vtu(&dir.join(&e.file))?;
-        fit.add_frame(&f);
-        times.push(f.time);
-        frame_force.push(frame_contact_force(&f));
-        for b in &f.bodies {
-            if !names.iter().any(|(id, _)| *id == b.id) {
-                names.push((b.id, b.name.clone()));
+    for facts in firsts {
+        fit.merge(&facts.fit);
+        times.push(facts.time);
+        frame_force.push(facts.force);
+        for (id, name) in facts.names {
+            if !names.iter().any(|(i, _)| *i == id) {
+                names.push((id, name));
             }
         }
     }
@@ -132,28 +162,45 @@ pub fn render_run(out_dir: impl AsRef<Path>) -> Result<Vec<PathBuf>, IoError> {
         camera,
         ..RenderOptions::default()
     };
-    let mut cells: Vec<(usize, crate::render::Image)> = Vec::new();
-    let mut zone_cells: Vec<crate::render::Image> = Vec::new();
-    for (k, e) in entries.iter().enumerate() {
-        let f = read_vtu(&dir.join(&e.file))?;
-        let stem = Path::new(&e.file).file_stem().map_or_else(
-            || format!("frame_{k:06}"),
-            |s| s.to_string_lossy().into_owned(),
-        );
-        save(render_frame(&f, &snap), &format!("{stem}.png"))?;
-        if let Some(p) = sheet_panels.iter().find(|p| p.frame == k) {
-            cells.push((k, panel_cell(&f, p, camera)));
-        }
-        if peak_frame == Some(k) {
-            if let Some(z) = contact_zone(&f, peak_pair) {
-                save(view_from_below(&f, &z, 800, 600), "below.png")?;
-                save(section_view(&f, &z, 800, 600), "section.png")?;
-                zone_cells.push(view_from_below(&f, &z, CELL.0, CELL.1));
-                zone_cells.push(section_view(&f, &z, CELL.0, CELL.1));
+    // frames in parallel; what each gives is taken in frame order
+    let per_frame: Vec<FramePictures> = entries
+        .par_iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let f = read_vtu(&dir.join(&e.file))?;
+            let stem = Path::new(&e.file).file_stem().map_or_else(
+                || format!("frame_{k:06}"),
+                |s| s.to_string_lossy().into_owned(),
+            );
+            let mut out = FramePictures {
+                written: vec![save(render_frame(&f, &snap), &format!("{stem}.png"))?],
+                cell: sheet_panels
+                    .iter()
+                    .find(|p| p.frame == k)
+                    .map(|p| panel_cell(&f, p, camera)),
+                zone: Vec::new(),
+            };
+            if peak_frame == Some(k) {
+                if let Some(z) = contact_zone(&f, peak_pair) {
+                    out.written
+                        .push(save(view_from_below(&f, &z, 800, 600), "below.png")?);
+                    out.written
+                        .push(save(section_view(&f, &z, 800, 600), "section.png")?);
+                    out.zone.push(view_from_below(&f, &z, CELL.0, CELL.1));
+                    out.zone.push(section_view(&f, &z, CELL.0, CELL.1));
+                }
             }
-        }
+            Ok(out)
+        })
+        .collect::<Result<_, IoError>>()?;
+    let mut cells: Vec<crate::render::Image> = Vec::new();
+    let mut zone_cells: Vec<crate::render::Image> = Vec::new();
+    for p in per_frame {
+        written.extend(p.written);
+        cells.extend(p.cell);
+        zone_cells.extend(p.zone);
     }
-    let mut all: Vec<crate::render::Image> = cells.into_iter().map(|(_, c)| c).collect();
+    let mut all = cells;
     all.extend(zone_cells);
     if !all.is_empty() {
         // One row up to four panels, else two rows (at most four columns).
@@ -162,23 +209,29 @@ pub fn render_run(out_dir: impl AsRef<Path>) -> Result<Vec<PathBuf>, IoError> {
         } else {
             all.len().div_ceil(2).min(4)
         };
-        save(sheet_from_cells(&all, cols), "sheet.png")?;
+        written.push(save(sheet_from_cells(&all, cols), "sheet.png")?);
     }
     if let Some(rows) = &contacts {
-        save(
+        written.push(save(
             contact_force_plot(&series, rows, &names, 1000, 500).0,
             "contact_force.png",
-        )?;
+        )?);
     }
     let matsum = dir.join(MATSUM_CSV);
     if matsum.exists() {
         let rows = read_matsum_csv(&matsum)?;
-        save(body_energy_plot(&rows, &names, 1200, 800), "energies.png")?;
+        written.push(save(
+            body_energy_plot(&rows, &names, 1200, 800),
+            "energies.png",
+        )?);
     } else if let Some(rows) = &energy {
-        save(total_energy_fallback_plot(rows, 1200, 800), "energies.png")?;
+        written.push(save(
+            total_energy_fallback_plot(rows, 1200, 800),
+            "energies.png",
+        )?);
     }
     if let Some(rows) = &energy {
-        save(energy_plot(rows, 1000, 600), "energy.png")?;
+        written.push(save(energy_plot(rows, 1000, 600), "energy.png")?);
     }
     Ok(written)
 }

@@ -122,6 +122,13 @@ impl Fit {
         Self::new(View::three_quarter_direction(), Vec3::z())
     }
 
+    /// Take in another fit of the same view (`add` over both point sets: min and max
+    /// are exact, so the order does not matter).
+    pub fn merge(&mut self, other: &Fit) {
+        self.lo = self.lo.inf(&other.lo);
+        self.hi = self.hi.sup(&other.hi);
+    }
+
     pub fn add(&mut self, p: &Vec3) {
         if p.iter().all(|c| c.is_finite()) {
             let q = Vec3::new(p.dot(&self.right), p.dot(&self.up), p.dot(&self.fwd));
