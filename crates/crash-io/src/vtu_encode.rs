@@ -405,9 +405,10 @@ impl Out<'_> {
                 &self.scratch[..]
             }
             None if self.compress => {
+                // the arm above took the arrays the cache stores: this one's level is its own
                 self.scratch.clear();
-                let level = self.cache.level(s.index, s.level);
-                let mut z = ZlibEncoder::new(std::mem::take(self.scratch), Compression::new(level));
+                let level = Compression::new(s.level);
+                let mut z = ZlibEncoder::new(std::mem::take(self.scratch), level);
                 z.write_all(&s.buf)?;
                 *self.scratch = z.finish()?;
                 if !s.steady {

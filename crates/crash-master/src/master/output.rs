@@ -143,7 +143,8 @@ impl<L: WorkerLink> Master<'_, L> {
     ) -> Result<(), MasterError> {
         let nw = self.links.len();
         let mut cmds = vec![Vec::new(); nw];
-        let mut asked = vec![None; nw];
+        // the piece asked of each worker and its bodies (the queues hold worker pieces)
+        let mut asked: Vec<Option<(usize, &[u32])>> = vec![None; nw];
         for (w, q) in queues.iter_mut().enumerate() {
             if ready.values().any(|(hw, _)| *hw == w) {
                 continue;
@@ -151,15 +152,12 @@ impl<L: WorkerLink> Master<'_, L> {
             if let Some(i) = q.pop_front() {
                 if let Piece::Worker(_, ids) = &pieces[i] {
                     cmds[w].push(Command::Frame(ids.clone()));
-                    asked[w] = Some(i);
+                    asked[w] = Some((i, ids));
                 }
             }
         }
         for (w, mut replies) in self.exchange(cmds)?.into_iter().enumerate() {
-            let Some(i) = asked[w] else { continue };
-            let Piece::Worker(_, ids) = &pieces[i] else {
-                continue;
-            };
+            let Some((i, ids)) = asked[w] else { continue };
             let Some(Reply::Frame(bodies)) = replies.pop() else {
                 return Err(self.bad_reply(w, "Frame"));
             };
