@@ -26,6 +26,7 @@ use super::reach::{
 use super::segment::{Corners, Segment};
 use super::stiffening;
 use super::surface::Surface;
+use super::verlet::{box_list, NodeList, NodeLists};
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -48,8 +49,7 @@ const SEG_CHUNK: usize = 256;
 const TASKS_PER_THREAD: usize = 4;
 /// Columns of a strip (two points each) whose points search one list of masters.
 const BLOCK: usize = 4;
-/// Slave segments per master tree query (consecutive ones: the mesh order keeps them
-/// near each other).
+/// Fewest slave segments per task (a task's size is a multiple of it).
 const QUERY_GROUP: usize = 8;
 
 /// One active quadrature point: its forces on the corner nodes of its two segments. The
@@ -107,7 +107,9 @@ fn strip_points(n: usize, i: usize) -> impl Iterator<Item = (f64, f64)> {
 /// `kappa`: penalty stiffness per unit area of this direction (weight included); `mu`:
 /// areal mass for the damping; `slaves`: the slave segments whose points are wanted
 /// (None: all; a split group's view wants those that can push its owned nodes, and
-/// each point's result does not depend on which others are searched).
+/// each point's result does not depend on which others are searched); `lists`: each
+/// slave segment's list of master candidates, kept from pass to pass (`verlet::box_list`:
+/// the same candidates as a tree query, the same bits).
 #[allow(clippy::too_many_arguments)]
 pub fn point_pushes(
     sb: &Body,
@@ -120,6 +122,7 @@ pub fn point_pushes(
     kappa: f64,
     mu: f64,
     slaves: Option<&[bool]>,
+    lists: &mut NodeLists,
 ) -> Vec<Points> {
     let (scurv, mcurv) = curved;
     let (hs_max, hm_max) = (scurv.bound, mcurv.bound);
@@ -142,16 +145,18 @@ pub fn point_pushes(
     // the slave segments searched: those wanted whose node box meets the master's near
     // box grown by `press` (the rest hold no point that can touch), in index order
     let wanted = |j: &u32| slaves.is_none_or(|w| w.get(*j as usize).copied().unwrap_or(false));
-    let passing: Vec<(u32, (Vec3, Vec3))> = scurv
-        .segs()
-        .iter()
-        .zip(scurv.boxes())
-        .filter(|(j, sbx)| {
-            let gap = box_gap(sbx, &mbox);
-            wanted(j) && (gap.is_nan() || gap <= 0.0)
-        })
-        .map(|(&js, &sbx)| (js, sbx))
-        .collect();
+    // with each its list (the near segments ascend: one walk over the lists)
+    let mut own = lists.fit(ssurf.segments.len()).iter_mut().enumerate();
+    let mut passing: Vec<(u32, (Vec3, Vec3), &mut NodeList)> = Vec::new();
+    for (&js, &sbx) in scurv.segs().iter().zip(scurv.boxes()) {
+        let gap = box_gap(&sbx, &mbox);
+        if !(wanted(&js) && (gap.is_nan() || gap <= 0.0)) {
+            continue;
+        }
+        if let Some((_, list)) = own.find(|(k, _)| *k == js as usize) {
+            passing.push((js, sbx, list));
+        }
+    }
     // tasks of a few query groups each, a few tasks per thread: the points cluster
     // where the bodies touch, so tasks much larger than that leave a thread idle
     let per_task = passing
@@ -161,11 +166,10 @@ pub fn point_pushes(
         .next_multiple_of(QUERY_GROUP)
         .clamp(QUERY_GROUP, SEG_CHUNK);
     passing
-        .par_chunks(chunk)
+        .par_chunks_mut(chunk)
         .map(|passing| {
             let mut out = Points::default();
             let mut cand = Vec::new();
-            let mut group_cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
             let mut extra: Vec<Curved> = Vec::new();
             // the rule's candidates: master segments whose stored box meets the slave's
@@ -179,93 +183,76 @@ pub fn point_pushes(
                 let (lo, hi) = (sbx.0.add_scalar(-gp), sbx.1.add_scalar(gp));
                 ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z])
             };
-            for group in passing.chunks(QUERY_GROUP) {
-                // one tree query for the group's union box; each segment keeps the
-                // segments whose stored box meets its own box (the tree's test: the set
-                // its own query gives), already in index order
-                let (mut glo, mut ghi) = query_box(&group[0].1);
-                for (_, sbx) in &group[1..] {
-                    let (lo, hi) = query_box(sbx);
-                    glo = std::array::from_fn(|d| glo[d].min(lo[d]));
-                    ghi = std::array::from_fn(|d| ghi[d].max(hi[d]));
-                }
-                msurf.query(glo, ghi, &mut group_cand);
-                group_cand.sort_unstable();
-                for &(js, sbx) in group {
-                    let seg = &ssurf.segments[js as usize];
-                    let (lo, hi) = query_box(&sbx);
-                    cand.clear();
-                    cand.extend(
-                        group_cand
-                            .iter()
-                            .copied()
-                            .filter(|&j| msurf.box_meets(j, &lo, &hi)),
-                    );
-                    masters.clear();
-                    extra.clear();
-                    // coordinates' size, for the slabs' round-off margin
-                    let scale = sbx.0.abs().max().max(sbx.1.abs().max()) + box_reach;
-                    for &j in &cand {
-                        let ms = &msurf.segments[j as usize];
-                        let bx = node_box(ms, xm);
-                        if gap_at_least(box_gap2(&sbx, &bx), press, press2) {
-                            continue;
-                        }
-                        let at = Corners::of(ms, xm);
-                        let cv = match mcurv.index(j) {
-                            Some(k) => CurvedAt::Near(k),
-                            None => {
-                                extra.push(Curved::of(ms, msurf, xm));
-                                CurvedAt::Extra(extra.len() - 1)
-                            }
-                        };
-                        masters.push(Master {
-                            j,
-                            bx,
-                            at,
-                            cv,
-                            slab: Slab::of(&at, scale, c),
-                        });
-                    }
-                    if masters.is_empty() {
+            for (js, sbx, list) in passing.iter_mut() {
+                let (js, sbx) = (*js, *sbx);
+                let seg = &ssurf.segments[js as usize];
+                let (lo, hi) = query_box(&sbx);
+                // the segments whose stored box meets the query box, ascending
+                box_list(list, msurf, (&lo, &hi), &mut cand);
+                masters.clear();
+                extra.clear();
+                // coordinates' size, for the slabs' round-off margin
+                let scale = sbx.0.abs().max().max(sbx.1.abs().max()) + box_reach;
+                for &j in &cand {
+                    let ms = &msurf.segments[j as usize];
+                    let bx = node_box(ms, xm);
+                    if gap_at_least(box_gap2(&sbx, &bx), press, press2) {
                         continue;
                     }
-                    let scv = scurv.get(js, ssurf, &sb.state.x);
-                    let mc = MasterCurved {
-                        near: mcurv,
-                        extra: &extra,
+                    let at = Corners::of(ms, xm);
+                    let cv = match mcurv.index(j) {
+                        Some(k) => CurvedAt::Near(k),
+                        None => {
+                            extra.push(Curved::of(ms, msurf, xm));
+                            CurvedAt::Extra(extra.len() - 1)
+                        }
                     };
-                    let wide = Wide {
-                        msurf,
-                        xm,
-                        mcurv,
-                        sbx,
-                        grow: g,
-                        box_reach,
-                        scale,
-                        c,
-                    };
-                    slave_segment(
-                        sb,
-                        ssurf,
-                        js,
-                        seg,
-                        &scv,
-                        mb,
-                        msurf,
-                        (&masters, &mc, &wide),
-                        c,
-                        Reach {
-                            reach,
-                            touch,
-                            tie: TIE * c,
-                        },
-                        kappa,
-                        mu,
-                        cfg,
-                        &mut out,
-                    );
+                    masters.push(Master {
+                        j,
+                        bx,
+                        at,
+                        cv,
+                        slab: Slab::of(&at, scale, c),
+                    });
                 }
+                if masters.is_empty() {
+                    continue;
+                }
+                let scv = scurv.get(js, ssurf, &sb.state.x);
+                let mc = MasterCurved {
+                    near: mcurv,
+                    extra: &extra,
+                };
+                let wide = Wide {
+                    msurf,
+                    xm,
+                    mcurv,
+                    sbx,
+                    grow: g,
+                    box_reach,
+                    scale,
+                    c,
+                };
+                slave_segment(
+                    sb,
+                    ssurf,
+                    js,
+                    seg,
+                    &scv,
+                    mb,
+                    msurf,
+                    (&masters, &mc, &wide),
+                    c,
+                    Reach {
+                        reach,
+                        touch,
+                        tie: TIE * c,
+                    },
+                    kappa,
+                    mu,
+                    cfg,
+                    &mut out,
+                );
             }
             out
         })

@@ -9,6 +9,7 @@ use super::quadrature::{point_pushes, NormalLoad, PointPush, Points};
 use super::reach::{near_sets, union};
 use super::stats::{KinLoad, PairStats};
 use super::surface::Surface;
+use super::verlet::NodeLists;
 use crate::body::Body;
 use crate::Vec3;
 use std::collections::BTreeMap;
@@ -21,6 +22,8 @@ use std::mem::take;
 /// all): a split group's views overlap, and each point is booked by the holder that
 /// counts its slave segment's element. `slaves`: the slave segments searched, of a and
 /// of b (None: all; a split group's view searches those that can push its owned nodes).
+/// `lists`: the slave segments' master lists kept from pass to pass, a's against b and
+/// b's against a (`quadrature::point_pushes`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn segment_pair(
     bodies: &mut [Body],
@@ -32,11 +35,12 @@ pub(crate) fn segment_pair(
     dt_ref: f64,
     counted: (Option<&[bool]>, Option<&[bool]>),
     slaves: (Option<&[bool]>, Option<&[bool]>),
+    lists: (&mut NodeLists, &mut NodeLists),
 ) -> PairStats {
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
     let kappa = 0.5 * cfg.penalty_scale * mu / (dt_ref * dt_ref);
-    let (first, second) = pair_points(a, sa, b, sb, cfg, kappa, mu, slaves);
+    let (first, second) = pair_points(a, sa, b, sb, cfg, kappa, mu, slaves, lists);
     let mut st = PairStats::empty(a.def.id, b.def.id, 0);
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, (ia, ib), &first, &mut st, true, counted.0);
@@ -166,6 +170,7 @@ fn pair_points(
     kappa: f64,
     mu: f64,
     slaves: (Option<&[bool]>, Option<&[bool]>),
+    (la, lb): (&mut NodeLists, &mut NodeLists),
 ) -> (Vec<Points>, Vec<Points>) {
     // the segments of each body that can touch the other, their curved data and how far
     // each body's curved surface can stand off its facets there (exact bounds over those
@@ -179,8 +184,36 @@ fn pair_points(
     // the two directions at once (each reads only positions): the pool gets both
     // directions' tasks, and a direction with few points does not leave a thread idle
     rayon::join(
-        || point_pushes(a, sa, b, sb, near_b, (&ca, &cb), cfg, kappa, mu, slaves.0),
-        || point_pushes(b, sb, a, sa, near_a, (&cb, &ca), cfg, kappa, mu, slaves.1),
+        || {
+            point_pushes(
+                a,
+                sa,
+                b,
+                sb,
+                near_b,
+                (&ca, &cb),
+                cfg,
+                kappa,
+                mu,
+                slaves.0,
+                la,
+            )
+        },
+        || {
+            point_pushes(
+                b,
+                sb,
+                a,
+                sa,
+                near_a,
+                (&cb, &ca),
+                cfg,
+                kappa,
+                mu,
+                slaves.1,
+                lb,
+            )
+        },
     )
 }
 
@@ -197,7 +230,8 @@ pub(crate) fn active_points(
 ) -> [(usize, Option<PointPush>); 2] {
     // any stiffness: which points are active depends on the gap alone
     let mu = sa.areal_mass.min(sb.areal_mass);
-    let (first, second) = pair_points(a, sa, b, sb, cfg, 1.0, mu, (None, None));
+    let lists = (&mut NodeLists::default(), &mut NodeLists::default());
+    let (first, second) = pair_points(a, sa, b, sb, cfg, 1.0, mu, (None, None), lists);
     [first, second].map(|chunks| {
         let pushes = chunks.into_iter().flat_map(|c| c.pushes);
         pushes.fold((0, None), |(n, deepest): (usize, Option<PointPush>), p| {

@@ -36,6 +36,8 @@ pub struct ContactState {
     normals: BTreeMap<u32, Vec<Vec3>>,
     /// Node candidate lists per pass (node body, segment body).
     lists: BTreeMap<(u32, u32), NodeLists>,
+    /// The segment pass's master lists per slave segment (slave body, master body).
+    seg_lists: BTreeMap<(u32, u32), NodeLists>,
     stats: Vec<PairStats>,
 }
 
@@ -242,6 +244,7 @@ pub(crate) fn contact_forces_given(
         })
         .collect();
     state.lists.retain(|k, _| live.contains(k));
+    state.seg_lists.retain(|k, _| live.contains(k));
     // each body of a pair once per pass, however many pairs it is in (a floor under many
     // bodies): its surface, and its mean velocity when the closing speed is needed
     let mut in_pairs: Vec<usize> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
@@ -335,7 +338,13 @@ pub(crate) fn contact_forces_given(
             let counted = (segs(ia), segs(ib));
             let wanted = |k: usize| given.slave_segments.get(k).map(Vec::as_slice);
             let slaves = (wanted(ia), wanted(ib));
-            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref, counted, slaves);
+            let (ida, idb) = (a.def.id, b.def.id);
+            let mut la = state.seg_lists.remove(&(ida, idb)).unwrap_or_default();
+            let mut lb = state.seg_lists.remove(&(idb, ida)).unwrap_or_default();
+            let lists = (&mut la, &mut lb);
+            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref, counted, slaves, lists);
+            state.seg_lists.insert((ida, idb), la);
+            state.seg_lists.insert((idb, ida), lb);
             // the stiffening law's step (docs/theory-contact.md, "Depth")
             let (a, b) = (&bodies[ia], &bodies[ib]);
             let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);

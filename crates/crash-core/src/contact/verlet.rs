@@ -88,22 +88,60 @@ pub fn candidates(
     // the query's corners, computed as the tree query computes them
     let qlo = [p.x - r, p.y - r, p.z - r];
     let qhi = [p.x + r, p.y + r, p.z + r];
+    box_candidates(list, surf, (&qlo, &qhi), out, false, || {
+        let g = r.max(reach) + GROW * surf.skin();
+        ([p.x - g, p.y - g, p.z - g], [p.x + g, p.y + g, p.z + g])
+    });
+}
+
+/// The segments of `surf` whose stored box meets the box `qlo`..`qhi`, into `out` (in
+/// the list's order: the tree's, or ascending with `sorted`): from `list` when its box
+/// holds the query and it came from the current tree, else from the tree, the list
+/// renewed for the box `renew` gives (which must hold the query).
+fn box_candidates(
+    list: &mut NodeList,
+    surf: &Surface,
+    (qlo, qhi): (&[f64; 3], &[f64; 3]),
+    out: &mut Vec<u32>,
+    sorted: bool,
+    renew: impl FnOnce() -> ([f64; 3], [f64; 3]),
+) {
     let covered = list.build == surf.tree_id()
         && (0..3).all(|d| list.lo[d] <= qlo[d] && qhi[d] <= list.hi[d]);
     if !covered {
-        let g = r.max(reach) + GROW * surf.skin();
-        list.lo = [p.x - g, p.y - g, p.z - g];
-        list.hi = [p.x + g, p.y + g, p.z + g];
+        (list.lo, list.hi) = renew();
         list.build = surf.tree_id();
         surf.query(list.lo, list.hi, &mut list.segs);
+        if sorted {
+            list.segs.sort_unstable();
+        }
     }
     out.clear();
     out.extend(
         list.segs
             .iter()
             .copied()
-            .filter(|&j| surf.box_meets(j, &qlo, &qhi)),
+            .filter(|&j| surf.box_meets(j, qlo, qhi)),
     );
+}
+
+/// The segments of `surf` whose stored box meets the box `qlo`..`qhi`, ascending, into
+/// `out`, from `list` (renewed as `box_candidates` does, for the query grown by
+/// `GROW` times the tree's skin on every side): the segment pass's masters of a slave
+/// segment, asked every step while the two bodies move less than that.
+pub fn box_list(
+    list: &mut NodeList,
+    surf: &Surface,
+    (qlo, qhi): (&[f64; 3], &[f64; 3]),
+    out: &mut Vec<u32>,
+) {
+    box_candidates(list, surf, (qlo, qhi), out, true, || {
+        let g = GROW * surf.skin();
+        (
+            std::array::from_fn(|d| qlo[d] - g),
+            std::array::from_fn(|d| qhi[d] + g),
+        )
+    });
 }
 
 #[cfg(test)]
@@ -156,5 +194,48 @@ mod tests {
         // both paths taken many times
         assert!(from_list > 1000 && from_list < 1990, "{from_list}");
         assert!(rebuilds > 1, "{rebuilds}");
+    }
+    /// A slave segment's box wandering over a moving plate (the tree rebuilt now and
+    /// then): every `box_list` answers the tree's set, ascending, from the list or not.
+    #[test]
+    fn segment_lists_answer_exactly_the_segments_the_tree_answers_ascending() {
+        let mut b = Body::new(
+            0,
+            "plate",
+            &plate(0.1, 0.1, 20, 20, ElementKind::Tri),
+            Section::new(Material::steel(), 0.001),
+            Stabilization::default(),
+        )
+        .expect("plate");
+        let skin = 1e-3;
+        let mut surf = Surface::new(&b);
+        let mut list = NodeList::default();
+        let (mut from_list, mut found) = (0, 0);
+        let (mut a, mut want) = (Vec::new(), Vec::new());
+        for k in 0..2000 {
+            let t = k as f64 * 1e-3;
+            let dz = 1e-5 * (t * 3.0).cos();
+            for x in &mut b.state.x {
+                x.z += dz;
+            }
+            surf.refresh(&b, skin);
+            let c = Vec3::new(
+                0.03 * t.sin(),
+                0.02 * (1.7 * t).cos(),
+                4e-4 + 2e-3 * t.sin(),
+            );
+            let h = if k % 5 == 0 { 3e-3 } else { 1e-3 };
+            let lo = [c.x - h, c.y - 0.5 * h, c.z - 2e-4];
+            let hi = [c.x + h, c.y + 0.5 * h, c.z + 2e-4];
+            let before = (list.build, list.lo);
+            box_list(&mut list, &surf, (&lo, &hi), &mut a);
+            from_list += usize::from(before == (list.build, list.lo));
+            surf.query(lo, hi, &mut want);
+            want.sort_unstable();
+            assert_eq!(a, want, "query {k}");
+            found += usize::from(!want.is_empty());
+        }
+        assert!(found > 500 && found < 1990, "{found}");
+        assert!(from_list > 500 && from_list < 1990, "{from_list}");
     }
 }
