@@ -150,23 +150,24 @@ mod tests {
     use crate::shapes::{plate, ElementKind};
     use crate::{Body, Material, Section, Stabilization};
 
-    /// A node wandering over a plate, and the plate itself moving (so the tree is
-    /// rebuilt now and then): every query answers the tree's set, from the list or not.
-    #[test]
-    fn node_lists_answer_exactly_the_segments_the_tree_answers() {
+    /// A plate of `kind` rising and sinking over 2000 steps (its tree rebuilt now and
+    /// then), `ask(k, t, z, surface)` at each step (z: how far it moved up); returns how
+    /// often the tree was rebuilt.
+    fn over_a_moving_plate(
+        kind: ElementKind,
+        mut ask: impl FnMut(usize, f64, f64, &Surface),
+    ) -> usize {
         let mut b = Body::new(
             0,
             "plate",
-            &plate(0.1, 0.1, 20, 20, ElementKind::Quad),
+            &plate(0.1, 0.1, 20, 20, kind),
             Section::new(Material::steel(), 0.001),
             Stabilization::default(),
         )
         .expect("plate");
         let skin = 1e-3;
         let mut surf = Surface::new(&b);
-        let mut list = NodeList::default();
-        let (mut from_list, mut rebuilds, mut found, mut z) = (0, 0, 0, 0.0);
-        let (mut a, mut want) = (Vec::new(), Vec::new());
+        let (mut rebuilds, mut z) = (0, 0.0);
         for k in 0..2000 {
             let t = k as f64 * 1e-3;
             let dz = 1e-5 * (t * 3.0).cos();
@@ -177,65 +178,60 @@ mod tests {
             if surf.refresh(&b, skin) {
                 rebuilds += 1;
             }
+            ask(k, t, z, &surf);
+        }
+        rebuilds
+    }
+
+    /// A node wandering over a plate, and the plate itself moving (so the tree is
+    /// rebuilt now and then): every query answers the tree's set, from the list or not.
+    #[test]
+    fn node_lists_answer_exactly_the_segments_the_tree_answers() {
+        let mut list = NodeList::default();
+        let (mut from_list, mut found) = (0, 0);
+        let (mut a, mut want) = (Vec::new(), Vec::new());
+        let rebuilds = over_a_moving_plate(ElementKind::Quad, |k, t, z, surf| {
             // hovering over the plate, at times out of reach
             let h = 4e-4 + 2e-3 * (0.7 * t).sin().max(0.0);
             let p = Vec3::new(0.03 * t.sin(), 0.02 * (1.7 * t).cos(), z + h);
             let r = if k % 3 == 0 { 5e-4 } else { 1e-5 };
             let before = (list.build, list.lo);
-            candidates(&mut list, &surf, &p, r, 5e-4, &mut a);
+            candidates(&mut list, surf, &p, r, 5e-4, &mut a);
             from_list += usize::from(before == (list.build, list.lo));
             surf.candidates(&p, r, &mut want);
             a.sort_unstable();
             want.sort_unstable();
             assert_eq!(a, want, "query {k}");
             found += usize::from(!want.is_empty());
-        }
+        });
         assert!(found > 500 && found < 1990, "{found}");
         // both paths taken many times
         assert!(from_list > 1000 && from_list < 1990, "{from_list}");
         assert!(rebuilds > 1, "{rebuilds}");
     }
+
     /// A slave segment's box wandering over a moving plate (the tree rebuilt now and
     /// then): every `box_list` answers the tree's set, ascending, from the list or not.
     #[test]
     fn segment_lists_answer_exactly_the_segments_the_tree_answers_ascending() {
-        let mut b = Body::new(
-            0,
-            "plate",
-            &plate(0.1, 0.1, 20, 20, ElementKind::Tri),
-            Section::new(Material::steel(), 0.001),
-            Stabilization::default(),
-        )
-        .expect("plate");
-        let skin = 1e-3;
-        let mut surf = Surface::new(&b);
         let mut list = NodeList::default();
         let (mut from_list, mut found) = (0, 0);
         let (mut a, mut want) = (Vec::new(), Vec::new());
-        for k in 0..2000 {
-            let t = k as f64 * 1e-3;
-            let dz = 1e-5 * (t * 3.0).cos();
-            for x in &mut b.state.x {
-                x.z += dz;
-            }
-            surf.refresh(&b, skin);
-            let c = Vec3::new(
-                0.03 * t.sin(),
-                0.02 * (1.7 * t).cos(),
-                4e-4 + 2e-3 * t.sin(),
-            );
+        let rebuilds = over_a_moving_plate(ElementKind::Tri, |k, t, z, surf| {
+            let c = Vec3::new(0.03 * t.sin(), 0.02 * (1.7 * t).cos(), z + 2e-3 * t.sin());
             let h = if k % 5 == 0 { 3e-3 } else { 1e-3 };
             let lo = [c.x - h, c.y - 0.5 * h, c.z - 2e-4];
             let hi = [c.x + h, c.y + 0.5 * h, c.z + 2e-4];
             let before = (list.build, list.lo);
-            box_list(&mut list, &surf, (&lo, &hi), &mut a);
+            box_list(&mut list, surf, (&lo, &hi), &mut a);
             from_list += usize::from(before == (list.build, list.lo));
             surf.query(lo, hi, &mut want);
             want.sort_unstable();
             assert_eq!(a, want, "query {k}");
             found += usize::from(!want.is_empty());
-        }
+        });
         assert!(found > 500 && found < 1990, "{found}");
         assert!(from_list > 500 && from_list < 1990, "{from_list}");
+        assert!(rebuilds > 1, "{rebuilds}");
     }
 }
