@@ -50,7 +50,7 @@ const TASKS_PER_THREAD: usize = 4;
 /// Columns of a strip (two points each) whose points search one list of masters.
 const BLOCK: usize = 4;
 /// Fewest slave segments per task (a task's size is a multiple of it).
-const QUERY_GROUP: usize = 8;
+const TASK_GRAIN: usize = 8;
 
 /// One active quadrature point: its forces on the corner nodes of its two segments. The
 /// bulge terms through the corner normals are not here: they go to `NormalLoad`s,
@@ -157,14 +157,14 @@ pub fn point_pushes(
             passing.push((js, sbx, list));
         }
     }
-    // tasks of a few query groups each, a few tasks per thread: the points cluster
+    // tasks of a few grains each, a few tasks per thread: the points cluster
     // where the bodies touch, so tasks much larger than that leave a thread idle
     let per_task = passing
         .len()
         .div_ceil(TASKS_PER_THREAD * rayon::current_num_threads());
     let chunk = per_task
-        .next_multiple_of(QUERY_GROUP)
-        .clamp(QUERY_GROUP, SEG_CHUNK);
+        .next_multiple_of(TASK_GRAIN)
+        .clamp(TASK_GRAIN, SEG_CHUNK);
     passing
         .par_chunks_mut(chunk)
         .map(|passing| {
