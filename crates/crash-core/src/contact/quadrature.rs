@@ -26,7 +26,7 @@ use super::reach::{
 use super::segment::{Corners, Segment};
 use super::stiffening;
 use super::surface::Surface;
-use super::verlet::{box_list, NodeList, NodeLists};
+use super::verlet::{box_list, NodeList, SegmentLists};
 use crate::body::Body;
 use crate::Vec3;
 use rayon::prelude::*;
@@ -122,7 +122,7 @@ pub fn point_pushes(
     kappa: f64,
     mu: f64,
     slaves: Option<&[bool]>,
-    lists: &mut NodeLists,
+    lists: &mut SegmentLists,
 ) -> Vec<Points> {
     let (scurv, mcurv) = curved;
     let (hs_max, hm_max) = (scurv.bound, mcurv.bound);
@@ -145,18 +145,23 @@ pub fn point_pushes(
     // the slave segments searched: those wanted whose node box meets the master's near
     // box grown by `press` (the rest hold no point that can touch), in index order
     let wanted = |j: &u32| slaves.is_none_or(|w| w.get(*j as usize).copied().unwrap_or(false));
-    // with each its list (the near segments ascend: one walk over the lists)
-    let mut own = lists.fit(ssurf.segments.len()).iter_mut().enumerate();
-    let mut passing: Vec<(u32, (Vec3, Vec3), &mut NodeList)> = Vec::new();
-    for (&js, &sbx) in scurv.segs().iter().zip(scurv.boxes()) {
-        let gap = box_gap(&sbx, &mbox);
-        if !(wanted(&js) && (gap.is_nan() || gap <= 0.0)) {
-            continue;
-        }
-        if let Some((_, list)) = own.find(|(k, _)| *k == js as usize) {
-            passing.push((js, sbx, list));
-        }
-    }
+    let (ids, boxes): (Vec<u32>, Vec<(Vec3, Vec3)>) = scurv
+        .segs()
+        .iter()
+        .zip(scurv.boxes())
+        .filter(|(j, sbx)| {
+            let gap = box_gap(sbx, &mbox);
+            wanted(j) && (gap.is_nan() || gap <= 0.0)
+        })
+        .map(|(&js, &sbx)| (js, sbx))
+        .unzip();
+    // with each its kept list of master candidates
+    let mut passing: Vec<(u32, (Vec3, Vec3), &mut NodeList)> = ids
+        .iter()
+        .zip(boxes)
+        .zip(lists.for_segments(&ids))
+        .map(|((&js, sbx), list)| (js, sbx, list))
+        .collect();
     // tasks of a few grains each, a few tasks per thread: the points cluster
     // where the bodies touch, so tasks much larger than that leave a thread idle
     let per_task = passing

@@ -9,7 +9,7 @@ use super::quadrature::{point_pushes, NormalLoad, PointPush, Points};
 use super::reach::{near_sets, union};
 use super::stats::{KinLoad, PairStats};
 use super::surface::Surface;
-use super::verlet::NodeLists;
+use super::verlet::SegmentLists;
 use crate::body::Body;
 use crate::Vec3;
 use std::collections::BTreeMap;
@@ -35,7 +35,7 @@ pub(crate) fn segment_pair(
     dt_ref: f64,
     counted: (Option<&[bool]>, Option<&[bool]>),
     slaves: (Option<&[bool]>, Option<&[bool]>),
-    lists: (&mut NodeLists, &mut NodeLists),
+    lists: (&mut SegmentLists, &mut SegmentLists),
 ) -> PairStats {
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
@@ -170,7 +170,7 @@ fn pair_points(
     kappa: f64,
     mu: f64,
     slaves: (Option<&[bool]>, Option<&[bool]>),
-    (la, lb): (&mut NodeLists, &mut NodeLists),
+    (la, lb): (&mut SegmentLists, &mut SegmentLists),
 ) -> (Vec<Points>, Vec<Points>) {
     // the segments of each body that can touch the other, their curved data and how far
     // each body's curved surface can stand off its facets there (exact bounds over those
@@ -230,7 +230,7 @@ pub(crate) fn active_points(
 ) -> [(usize, Option<PointPush>); 2] {
     // any stiffness: which points are active depends on the gap alone
     let mu = sa.areal_mass.min(sb.areal_mass);
-    let lists = (&mut NodeLists::default(), &mut NodeLists::default());
+    let lists = (&mut SegmentLists::default(), &mut SegmentLists::default());
     let (first, second) = pair_points(a, sa, b, sb, cfg, 1.0, mu, (None, None), lists);
     [first, second].map(|chunks| {
         let pushes = chunks.into_iter().flat_map(|c| c.pushes);

@@ -20,7 +20,7 @@ use super::stats::PairStats;
 use super::stiffening;
 use super::surface::Surface;
 use super::sweep::{closing_speed, BodySpeed};
-use super::verlet::NodeLists;
+use super::verlet::{NodeLists, SegmentLists};
 use crate::body::Body;
 use crate::error::Fault;
 use crate::Vec3;
@@ -37,7 +37,7 @@ pub struct ContactState {
     /// Node candidate lists per pass (node body, segment body).
     lists: BTreeMap<(u32, u32), NodeLists>,
     /// The segment pass's master lists per slave segment (slave body, master body).
-    seg_lists: BTreeMap<(u32, u32), NodeLists>,
+    seg_lists: BTreeMap<(u32, u32), SegmentLists>,
     stats: Vec<PairStats>,
 }
 

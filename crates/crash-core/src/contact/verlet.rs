@@ -69,6 +69,32 @@ impl NodeLists {
     }
 }
 
+/// The segment pass's lists of one direction (slave body, master body): one per slave
+/// segment that passed the pass's box test, by segment index. Only those are kept: a
+/// list per segment of the body would cost 80 bytes a segment for every body it ever
+/// came near (a floor under many bodies), where the contact region needs a few hundred.
+#[derive(Debug, Clone, Default)]
+pub struct SegmentLists {
+    lists: Vec<(u32, NodeList)>,
+}
+
+impl SegmentLists {
+    /// The lists of `segs` (ascending), in that order: each segment's kept list, a new
+    /// one for a segment that did not pass last time; the lists of segments not in
+    /// `segs` are dropped.
+    pub fn for_segments(&mut self, segs: &[u32]) -> Vec<&mut NodeList> {
+        let mut old = std::mem::take(&mut self.lists).into_iter().peekable();
+        for &j in segs {
+            while old.next_if(|(k, _)| *k < j).is_some() {}
+            let list = old
+                .next_if(|(k, _)| *k == j)
+                .map_or_else(NodeList::default, |(_, l)| l);
+            self.lists.push((j, list));
+        }
+        self.lists.iter_mut().map(|(_, l)| l).collect()
+    }
+}
+
 /// How much larger than its query a node's cube is, as a share of the tree's skin:
 /// larger lists are renewed less often but hold more segments to filter.
 pub const GROW: f64 = 0.25;
@@ -233,5 +259,23 @@ mod tests {
         assert!(found > 500 && found < 1990, "{found}");
         assert!(from_list > 500 && from_list < 1990, "{from_list}");
         assert!(rebuilds > 1, "{rebuilds}");
+    }
+
+    /// A segment that passes again finds its list; new ones start empty; the others'
+    /// lists are dropped.
+    #[test]
+    fn segment_lists_follow_the_passing_segments() {
+        let mut sl = SegmentLists::default();
+        for (k, l) in sl.for_segments(&[1, 3, 5]).into_iter().enumerate() {
+            l.build = 10 + k as u64;
+        }
+        let builds: Vec<u64> = sl
+            .for_segments(&[2, 3, 6])
+            .iter()
+            .map(|l| l.build)
+            .collect();
+        assert_eq!(builds, [u64::MAX, 11, u64::MAX]);
+        assert!(sl.for_segments(&[]).is_empty());
+        assert!(sl.lists.is_empty());
     }
 }
