@@ -74,9 +74,9 @@ pub(crate) fn segment_pair(
 /// The loads on a body's normals summed per normal, each sum in load order from zero,
 /// then pulled back to node forces once per normal in `NormalOf` order (nodes
 /// ascending, then crease segments ascending), into `out`. The node loads are sorted by
-/// node (stable: a node's loads keep their order) and summed run by run: arrays the
-/// size of the body (the sums before session 38) were zeroed for every pair and pass, a
-/// tenth of the segment pass on a plate under 64 spheres.
+/// node, then by their place in `loads`, and summed run by run: arrays the size of the
+/// body (the sums before session 38) were zeroed for every pair and pass, about 8 % of
+/// the segment pass on a plate under 64 spheres.
 fn pull_back_loads(loads: &[&NormalLoad], surf: &Surface, x: &[Vec3], out: &mut Vec<(u32, Vec3)>) {
     let mut at_nodes: Vec<(u32, usize)> = Vec::new();
     let mut seg_sum: BTreeMap<u32, Vec3> = BTreeMap::new();
