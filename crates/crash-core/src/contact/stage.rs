@@ -36,8 +36,9 @@ pub struct ContactState {
     normals: BTreeMap<u32, Vec<Vec3>>,
     /// Node candidate lists per pass (node body, segment body).
     lists: BTreeMap<(u32, u32), NodeLists>,
-    /// The segment pass's master lists per slave segment (slave body, master body).
-    seg_lists: BTreeMap<(u32, u32), SegmentLists>,
+    /// The segment pass's master lists per slave segment, per pair (a, b): a's against
+    /// b, b's against a.
+    seg_lists: BTreeMap<(u32, u32), (SegmentLists, SegmentLists)>,
     stats: Vec<PairStats>,
 }
 
@@ -338,13 +339,19 @@ pub(crate) fn contact_forces_given(
             let counted = (segs(ia), segs(ib));
             let wanted = |k: usize| given.slave_segments.get(k).map(Vec::as_slice);
             let slaves = (wanted(ia), wanted(ib));
-            let (ida, idb) = (a.def.id, b.def.id);
-            let mut la = state.seg_lists.remove(&(ida, idb)).unwrap_or_default();
-            let mut lb = state.seg_lists.remove(&(idb, ida)).unwrap_or_default();
-            let lists = (&mut la, &mut lb);
-            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref, counted, slaves, lists);
-            state.seg_lists.insert((ida, idb), la);
-            state.seg_lists.insert((idb, ida), lb);
+            let (la, lb) = state.seg_lists.entry((a.def.id, b.def.id)).or_default();
+            let st = segment_pair(
+                bodies,
+                ia,
+                ib,
+                sa,
+                sb,
+                cfg,
+                dt_ref,
+                counted,
+                slaves,
+                (la, lb),
+            );
             // the stiffening law's step (docs/theory-contact.md, "Depth")
             let (a, b) = (&bodies[ia], &bodies[ib]);
             let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);

@@ -14,7 +14,8 @@
 use super::surface::Surface;
 use crate::Vec3;
 
-/// One node's list: the cube it was made for, the tree build it came from, its segments.
+/// One query's list (a node's, or a slave segment's in the segment pass): the box it was
+/// made for, the tree build it came from, its segments.
 #[derive(Debug, Clone)]
 pub struct NodeList {
     lo: [f64; 3],
@@ -83,7 +84,8 @@ impl SegmentLists {
     /// one for a segment that did not pass last time; the lists of segments not in
     /// `segs` are dropped.
     pub fn for_segments(&mut self, segs: &[u32]) -> Vec<&mut NodeList> {
-        let mut old = std::mem::take(&mut self.lists).into_iter().peekable();
+        let kept = std::mem::replace(&mut self.lists, Vec::with_capacity(segs.len()));
+        let mut old = kept.into_iter().peekable();
         for &j in segs {
             while old.next_if(|(k, _)| *k < j).is_some() {}
             let list = old
