@@ -363,16 +363,7 @@ pub fn near_curved(
         .unzip();
     // each corner node's normal once (a node is a corner of about six segments): the
     // same function, so the same bits
-    let mut slot = vec![u32::MAX; x.len()];
-    let mut nodes = Vec::new();
-    for &j in &segs {
-        for &n in surf.segments[j as usize].nodes() {
-            if slot[n as usize] == u32::MAX {
-                slot[n as usize] = nodes.len() as u32;
-                nodes.push(n);
-            }
-        }
-    }
+    let (nodes, corners) = corner_slots(surf, &segs, x.len());
     let normals: Vec<Vec3> = nodes
         .par_iter()
         .with_min_len(256)
@@ -380,10 +371,13 @@ pub fn near_curved(
         .collect();
     let data: Vec<Curved> = segs
         .par_iter()
+        .zip(&corners)
         .with_min_len(128)
-        .map(|&j| {
-            Curved::with(&surf.segments[j as usize], x, |n| {
-                normals[slot[n as usize] as usize]
+        .map(|(&j, slots)| {
+            let seg = &surf.segments[j as usize];
+            Curved::with(seg, x, |n| {
+                let q = seg.nodes().iter().position(|&k| k == n).unwrap_or(0);
+                normals[slots[q] as usize]
             })
         })
         .collect();
@@ -394,6 +388,45 @@ pub fn near_curved(
         data,
         bound,
     }
+}
+
+thread_local! {
+    /// `corner_slots`' node-to-slot map, as large as the largest body seen on this
+    /// thread, all `u32::MAX` between calls.
+    static SLOTS: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The corner nodes of `segs` (of a body of `n_nodes` nodes), each once, in order of
+/// first use, and each segment's corners as places in that list. The map from node to
+/// place is a scratch array per thread, reset entry by entry after use: filling an
+/// array the size of the body for every pair and pass (a floor under many bodies) cost
+/// more than the lookups, and sorting the nodes more still on the showcase.
+fn corner_slots(surf: &Surface, segs: &[u32], n_nodes: usize) -> (Vec<u32>, Vec<[u32; 4]>) {
+    SLOTS.with_borrow_mut(|slot| {
+        if slot.len() < n_nodes {
+            slot.resize(n_nodes, u32::MAX);
+        }
+        let mut nodes = Vec::new();
+        let corners = segs
+            .iter()
+            .map(|&j| {
+                let mut c = [0; 4];
+                for (q, &n) in surf.segments[j as usize].nodes().iter().enumerate() {
+                    let s = &mut slot[n as usize];
+                    if *s == u32::MAX {
+                        *s = nodes.len() as u32;
+                        nodes.push(n);
+                    }
+                    c[q] = *s;
+                }
+                c
+            })
+            .collect();
+        for &n in &nodes {
+            slot[n as usize] = u32::MAX;
+        }
+        (nodes, corners)
+    })
 }
 
 /// h(w) and its partial derivatives dh/dw_k.

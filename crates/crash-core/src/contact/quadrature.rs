@@ -177,6 +177,7 @@ pub fn point_pushes(
             let mut cand = Vec::new();
             let mut masters: Vec<Master> = Vec::new();
             let mut extra: Vec<Curved> = Vec::new();
+            let mut culled = (Vec::new(), Vec::new());
             // the rule's candidates: master segments whose stored box meets the slave's
             // box grown by the slave's half-thickness and the bulge reach (`g`); of
             // those, the ones that can press: within `press` (their stored box holds their
@@ -256,6 +257,7 @@ pub fn point_pushes(
                     kappa,
                     mu,
                     cfg,
+                    &mut culled,
                     &mut out,
                 );
             }
@@ -279,6 +281,7 @@ fn slave_segment(
     kappa: f64,
     mu: f64,
     cfg: &ContactConfig,
+    (keep, block): &mut (Vec<usize>, Vec<usize>),
     out: &mut Points,
 ) {
     let xs_ = &sb.state.x;
@@ -287,8 +290,6 @@ fn slave_segment(
     let (sn, s_nodal, sb_coef) = (scv.normals, scv.nodal, scv.b);
     let hs_bound = bulge_bound(&sb_coef);
     let (reach, touch) = (r.reach, r.touch);
-    let mut keep: Vec<usize> = Vec::with_capacity(masters.len());
-    let mut block: Vec<usize> = Vec::with_capacity(masters.len());
     let near = Near {
         masters,
         touch,
@@ -324,7 +325,7 @@ fn slave_segment(
                 flat_at(u0, 1.0 - u0),
                 flat_at(u1, 1.0 - u1),
             ];
-            let strip = near.cull(&corners, 0..masters.len(), &mut keep);
+            let strip = near.cull(&corners, 0..masters.len(), keep);
             if keep.is_empty() {
                 continue;
             }
@@ -337,7 +338,7 @@ fn slave_segment(
                     at_block = k / (2 * BLOCK);
                     if n - i <= BLOCK {
                         // a short strip is its one block
-                        block.clone_from(&keep);
+                        block.clone_from(keep);
                     } else {
                         let (j0, j1) = (at_block * BLOCK, ((at_block + 1) * BLOCK).min(n - i));
                         let (v0, v1) = (j0 as f64 / n as f64, j1 as f64 / n as f64);
@@ -347,7 +348,7 @@ fn slave_segment(
                             flat_at(u0, v1),
                             flat_at(u1, v1),
                         ];
-                        near.cull(&bc, keep.iter().copied(), &mut block);
+                        near.cull(&bc, keep.iter().copied(), block);
                     }
                 }
                 if block.is_empty() {
@@ -362,7 +363,7 @@ fn slave_segment(
                 let xa = flat + nsub * hs;
                 // closest master segment (ties within TIE c: lowest index; `masters` sorted)
                 let again;
-                let (pr, m, mcv) = match nearest(&xa, masters, &block, r) {
+                let (pr, m, mcv) = match nearest(&xa, masters, block, r) {
                     Pick::Found(pr, mi) => (pr, &masters[mi], mcurv.of(&masters[mi])),
                     Pick::Drop => continue,
                     Pick::Rerun => {

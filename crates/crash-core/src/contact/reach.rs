@@ -7,6 +7,7 @@
 use super::curved::{loose_bulge_bound, near_curved, node_box, Curved, NearCurved};
 use super::segment::{closest, point_gap2, Closest, Corners, Segment};
 use super::surface::Surface;
+use super::verlet::{box_list, NodeList};
 use crate::Vec3;
 use rayon::prelude::*;
 
@@ -24,17 +25,25 @@ pub(crate) fn box_gap2(a: &(Vec3, Vec3), b: &(Vec3, Vec3)) -> f64 {
 }
 
 /// The segments of `surf` whose stored box comes within `grow` of the box `near` (per
-/// axis), ascending, and their node boxes: a test per `BOX_CHUNK` segments far from it,
-/// so a pass costs what lies near the other body, not the whole body.
+/// axis), ascending, and their node boxes: from the query's `list`, kept from pass to
+/// pass while the query stays inside it and the tree is the same build
+/// (`verlet::box_list`, the tree's own test: the same set), so a pass costs what lies
+/// near the other body, not the whole body.
 fn live_boxes(
     surf: &Surface,
     x: &[Vec3],
     near: &(Vec3, Vec3),
     grow: f64,
+    list: &mut NodeList,
 ) -> (Vec<u32>, Vec<(Vec3, Vec3)>) {
     let (lo, hi) = (near.0.add_scalar(-grow), near.1.add_scalar(grow));
     let mut live = Vec::new();
-    surf.near_segments(&[lo.x, lo.y, lo.z], &[hi.x, hi.y, hi.z], &mut live);
+    box_list(
+        list,
+        surf,
+        (&[lo.x, lo.y, lo.z], &[hi.x, hi.y, hi.z]),
+        &mut live,
+    );
     let boxes = live
         .par_iter()
         .with_min_len(LIVE_TASK)
@@ -80,26 +89,27 @@ pub(crate) fn union(boxes: &[(Vec3, Vec3)]) -> (Vec3, Vec3) {
 /// bulge is at most its segment's loose bound; so each step keeps every segment that can
 /// touch one of the other's, and each exact bound (a max over a set holding every
 /// segment that can touch) bounds the bulge of every segment a point can touch.
-/// Returns (a's, b's).
+/// `lists`: the queries' kept lists, a's and b's first round, a's and b's second
+/// (`verlet::PairLists::near`). Returns (a's, b's).
 pub(crate) fn near_sets(
-    sa: &Surface,
-    xa: &[Vec3],
-    sb: &Surface,
-    xb: &[Vec3],
+    (sa, xa): (&Surface, &[Vec3]),
+    (sb, xb): (&Surface, &[Vec3]),
     base: f64,
+    lists: &mut [NodeList; 4],
 ) -> (NearCurved, NearCurved) {
     let flip = sb.loose_bulge_ub > sa.loose_bulge_ub;
-    let ((sp, xp), (sq, xq)) = if flip {
-        ((sb, xb), (sa, xa))
+    let [a1, b1, a2, b2] = lists;
+    let ((sp, xp), (sq, xq), (p1, q1, q2)) = if flip {
+        ((sb, xb), (sa, xa), (b1, a1, a2))
     } else {
-        ((sa, xa), (sb, xb))
+        ((sa, xa), (sb, xb), (a1, b1, b2))
     };
     let bounds = |s: &Surface| s.bounds();
     // 1. as before this step: every segment within the loose reach of the other body
     let live1 = base + sp.loose_bulge_ub + sq.loose_bulge_ub;
     let ((live_p, boxes_p), (live_q, boxes_q)) = rayon::join(
-        || live_boxes(sp, xp, &bounds(sq), live1),
-        || live_boxes(sq, xq, &bounds(sp), live1),
+        || live_boxes(sp, xp, &bounds(sq), live1, p1),
+        || live_boxes(sq, xq, &bounds(sp), live1, q1),
     );
     let grow1 =
         base + loose_bulge_bound(sp, &live_p, &boxes_p) + loose_bulge_bound(sq, &live_q, &boxes_q);
@@ -107,7 +117,7 @@ pub(crate) fn near_sets(
     // 2. q's segments against p's set, with p's exact bound
     let box_p = union(cp.boxes());
     let live2 = base + cp.bound + sq.loose_bulge_ub;
-    let (live_q, boxes_q) = live_boxes(sq, xq, &box_p, live2);
+    let (live_q, boxes_q) = live_boxes(sq, xq, &box_p, live2, q2);
     let grow2 = base + cp.bound + loose_bulge_bound(sq, &live_q, &boxes_q);
     let cq = near_curved(sq, xq, &live_q, &boxes_q, &box_p, grow2);
     // 3. p's set against q's, with q's exact bound

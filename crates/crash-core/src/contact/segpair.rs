@@ -9,7 +9,7 @@ use super::quadrature::{point_pushes, NormalLoad, PointPush, Points};
 use super::reach::{near_sets, union};
 use super::stats::{KinLoad, PairStats};
 use super::surface::Surface;
-use super::verlet::SegmentLists;
+use super::verlet::PairLists;
 use crate::body::Body;
 use crate::Vec3;
 use std::collections::BTreeMap;
@@ -22,8 +22,9 @@ use std::mem::take;
 /// all): a split group's views overlap, and each point is booked by the holder that
 /// counts its slave segment's element. `slaves`: the slave segments searched, of a and
 /// of b (None: all; a split group's view searches those that can push its owned nodes).
-/// `lists`: the slave segments' master lists kept from pass to pass, a's against b and
-/// b's against a (`quadrature::point_pushes`).
+/// `lists`: the pair's lists kept from pass to pass (the slave segments' masters, a's
+/// against b and b's against a, `quadrature::point_pushes`; the near sets' queries,
+/// `reach::near_sets`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn segment_pair(
     bodies: &mut [Body],
@@ -35,7 +36,7 @@ pub(crate) fn segment_pair(
     dt_ref: f64,
     counted: (Option<&[bool]>, Option<&[bool]>),
     slaves: (Option<&[bool]>, Option<&[bool]>),
-    lists: (&mut SegmentLists, &mut SegmentLists),
+    lists: &mut PairLists,
 ) -> PairStats {
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.areal_mass.min(sb.areal_mass);
@@ -168,7 +169,7 @@ fn pair_points(
     kappa: f64,
     mu: f64,
     slaves: (Option<&[bool]>, Option<&[bool]>),
-    (la, lb): (&mut SegmentLists, &mut SegmentLists),
+    lists: &mut PairLists,
 ) -> (Vec<Points>, Vec<Points>) {
     // the segments of each body that can touch the other, their curved data and how far
     // each body's curved surface can stand off its facets there (exact bounds over those
@@ -176,7 +177,13 @@ fn pair_points(
     // Only segments whose tree box comes within 1.25 c plus both surfaces' loose bulge
     // bounds of the other body are read.
     let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);
-    let (ca, cb) = near_sets(sa, &a.state.x, sb, &b.state.x, c * (1.0 + BULGE_REACH));
+    let PairLists { a: la, b: lb, near } = lists;
+    let (ca, cb) = near_sets(
+        (sa, &a.state.x),
+        (sb, &b.state.x),
+        c * (1.0 + BULGE_REACH),
+        near,
+    );
     // the other's segments a point can touch lie in the box of the other's near set
     let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
     // the two directions at once (each reads only positions): the pool gets both
@@ -228,7 +235,7 @@ pub(crate) fn active_points(
 ) -> [(usize, Option<PointPush>); 2] {
     // any stiffness: which points are active depends on the gap alone
     let mu = sa.areal_mass.min(sb.areal_mass);
-    let lists = (&mut SegmentLists::default(), &mut SegmentLists::default());
+    let lists = &mut PairLists::default();
     let (first, second) = pair_points(a, sa, b, sb, cfg, 1.0, mu, (None, None), lists);
     [first, second].map(|chunks| {
         let pushes = chunks.into_iter().flat_map(|c| c.pushes);

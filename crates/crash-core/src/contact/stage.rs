@@ -20,7 +20,7 @@ use super::stats::PairStats;
 use super::stiffening;
 use super::surface::Surface;
 use super::sweep::{closing_speed, BodySpeed};
-use super::verlet::{NodeLists, SegmentLists};
+use super::verlet::{NodeLists, PairLists};
 use crate::body::Body;
 use crate::error::Fault;
 use crate::Vec3;
@@ -36,9 +36,9 @@ pub struct ContactState {
     normals: BTreeMap<u32, Vec<Vec3>>,
     /// Node candidate lists per pass (node body, segment body).
     lists: BTreeMap<(u32, u32), NodeLists>,
-    /// The segment pass's master lists per slave segment, per pair (a, b): a's against
-    /// b, b's against a.
-    seg_lists: BTreeMap<(u32, u32), (SegmentLists, SegmentLists)>,
+    /// The segment pass's kept lists per pair (a, b): the slave segments' masters, a's
+    /// against b and b's against a, and the near sets' queries.
+    seg_lists: BTreeMap<(u32, u32), PairLists>,
     stats: Vec<PairStats>,
 }
 
@@ -339,19 +339,8 @@ pub(crate) fn contact_forces_given(
             let counted = (segs(ia), segs(ib));
             let wanted = |k: usize| given.slave_segments.get(k).map(Vec::as_slice);
             let slaves = (wanted(ia), wanted(ib));
-            let (la, lb) = state.seg_lists.entry((a.def.id, b.def.id)).or_default();
-            let st = segment_pair(
-                bodies,
-                ia,
-                ib,
-                sa,
-                sb,
-                cfg,
-                dt_ref,
-                counted,
-                slaves,
-                (la, lb),
-            );
+            let lists = state.seg_lists.entry((a.def.id, b.def.id)).or_default();
+            let st = segment_pair(bodies, ia, ib, sa, sb, cfg, dt_ref, counted, slaves, lists);
             // the stiffening law's step (docs/theory-contact.md, "Depth")
             let (a, b) = (&bodies[ia], &bodies[ib]);
             let c = 0.5 * (a.def.section.thickness + b.def.section.thickness);

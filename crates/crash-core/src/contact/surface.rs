@@ -25,10 +25,6 @@ const SEG_CHUNK: usize = 2048;
 /// Nodes per task of the node passes (fixed: results are concatenated in node order).
 pub const NODE_CHUNK: usize = 512;
 
-/// Segments per box of `Surface::near_segments` (consecutive segments: element order,
-/// which the mesh generators keep spatially coherent).
-pub const BOX_CHUNK: usize = 32;
-
 /// The box and the largest speed of one chunk of a body's nodes at the current pass:
 /// a node pass skips a chunk whose box cannot meet the other body (the test each node
 /// would fail, made once per chunk), so its cost follows the contact zone.
@@ -133,8 +129,6 @@ pub struct Surface {
     tree: Forest,
     /// Each segment's stored box (the tree's entries, by segment index).
     boxes: Vec<([f64; 3], [f64; 3])>,
-    /// The union of the stored boxes of each `BOX_CHUNK` consecutive segments.
-    chunk_boxes: Vec<([f64; 3], [f64; 3])>,
     /// Until the next build, a bound on `curved::loose_bulge_bound` of any segments'
     /// node boxes: `curved::loose_factor` x the largest stored box's diagonal without the
     /// half-thickness pads (a node box stays within its build's box grown by the skin).
@@ -261,7 +255,6 @@ impl Surface {
             chunks: node_chunks(body),
             tree: Forest::default(),
             boxes: Vec::new(),
-            chunk_boxes: Vec::new(),
             loose_bulge_ub: f64::INFINITY,
             tree_id: u64::MAX - 1,
             reference: Vec::new(),
@@ -364,21 +357,6 @@ impl Surface {
                 (env.lower(), env.upper())
             })
             .collect();
-        self.chunk_boxes = self
-            .boxes
-            .chunks(BOX_CHUNK)
-            .map(|bs| {
-                bs.iter().fold(
-                    ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-                    |(lo, hi), (blo, bhi)| {
-                        (
-                            std::array::from_fn(|d| lo[d].min(blo[d])),
-                            std::array::from_fn(|d| hi[d].max(bhi[d])),
-                        )
-                    },
-                )
-            })
-            .collect();
         // the pads less a hair, so round-off cannot make the bound too small
         let t = body.def.section.thickness * (1.0 - 1e-9);
         self.loose_bulge_ub = self
@@ -420,23 +398,6 @@ impl Surface {
     /// particular order (`forest.rs`).
     pub fn query(&self, lo: [f64; 3], hi: [f64; 3], out: &mut Vec<u32>) {
         self.tree.query(lo, hi, out);
-    }
-
-    /// The segments whose stored box meets the box `lo`..`hi` (the set `query` gives),
-    /// in index order, into `out`: through the chunk boxes, so a box far from the body
-    /// costs a test per chunk.
-    pub fn near_segments(&self, lo: &[f64; 3], hi: &[f64; 3], out: &mut Vec<u32>) {
-        out.clear();
-        for (ci, (clo, chi)) in self.chunk_boxes.iter().enumerate() {
-            if (0..3).all(|d| clo[d] <= hi[d] && chi[d] >= lo[d]) {
-                let end = ((ci + 1) * BOX_CHUNK).min(self.boxes.len());
-                out.extend(
-                    (ci * BOX_CHUNK..end)
-                        .map(|j| j as u32)
-                        .filter(|&j| self.box_meets(j, lo, hi)),
-                );
-            }
-        }
     }
 
     /// Whether segment `j`'s stored box meets the box `lo`..`hi`: the tree's own test

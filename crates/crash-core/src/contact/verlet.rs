@@ -97,6 +97,17 @@ impl SegmentLists {
     }
 }
 
+/// The segment pass's kept lists of one pair (a, b): each direction's slave-segment
+/// lists (a's against b, b's against a) and the near sets' queries
+/// (`reach::near_sets`): a's and b's first round, a's and b's second (a body takes one
+/// of the two rounds' roles per pass, whichever its loose bulge bound gives it).
+#[derive(Debug, Clone, Default)]
+pub struct PairLists {
+    pub a: SegmentLists,
+    pub b: SegmentLists,
+    pub near: [NodeList; 4],
+}
+
 /// How much larger than its query a node's cube is, as a share of the tree's skin:
 /// larger lists are renewed less often but hold more segments to filter.
 pub const GROW: f64 = 0.25;
