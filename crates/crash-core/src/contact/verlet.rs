@@ -99,8 +99,9 @@ impl SegmentLists {
 
 /// The segment pass's kept lists of one pair (a, b): each direction's slave-segment
 /// lists (a's against b, b's against a) and the near sets' queries
-/// (`reach::near_sets`): a's and b's first round, a's and b's second (a body takes one
-/// of the two rounds' roles per pass, whichever its loose bulge bound gives it).
+/// (`reach::near_sets`): a's and b's first round, a's and b's second (both bodies are
+/// queried in the first round, the one with the smaller loose bulge bound again in the
+/// second; which one that is can change between passes).
 #[derive(Debug, Clone, Default)]
 pub struct PairLists {
     pub a: SegmentLists,
