@@ -15,15 +15,15 @@ use crate::Vec3;
 /// corner on a crease (more than 30 degrees off), where a bulge would not be the surface;
 /// and which corners took their nodal normal.
 pub fn corner_normals(seg: &Segment, surf: &Surface, x: &[Vec3]) -> ([Vec3; 4], [bool; 4]) {
-    corner_normals_with(seg, x, |n| surf.nodal_normal(n, x))
+    corner_normals_with(seg, x, |_, n| surf.nodal_normal(n, x))
 }
 
 /// `corner_normals` with the nodal normals from `nodal` (a cache of
-/// `Surface::nodal_normal`).
+/// `Surface::nodal_normal`), asked with the corner's place in the segment and its node.
 fn corner_normals_with(
     seg: &Segment,
     x: &[Vec3],
-    nodal_normal: impl Fn(u32) -> Vec3,
+    nodal_normal: impl Fn(usize, u32) -> Vec3,
 ) -> ([Vec3; 4], [bool; 4]) {
     let f = face_vector(seg, x);
     let l = f.norm();
@@ -31,7 +31,7 @@ fn corner_normals_with(
     let mut out = [ns; 4];
     let mut nodal = [false; 4];
     for (k, &n) in seg.nodes().iter().enumerate() {
-        let nn = nodal_normal(n);
+        let nn = nodal_normal(k, n);
         if nn.dot(&ns) >= CREASE_COS {
             out[k] = nn;
             nodal[k] = true;
@@ -253,11 +253,12 @@ pub struct Curved {
 
 impl Curved {
     pub fn of(seg: &Segment, surf: &Surface, x: &[Vec3]) -> Self {
-        Self::with(seg, x, |n| surf.nodal_normal(n, x))
+        Self::with(seg, x, |_, n| surf.nodal_normal(n, x))
     }
 
-    /// `of` with the nodal normals from `nodal` (a cache of `Surface::nodal_normal`).
-    fn with(seg: &Segment, x: &[Vec3], nodal: impl Fn(u32) -> Vec3) -> Self {
+    /// `of` with the nodal normals from `nodal` (a cache of `Surface::nodal_normal`,
+    /// asked with the corner's place and its node).
+    fn with(seg: &Segment, x: &[Vec3], nodal: impl Fn(usize, u32) -> Vec3) -> Self {
         let (normals, nodal) = corner_normals_with(seg, x, nodal);
         Curved {
             normals,
@@ -374,9 +375,7 @@ pub fn near_curved(
         .zip(&corners)
         .with_min_len(128)
         .map(|(&j, slots)| {
-            let seg = &surf.segments[j as usize];
-            Curved::with(seg, x, |n| {
-                let q = seg.nodes().iter().position(|&k| k == n).unwrap_or(0);
+            Curved::with(&surf.segments[j as usize], x, |q, _| {
                 normals[slots[q] as usize]
             })
         })
