@@ -201,11 +201,23 @@ pub struct BodyDef {
     /// add up to the whole body's. None for a whole body.
     #[serde(skip)]
     pub uncounted: Option<std::sync::Arc<[bool]>>,
-    /// A contact view's sub-body (`partition::view`): the whole body's mass per
-    /// initial segment area, which the segment pass's stiffness reads
-    /// (`Surface::areal_mass`); None for a body that is its own whole.
+    /// A contact view's sub-body (`partition::view`): the whole body's surface
+    /// figures, which the segment pass reads (`Surface::figures`); None for a body that
+    /// is its own whole.
     #[serde(skip)]
-    pub whole_areal_mass: Option<f64>,
+    pub whole_surface: Option<SurfaceFigures>,
+}
+
+/// A whole body's contact surface figures from its definition (initial positions, all
+/// its elements): what the segment pass reads, the same in every mode however the body
+/// is split or viewed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceFigures {
+    /// All node masses over the sum of the segments' initial areas [kg/m^2] (the
+    /// pass's stiffness).
+    pub areal_mass: f64,
+    /// The segments' mean initial area [m^2] (the finer surface is the slave).
+    pub mean_area: f64,
 }
 
 /// What a step changes: nodal motion, element resultants and force slots, contact
@@ -369,7 +381,7 @@ impl Body {
                 kinematic: false,
                 halo_nodes: 0,
                 uncounted: None,
-                whole_areal_mass: None,
+                whole_surface: None,
             }),
             mass_sum: Default::default(),
         })

@@ -147,10 +147,11 @@ fn a_curved_surface_reaching_into_a_body_where_no_node_does_is_an_initial_penetr
     assert!(initial_penetrations(&[s.clone(), p.clone()], &nodes).is_empty());
     let found = initial_penetrations(&[s.clone(), p.clone()], &segments);
     println!("sagitta {sagitta:.4e} m: {found:?}");
-    let hit = found
-        .iter()
-        .find(|q| q.node_body == 0 && q.segment_body == 1)
-        .expect("the sphere's curved surface is inside the plate's");
+    // one entry: the pass searches the finer surface's points (here the plate's, 5 mm
+    // quads under a level-1 sphere's facets) against the coarser one's curved surface
+    assert_eq!(found.len(), 1, "{found:?}");
+    let hit = &found[0];
+    assert_eq!((hit.node_body, hit.segment_body), (1, 0), "{hit:?}");
     assert!(matches!(hit.at, Inside::Point { .. }), "{hit:?}");
     // the curved surface dips below the facet by less than the sphere's sagitta (the
     // bulge is the quadratic of the nodal normals, 0.4 of it at this facet's centroid)

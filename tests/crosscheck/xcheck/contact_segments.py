@@ -61,7 +61,8 @@ def _unit(v):
 class Geometry:
     """A body's segments (triangles, then quads; a triangle's slot 3 repeats node 2),
     its sub-triangles (seg, k) with their weight derivatives and initial areas, the
-    segments incident to each node, and the areal mass (all node masses / initial area)."""
+    segments incident to each node, the areal mass (all node masses / initial area) and
+    the mean segment area (the finer surface is the slave)."""
 
     def __init__(self, body):
         nt, nq = len(body.tris), len(body.quads)
@@ -76,6 +77,7 @@ class Geometry:
                         0.5 * norm(cross(X0[:, 2] - X0[:, 0], X0[:, 3] - X0[:, 1])))
         total = math.fsum(area)
         self.areal_mass = math.fsum(body.mass) / total if total > 0.0 else 0.0
+        self.mean_area = total / max(self.ns, 1)
         # sub-triangles: a triangle's one, a quad's four (centroid, x_k, x_k+1)
         seg = np.concatenate([np.nonzero(self.tri)[0], np.repeat(np.nonzero(~self.tri)[0], 4)])
         k = np.concatenate([np.zeros(nt, dtype=np.int64), np.tile(np.arange(4), nq)])
@@ -533,18 +535,36 @@ def _tally(values):
     return float(sum(int(v * q) for v in values)) / q
 
 
+FINER = 0.99
+
+
+def _slave_is_a(a, b):
+    """The finer surface (mean initial segment area smaller by more than 1 %), else the
+    lower id."""
+    (ida, ga), (idb, gb) = a, b
+    if ga.mean_area < FINER * gb.mean_area:
+        return True
+    if gb.mean_area < FINER * ga.mean_area:
+        return False
+    return ida < idb
+
+
 def segment_pair(a, b, ga, gb, cfg, dt_ref):
-    """The segment pass of a pair of different bodies: a's points against b, then b's
-    against a, each with half the weight; forces into f_contact; the pair's statistics."""
+    """The segment pass of a pair of different bodies: the slave's points (the finer
+    surface, by mean initial segment area, else the lower id) against the master's curved
+    surface, full weight; forces into f_contact; the pair's statistics."""
     mu = min(ga.areal_mass, gb.areal_mass)
-    kappa = 0.5 * cfg["penalty_scale"] * mu / (dt_ref * dt_ref)
+    kappa = cfg["penalty_scale"] * mu / (dt_ref * dt_ref)
     c = 0.5 * (a.thickness + b.thickness)
     xi = cfg["damping_ratio"]
     ca, cb = Curved(ga, a.x), Curved(gb, b.x)
     loads = {a.id: (np.zeros((ga.nn, 3)), np.zeros((ga.ns, 3))),
              b.id: (np.zeros((gb.nn, 3)), np.zeros((gb.ns, 3)))}
-    first = _direction((a, ga, ca), (b, gb, cb), c, kappa, mu, xi, loads)
-    second = _direction((b, gb, cb), (a, ga, ca), c, kappa, mu, xi, loads)
+    first = second = None
+    if _slave_is_a((a.id, ga), (b.id, gb)):
+        first = _direction((a, ga, ca), (b, gb, cb), c, kappa, mu, xi, loads)
+    else:
+        second = _direction((b, gb, cb), (a, ga, ca), c, kappa, mu, xi, loads)
     st = dict(a=a.id, b=b.id, active=0, max_penetration=0.0, normal_force=0.0)
     forces = []
     for pu, sl, ms in ((first, a, b), (second, b, a)):

@@ -1,8 +1,8 @@
 //! The segment pass (`ContactPass::Segments`): contact points that are not nodes.
 //! Quadrature points on one body's (slave's) curved segments press on the other's
 //! (master's) curved segments with the penalty potential k_a c^2 psi(-g_a / c) per
-//! point (`stiffening.rs`: (1/2) k_a g_a^2 when shallow, stiffer with depth); each body
-//! is slave once with half the weight. docs/theory-contact.md, "Segment pass".
+//! point (`stiffening.rs`: (1/2) k_a g_a^2 when shallow, stiffer with depth); the finer
+//! body is the slave (`segpair::slave_is_a`). docs/theory-contact.md, "Segment pass".
 //!
 //! Per point: x_a = sum N_k x_k + h_s n_sub (the slave's curved surface, `curved.rs`),
 //! P the closest point of the master's flat segments (closest, ties: lowest index),

@@ -9,7 +9,7 @@
 use super::figures::NodeFigures;
 use super::forest::{Entry, Forest};
 use super::segment::{segments, Segment};
-use crate::body::Body;
+use crate::body::{Body, SurfaceFigures};
 use crate::Vec3;
 use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
@@ -115,8 +115,9 @@ pub struct Surface {
     pub inv_k: f64,
     /// Smallest node mass of the body.
     pub min_mass: f64,
-    /// Mass per initial segment area of the body [kg/m^2] (the segment pass's stiffness).
-    pub areal_mass: f64,
+    /// The whole body's areal mass and mean segment area (the segment pass's stiffness
+    /// and slave side).
+    pub figures: SurfaceFigures,
     /// Node adjacency (CSR) for self-contact exclusion.
     pub adj_start: Vec<u32>,
     pub adj: Vec<u32>,
@@ -235,6 +236,7 @@ impl Surface {
         let inv_k = k_unit.iter().map(|k| 1.0 / k).fold(f64::INFINITY, f64::min);
         let (adj_start, adj) = node_adjacency(body.state.x.len(), &segs);
         let (inc_start, inc) = node_incidence(body.state.x.len(), &segs);
+        let mean_area = total_area / segs.len().max(1) as f64;
         Self {
             node_count: body.state.x.len(),
             segments: segs,
@@ -243,10 +245,13 @@ impl Surface {
             mass_per_k,
             inv_k,
             min_mass: body.def.mass.iter().copied().fold(f64::INFINITY, f64::min),
-            areal_mass: body.def.whole_areal_mass.unwrap_or(if total_area > 0.0 {
-                body.def.mass.iter().sum::<f64>() / total_area
-            } else {
-                0.0
+            figures: body.def.whole_surface.unwrap_or(SurfaceFigures {
+                areal_mass: if total_area > 0.0 {
+                    body.def.mass.iter().sum::<f64>() / total_area
+                } else {
+                    0.0
+                },
+                mean_area,
             }),
             adj_start,
             adj,

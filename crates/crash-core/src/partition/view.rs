@@ -206,8 +206,8 @@ impl GroupSplit {
                     continue;
                 }
                 let mut vb = super::parts::sub_body(b, &node, &element, node.len())?;
-                // the segment pass's stiffness reads the whole body's areal mass
-                vb.def_mut().whole_areal_mass = self.surfaces[j].as_ref().map(|s| s.areal_mass);
+                // the segment pass reads the whole body's figures (stiffness, slave side)
+                vb.def_mut().whole_surface = self.surfaces[j].as_ref().map(|s| s.figures);
                 if !self.rule.whole_masses {
                     let m = crate::mesh::Mesh {
                         nodes: vb.def.x0.clone(),
