@@ -5,6 +5,7 @@
 //! and split again), and the contact statistics (contacts.csv) of one worker.
 #![allow(clippy::unwrap_used)] // a test panics on failure
 
+use crash_core::contact::SegmentSides;
 use crash_master::{CostModel, RecordSink, RunInput, RunOptions, SplitMode};
 use crash_tests::procs::{master, out_dir, worker};
 use crash_tests::runs::{contact_rows, driver_reference, input, input_of, resume_local, run_local};
@@ -115,6 +116,20 @@ fn the_showcase_under_the_segment_pass_split_over_two_workers_has_the_single_pro
     let (hash, splits) = split_run(&inp, 2, SplitMode::Auto);
     assert!(splits >= 1, "the showcase's one group must be split");
     assert_eq!(format!("{hash:016x}"), SEGMENTS_HASH);
+}
+
+/// Both sides (`contact.sides = "both"`: each body's points against the other at half
+/// the weight) is the segment pass as it ran before session 40, bit for bit (that
+/// pass's hash), and split over two workers it keeps the single-process state.
+#[test]
+fn under_both_sides_the_segment_pass_is_the_two_sided_pass_of_before_in_every_mode() {
+    let mut inp = scene(SEGMENTS, 1.2e-3);
+    inp.contact.sides = SegmentSides::Both;
+    let (_, reference) = driver_reference(&inp);
+    assert_eq!(format!("{reference:016x}"), "07508666adfac5f1");
+    let (hash, splits) = split_run(&inp, 2, SplitMode::Auto);
+    assert!(splits >= 1, "the showcase's one group must be split");
+    assert_eq!(format!("{hash:016x}"), "07508666adfac5f1");
 }
 
 /// The same over 2 `crash-worker` processes (gRPC on loopback).

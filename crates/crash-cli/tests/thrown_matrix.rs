@@ -7,6 +7,8 @@
 
 use crash_cli::study::matrix::{cells, Cell, CellResult, Scenario};
 use crash_cli::study::outcome::Outcome;
+use crash_cli::study::scenarios::Thrown;
+use crash_core::shapes::ElementKind;
 use std::time::Instant;
 
 fn run(keep: impl Fn(&Cell) -> bool) -> Vec<CellResult> {
@@ -72,4 +74,26 @@ fn every_thrown_tube_cell_under_the_segment_pass_is_completed_under_the_energy_l
     let res = run(|c| matches!(&c.scenario, Scenario::Thrown(t) if t.segments));
     assert_eq!(res.len(), 20, "20 cells under the segment pass");
     check(&res);
+}
+
+/// The cell one side of the segment pass lets through (R/t 50, quads, 1000 m/s: a fold
+/// of the crushed tube, the finer surface and so the slave, crosses the plate between
+/// its points, and the crossing check stops the run) completes under both sides, each
+/// body's points against the other, with no pass-through and under the energy limit.
+#[test]
+fn under_both_sides_of_the_segment_pass_the_crushed_quad_tube_at_1000_m_s_completes_without_pass_through(
+) {
+    let cell = Thrown {
+        speed: 1000.0,
+        t: 5e-4,
+        kind: ElementKind::Quad,
+        segments: true,
+        both_sides: true,
+    };
+    let outcome = cell.run();
+    println!("{outcome:?}");
+    match outcome {
+        Outcome::Stable { max_error, .. } => assert!(max_error < 0.05, "{max_error}"),
+        other => panic!("{other:?}"),
+    }
 }

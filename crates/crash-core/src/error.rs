@@ -98,7 +98,7 @@ pub enum Fault {
         distance: f64,
         budget: f64,
     },
-    #[error("step {step}: node {node} of body '{body_name}' (#{body}) passed through the mid-surface of body '{other_name}' (#{other}, segment {segment}) at a closing speed of {closing_speed:.3e} m/s: the contact did not hold; the results after this point would be wrong (lower dt_safety, use contact.speed_rule = \"limit_dt\", or raise the penalty scale)")]
+    #[error("step {step}: node {node} of body '{body_name}' (#{body}) passed through the mid-surface of body '{other_name}' (#{other}, segment {segment}) at a closing speed of {closing_speed:.3e} m/s: the contact did not hold; the results after this point would be wrong (lower dt_safety, use contact.speed_rule = \"limit_dt\", raise the penalty scale, or under the segment pass set contact.sides = \"both\")")]
     PassThrough {
         step: u64,
         body: u32,

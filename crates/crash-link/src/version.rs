@@ -45,7 +45,9 @@ use thiserror::Error;
 /// v21: a split group under the segment pass runs its contact pass in the step (a
 /// Contact after the Halo), whose Report carries the stiffening step per body
 /// (Report.limit_ids, limit_dts).
-pub const PROTOCOL_VERSION: u32 = 21;
+/// v22: the segment pass runs one side by default (the finer surface's points, full
+/// weight; ContactConfig.sides "finer" or "both"): a v21 peer would run both sides.
+pub const PROTOCOL_VERSION: u32 = 22;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

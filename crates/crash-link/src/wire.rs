@@ -3,7 +3,7 @@
 //! conversions); the clock travels in Step and Load.
 
 use crate::command::{BodyLoad, Command, GroupTime, Halo, Reply, Setup, StepReport};
-use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SpeedRule};
+use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SegmentSides, SpeedRule};
 use crash_core::partition::SplitFigures;
 use crash_core::{Clock, Due, Vec3};
 use crash_io::FrameBody;
@@ -46,6 +46,11 @@ fn contact_to_pb(c: &ContactConfig) -> pb::ContactConfig {
             ContactPass::Segments => "segments",
         }
         .into(),
+        sides: match c.sides {
+            SegmentSides::Finer => "finer",
+            SegmentSides::Both => "both",
+        }
+        .into(),
     }
 }
 
@@ -79,6 +84,15 @@ fn contact_from_pb(c: &pb::ContactConfig) -> Result<ContactConfig, ProtoError> {
             other => {
                 return Err(ProtoError::Invalid(format!(
                     "unknown contact pass '{other}'"
+                )))
+            }
+        },
+        sides: match c.sides.as_str() {
+            "" | "finer" => SegmentSides::Finer,
+            "both" => SegmentSides::Both,
+            other => {
+                return Err(ProtoError::Invalid(format!(
+                    "unknown segment pass sides '{other}'"
                 )))
             }
         },

@@ -3,7 +3,7 @@
 use crate::context::Ctx;
 use crate::error::{ErrorKind, SceneError};
 use crate::schema::{MaterialSpec, SceneFile};
-use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SpeedRule};
+use crash_core::contact::{ContactConfig, ContactPass, PenaltyKind, SegmentSides, SpeedRule};
 use crash_core::{CoreError, Material, Vec3};
 use std::collections::BTreeMap;
 
@@ -144,6 +144,18 @@ pub fn globals(
             "\"segments\" needs contact.penalty = \"soft\" (its stiffness is per area)",
         ));
     }
+    let sides = match c.sides.as_deref() {
+        None => d.sides,
+        Some(_) if pass != ContactPass::Segments => {
+            return Err(ctx.invalid(
+                "contact.sides",
+                "applies to contact.pass = \"segments\" only (the node passes run both ways)",
+            ))
+        }
+        Some("finer") => SegmentSides::Finer,
+        Some("both") => SegmentSides::Both,
+        Some(_) => return Err(ctx.invalid("contact.sides", "must be \"finer\" or \"both\"")),
+    };
     Ok(Globals {
         end_time,
         safety,
@@ -158,6 +170,7 @@ pub fn globals(
             damping_ratio,
             speed_rule,
             pass,
+            sides,
         },
         margin_given: c.margin.is_some(),
     })

@@ -95,6 +95,8 @@ pub struct ContactSpec {
     pub speed_rule: Option<String>,
     /// "nodes" (default) or "segments".
     pub pass: Option<String>,
+    /// The segment pass's sides: "finer" (default) or "both".
+    pub sides: Option<String>,
 }
 
 /// Either (young, poisson) or the seed's Lamé pair (lambda1, lambda2).

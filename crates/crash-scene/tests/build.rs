@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use crash_core::body::{dof, NO_PROGRAM};
-use crash_core::contact::{ContactPass, PenaltyKind};
+use crash_core::contact::{ContactPass, PenaltyKind, SegmentSides};
 use crash_core::Vec3;
 use crash_scene::margin::{MARGIN_ELEMENT_FRACTION, MARGIN_STEPS};
 
@@ -45,6 +45,12 @@ fn contact_pass_is_nodes_by_default_and_segments_when_given() {
     assert_eq!(build(BASE).contact.pass, ContactPass::Nodes);
     let b = build(&format!("{BASE}\n[contact]\npass = \"segments\"\n"));
     assert_eq!(b.contact.pass, ContactPass::Segments);
+    // one side (the finer surface's points) unless both are asked for
+    assert_eq!(b.contact.sides, SegmentSides::Finer);
+    let b = build(&format!(
+        "{BASE}\n[contact]\npass = \"segments\"\nsides = \"both\"\n"
+    ));
+    assert_eq!(b.contact.sides, SegmentSides::Both);
 }
 
 #[test]

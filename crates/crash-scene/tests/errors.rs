@@ -476,6 +476,19 @@ fn unknown_contact_pass_and_segments_with_the_element_penalty_are_refused() {
 }
 
 #[test]
+fn unknown_segment_sides_and_sides_under_the_node_passes_are_refused() {
+    let e = error(&format!(
+        "{BASE}\n[contact]\npass = \"segments\"\nsides = \"one\"\n"
+    ));
+    assert_eq!(e.kind, ErrorKind::Invalid, "{e}");
+    assert!(e.to_string().contains("\"finer\" or \"both\""), "{e}");
+    let e = error(&format!("{BASE}\n[contact]\nsides = \"both\"\n"));
+    assert_eq!(e.kind, ErrorKind::Invalid, "{e}");
+    assert!(e.to_string().contains("contact.sides"), "{e}");
+    assert!(e.to_string().contains("pass = \"segments\" only"), "{e}");
+}
+
+#[test]
 fn duplicate_body_name_is_refused() {
     let e = error(&with("name = \"ball\"", "name = \"plate\""));
     check(

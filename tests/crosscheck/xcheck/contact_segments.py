@@ -550,20 +550,23 @@ def _slave_is_a(a, b):
 
 
 def segment_pair(a, b, ga, gb, cfg, dt_ref):
-    """The segment pass of a pair of different bodies: the slave's points (the finer
-    surface, by mean initial segment area, else the lower id) against the master's curved
-    surface, full weight; forces into f_contact; the pair's statistics."""
+    """The segment pass of a pair of different bodies: with sides "finer" the slave's
+    points (the finer surface, by mean initial segment area, else the lower id) against
+    the master's curved surface, full weight; with "both" a's points against b, then b's
+    against a, half the weight each; forces into f_contact; the pair's statistics."""
+    both = cfg.get("sides", "finer") == "both"
     mu = min(ga.areal_mass, gb.areal_mass)
-    kappa = cfg["penalty_scale"] * mu / (dt_ref * dt_ref)
+    kappa = (0.5 if both else 1.0) * cfg["penalty_scale"] * mu / (dt_ref * dt_ref)
     c = 0.5 * (a.thickness + b.thickness)
     xi = cfg["damping_ratio"]
     ca, cb = Curved(ga, a.x), Curved(gb, b.x)
     loads = {a.id: (np.zeros((ga.nn, 3)), np.zeros((ga.ns, 3))),
              b.id: (np.zeros((gb.nn, 3)), np.zeros((gb.ns, 3)))}
+    a_slave = _slave_is_a((a.id, ga), (b.id, gb))
     first = second = None
-    if _slave_is_a((a.id, ga), (b.id, gb)):
+    if both or a_slave:
         first = _direction((a, ga, ca), (b, gb, cb), c, kappa, mu, xi, loads)
-    else:
+    if both or not a_slave:
         second = _direction((b, gb, cb), (a, ga, ca), c, kappa, mu, xi, loads)
     st = dict(a=a.id, b=b.id, active=0, max_penetration=0.0, normal_force=0.0)
     forces = []

@@ -329,6 +329,7 @@ pub fn cells() -> Vec<Cell> {
                             t,
                             kind,
                             segments,
+                            both_sides: false,
                         }),
                         CompletedOrStopped,
                         quick,

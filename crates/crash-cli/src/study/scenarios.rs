@@ -178,6 +178,9 @@ pub struct Thrown {
     /// Run under the segment contact pass (`contact.pass = "segments"`) instead of the
     /// node passes.
     pub segments: bool,
+    /// Under the segment pass, both sides (`contact.sides = "both"`) instead of the
+    /// finer surface's points only.
+    pub both_sides: bool,
 }
 
 const TUBE_R: f64 = 0.025;
@@ -193,10 +196,10 @@ impl Thrown {
         let gap = 1e-4;
         let end = (gap + 3.0 * TUBE_R) / self.speed;
         let end = end.min(3e-4);
-        let contact = if self.segments {
-            "\n[contact]\npass = \"segments\"\n"
-        } else {
-            ""
+        let contact = match (self.segments, self.both_sides) {
+            (true, true) => "\n[contact]\npass = \"segments\"\nsides = \"both\"\n",
+            (true, false) => "\n[contact]\npass = \"segments\"\n",
+            (false, _) => "",
         };
         format!(
             r#"name = "matrix-thrown"

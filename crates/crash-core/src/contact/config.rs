@@ -38,9 +38,23 @@ pub enum ContactPass {
     /// Node to segment, both ways (each body's nodes against the other's segments).
     #[default]
     Nodes,
-    /// Quadrature points on each body's curved segments against the other's, half
-    /// weight each way (soft penalty only); self pairs stay node to segment.
+    /// Quadrature points on one body's curved segments against the other's curved
+    /// surface (`SegmentSides`; soft penalty only); self pairs stay node to segment.
     Segments,
+}
+
+/// Which bodies' points the segment pass searches (docs/theory-contact.md, "One side").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SegmentSides {
+    /// One way: the finer surface's points (smaller mean initial segment area, else the
+    /// lower id), full weight. Exact in sliding, about half the cost of both; in a
+    /// crush a sharp fold can cross the other surface between the slave's points (no
+    /// point sits on a node; the crossing check stops the run).
+    #[default]
+    Finer,
+    /// Two way: each body's points against the other, half the weight each.
+    Both,
 }
 
 /// Most a node may close on a segment in one step, as a fraction of the contact
@@ -74,6 +88,9 @@ pub struct ContactConfig {
     /// Node passes or the segment pass.
     #[serde(default)]
     pub pass: ContactPass,
+    /// The segment pass's sides (one way or two way).
+    #[serde(default)]
+    pub sides: SegmentSides,
 }
 
 impl Default for ContactConfig {
@@ -86,6 +103,7 @@ impl Default for ContactConfig {
             damping_ratio: 0.0,
             speed_rule: SpeedRule::LimitDt,
             pass: ContactPass::Nodes,
+            sides: SegmentSides::Finer,
         }
     }
 }

@@ -3,7 +3,7 @@
 //! point order, then the loads on the normals pulled back once per normal.
 //! docs/theory-contact.md, "Segment pass".
 
-use super::config::ContactConfig;
+use super::config::{ContactConfig, SegmentSides};
 use super::curved::{normal_pullback, NormalOf};
 use super::quadrature::BULGE_REACH;
 use super::quadrature::{point_pushes, NormalLoad, PointPush, Points};
@@ -37,10 +37,12 @@ pub(crate) fn slave_is_a((ida, sa): (u32, &Surface), (idb, sb): (u32, &Surface))
 }
 
 /// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
-/// `sb`): the slave's points (`slave_is_a`) against the master's curved surface;
-/// stiffness per unit area kappa = s mu / dt_ref^2 (the soft rule per area, mu the
-/// lighter areal mass). One side, not both at half the weight (before session 40):
-/// the finer side alone keeps issue 12's oblique bounds at about half the cost.
+/// `sb`): under `SegmentSides::Finer` the slave's points (`slave_is_a`) against the
+/// master's curved surface, stiffness per unit area kappa = s mu / dt_ref^2 (the soft
+/// rule per area, mu the lighter areal mass); under `Both` each body's points against
+/// the other with half of it. One side keeps issue 12's oblique bounds closer at
+/// about half the cost; both hold sharp folds in a crush (docs/theory-contact.md,
+/// "One side").
 /// `counted`: which slave segments' points the statistics book, of a and of b (None:
 /// all): a split group's views overlap, and each point is booked by the holder that
 /// counts its slave segment's element. `slaves`: the slave segments searched, of a and
@@ -63,7 +65,7 @@ pub(crate) fn segment_pair(
 ) -> PairStats {
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.figures.areal_mass.min(sb.figures.areal_mass);
-    let kappa = cfg.penalty_scale * mu / (dt_ref * dt_ref);
+    let kappa = weight(cfg.sides) * cfg.penalty_scale * mu / (dt_ref * dt_ref);
     let (first, second) = pair_points(a, sa, b, sb, cfg, kappa, mu, slaves, lists);
     let mut st = PairStats::empty(a.def.id, b.def.id, 0);
     let thin = a.def.section.thickness.min(b.def.section.thickness);
@@ -180,8 +182,17 @@ fn apply_points(
     }
 }
 
-/// The slave's points of a pair at the current positions, stiffness per unit area
-/// `kappa`, damping areal mass `mu`: (a's against b, none) or (none, b's against a).
+/// The share of the stiffness each side's points carry.
+fn weight(sides: SegmentSides) -> f64 {
+    match sides {
+        SegmentSides::Finer => 1.0,
+        SegmentSides::Both => 0.5,
+    }
+}
+
+/// The points of a pair at the current positions (a's against b, b's against a; under
+/// `SegmentSides::Finer` the master's direction has none), stiffness per unit area
+/// `kappa`, damping areal mass `mu`.
 #[allow(clippy::too_many_arguments)]
 fn pair_points(
     a: &Body,
@@ -209,20 +220,48 @@ fn pair_points(
     );
     // the other's segments a point can touch lie in the box of the other's near set
     let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
-    if slave_is_a((a.def.id, sa), (b.def.id, sb)) {
-        let ab = (&ca, &cb);
-        let pts = point_pushes(a, sa, b, sb, near_b, ab, cfg, kappa, mu, slaves.0, la);
-        (pts, Vec::new())
-    } else {
-        let ba = (&cb, &ca);
-        let pts = point_pushes(b, sb, a, sa, near_a, ba, cfg, kappa, mu, slaves.1, lb);
-        (Vec::new(), pts)
+    let mut ab = || {
+        point_pushes(
+            a,
+            sa,
+            b,
+            sb,
+            near_b,
+            (&ca, &cb),
+            cfg,
+            kappa,
+            mu,
+            slaves.0,
+            la,
+        )
+    };
+    let mut ba = || {
+        point_pushes(
+            b,
+            sb,
+            a,
+            sa,
+            near_a,
+            (&cb, &ca),
+            cfg,
+            kappa,
+            mu,
+            slaves.1,
+            lb,
+        )
+    };
+    match cfg.sides {
+        // the two directions at once (each reads only positions): the pool gets both
+        // directions' tasks, and a direction with few points does not leave a thread idle
+        SegmentSides::Both => rayon::join(ab, ba),
+        SegmentSides::Finer if slave_is_a((a.def.id, sa), (b.def.id, sb)) => (ab(), Vec::new()),
+        SegmentSides::Finer => (Vec::new(), ba()),
     }
 }
 
 /// The segment pass's active points of a pair at the current positions, without
-/// forces, per direction (a's points against b, b's against a; the master's direction
-/// has none): their number and the
+/// forces, per direction (a's points against b, b's against a; under one side the
+/// master's direction has none): their number and the
 /// deepest (for the check at t = 0: a curved surface can reach into another body where
 /// no node does).
 pub(crate) fn active_points(
