@@ -283,3 +283,42 @@ pub(crate) fn active_points(
         })
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{Material, Section};
+    use crate::mesh::Mesh;
+    use crate::shapes::{icosphere, plate, ElementKind};
+    use crate::Stabilization;
+
+    fn surface(id: u32, mut m: Mesh, shift: Vec3) -> (u32, Surface) {
+        m.transform(&nalgebra::Matrix3::identity(), shift);
+        let section = Section::new(Material::steel(), 1e-3);
+        let b = Body::new(id, "b", &m, section, Stabilization::default()).expect("valid body");
+        (id, Surface::new(&b))
+    }
+
+    /// The slave is the finer surface whichever way round the pair is given, and
+    /// between two copies of one mesh (areas equal but for round-off) the lower id:
+    /// exactly one of the two orders makes a the slave.
+    #[test]
+    fn the_slave_is_the_finer_surface_else_the_lower_id_in_either_order() {
+        let fine = surface(7, icosphere(0.05, 4), Vec3::zeros());
+        let coarse = surface(2, plate(0.4, 0.4, 20, 20, ElementKind::Quad), Vec3::zeros());
+        // a sphere of two copies, one moved far: the same mean area but for the last bits
+        let copy = surface(9, icosphere(0.05, 4), Vec3::new(12.345, -6.789, 0.1));
+        let (f, c, k) = ((fine.0, &fine.1), (coarse.0, &coarse.1), (copy.0, &copy.1));
+        assert!(
+            slave_is_a(f, c) && !slave_is_a(c, f),
+            "the finer sphere, not the lower id"
+        );
+        assert!(
+            slave_is_a(f, k) && !slave_is_a(k, f),
+            "equal meshes: the lower id (7)"
+        );
+        for (a, b) in [(f, c), (c, f), (f, k), (k, f), (c, k), (k, c)] {
+            assert_ne!(slave_is_a(a, b), slave_is_a(b, a), "one side per pair");
+        }
+    }
+}
