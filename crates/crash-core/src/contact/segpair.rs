@@ -219,14 +219,14 @@ fn pair_points(
         near,
     );
     // the other's segments a point can touch lie in the box of the other's near set
-    let (near_a, near_b) = (union(ca.boxes()), union(cb.boxes()));
+    // (taken in the direction that runs: one side needs only the master's)
     let mut ab = || {
         point_pushes(
             a,
             sa,
             b,
             sb,
-            near_b,
+            union(cb.boxes()),
             (&ca, &cb),
             cfg,
             kappa,
@@ -241,7 +241,7 @@ fn pair_points(
             sb,
             a,
             sa,
-            near_a,
+            union(ca.boxes()),
             (&cb, &ca),
             cfg,
             kappa,
