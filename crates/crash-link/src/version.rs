@@ -47,7 +47,10 @@ use thiserror::Error;
 /// (Report.limit_ids, limit_dts).
 /// v22: the segment pass runs one side by default (the finer surface's points, full
 /// weight; ContactConfig.sides "finer" or "both"): a v21 peer would run both sides.
-pub const PROTOCOL_VERSION: u32 = 22;
+/// v23: the segment pass's default sides are "auto" (one way only where one surface is
+/// clearly finer; an empty ContactConfig.sides now means "auto"): a v22 peer would run
+/// one way between meshes of about one size.
+pub const PROTOCOL_VERSION: u32 = 23;
 
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("protocol version mismatch: {peer} speaks crash protocol v{theirs}, this {me} speaks v{PROTOCOL_VERSION}; run matching versions of crash-master and crash-worker")]

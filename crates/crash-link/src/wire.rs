@@ -47,6 +47,7 @@ fn contact_to_pb(c: &ContactConfig) -> pb::ContactConfig {
         }
         .into(),
         sides: match c.sides {
+            SegmentSides::Auto => "auto",
             SegmentSides::Finer => "finer",
             SegmentSides::Both => "both",
         }
@@ -88,7 +89,8 @@ fn contact_from_pb(c: &pb::ContactConfig) -> Result<ContactConfig, ProtoError> {
             }
         },
         sides: match c.sides.as_str() {
-            "" | "finer" => SegmentSides::Finer,
+            "" | "auto" => SegmentSides::Auto,
+            "finer" => SegmentSides::Finer,
             "both" => SegmentSides::Both,
             other => {
                 return Err(ProtoError::Invalid(format!(

@@ -152,9 +152,12 @@ pub fn globals(
                 "applies to contact.pass = \"segments\" only (the node passes run both ways)",
             ))
         }
+        Some("auto") => SegmentSides::Auto,
         Some("finer") => SegmentSides::Finer,
         Some("both") => SegmentSides::Both,
-        Some(_) => return Err(ctx.invalid("contact.sides", "must be \"finer\" or \"both\"")),
+        Some(_) => {
+            return Err(ctx.invalid("contact.sides", "must be \"auto\", \"finer\" or \"both\""))
+        }
     };
     Ok(Globals {
         end_time,

@@ -95,7 +95,7 @@ pub struct ContactSpec {
     pub speed_rule: Option<String>,
     /// "nodes" (default) or "segments".
     pub pass: Option<String>,
-    /// The segment pass's sides: "finer" (default) or "both".
+    /// The segment pass's sides: "auto" (default), "finer" or "both".
     pub sides: Option<String>,
 }
 

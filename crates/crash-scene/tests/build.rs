@@ -45,12 +45,14 @@ fn contact_pass_is_nodes_by_default_and_segments_when_given() {
     assert_eq!(build(BASE).contact.pass, ContactPass::Nodes);
     let b = build(&format!("{BASE}\n[contact]\npass = \"segments\"\n"));
     assert_eq!(b.contact.pass, ContactPass::Segments);
-    // one side (the finer surface's points) unless both are asked for
-    assert_eq!(b.contact.sides, SegmentSides::Finer);
-    let b = build(&format!(
-        "{BASE}\n[contact]\npass = \"segments\"\nsides = \"both\"\n"
-    ));
-    assert_eq!(b.contact.sides, SegmentSides::Both);
+    // one side where one surface is clearly finer, else both, unless asked
+    assert_eq!(b.contact.sides, SegmentSides::Auto);
+    for (given, want) in [("both", SegmentSides::Both), ("finer", SegmentSides::Finer)] {
+        let b = build(&format!(
+            "{BASE}\n[contact]\npass = \"segments\"\nsides = \"{given}\"\n"
+        ));
+        assert_eq!(b.contact.sides, want);
+    }
 }
 
 #[test]

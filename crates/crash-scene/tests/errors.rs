@@ -481,7 +481,10 @@ fn unknown_segment_sides_and_sides_under_the_node_passes_are_refused() {
         "{BASE}\n[contact]\npass = \"segments\"\nsides = \"one\"\n"
     ));
     assert_eq!(e.kind, ErrorKind::Invalid, "{e}");
-    assert!(e.to_string().contains("\"finer\" or \"both\""), "{e}");
+    assert!(
+        e.to_string().contains("\"auto\", \"finer\" or \"both\""),
+        "{e}"
+    );
     let e = error(&format!("{BASE}\n[contact]\nsides = \"both\"\n"));
     assert_eq!(e.kind, ErrorKind::Invalid, "{e}");
     assert!(e.to_string().contains("contact.sides"), "{e}");

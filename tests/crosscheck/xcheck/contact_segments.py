@@ -536,6 +536,9 @@ def _tally(values):
 
 
 FINER = 0.99
+# sides "auto": one way only where the finer mean segment area is below this fraction
+# of the other's (crash: contact::ONE_SIDE_RATIO)
+ONE_SIDE_RATIO = 0.7
 
 
 def _slave_is_a(a, b):
@@ -550,11 +553,15 @@ def _slave_is_a(a, b):
 
 
 def segment_pair(a, b, ga, gb, cfg, dt_ref):
-    """The segment pass of a pair of different bodies: with sides "finer" the slave's
-    points (the finer surface, by mean initial segment area, else the lower id) against
-    the master's curved surface, full weight; with "both" a's points against b, then b's
-    against a, half the weight each; forces into f_contact; the pair's statistics."""
-    both = cfg.get("sides", "finer") == "both"
+    """The segment pass of a pair of different bodies: one way the slave's points (the
+    finer surface, by mean initial segment area, else the lower id) against the master's
+    curved surface, full weight; both ways a's points against b, then b's against a,
+    half the weight each; forces into f_contact; the pair's statistics. Sides "finer":
+    one way; "both": both ways; "auto": one way only where the finer mean area is below
+    ONE_SIDE_RATIO of the other's."""
+    sides = cfg.get("sides", "auto")
+    lo, hi = sorted((ga.mean_area, gb.mean_area))
+    both = sides == "both" or (sides == "auto" and not lo < ONE_SIDE_RATIO * hi)
     mu = min(ga.areal_mass, gb.areal_mass)
     kappa = (0.5 if both else 1.0) * cfg["penalty_scale"] * mu / (dt_ref * dt_ref)
     c = 0.5 * (a.thickness + b.thickness)

@@ -239,10 +239,11 @@ def load(path, end_time=None, output_interval=None):
         "damping_ratio": float(c.get("damping_ratio", 0.0)),
         "speed_rule": c.get("speed_rule", "limit_dt"),
         "pass": c.get("pass", "nodes"),
-        "sides": c.get("sides", "finer"),
+        "sides": c.get("sides", "auto"),
     }
-    if s.contact["sides"] not in ("finer", "both"):
-        raise ValueError(f"contact.sides: {s.contact['sides']!r} is not \"finer\" or \"both\"")
+    if s.contact["sides"] not in ("auto", "finer", "both"):
+        raise ValueError(
+            f"contact.sides: {s.contact['sides']!r} is not \"auto\", \"finer\" or \"both\"")
     if s.contact["pass"] not in ("nodes", "segments"):
         raise ValueError(f"contact.pass: {s.contact['pass']!r} is not \"nodes\" or \"segments\"")
     if s.contact["pass"] == "segments" and s.contact["penalty"] != "soft":

@@ -329,7 +329,7 @@ pub fn cells() -> Vec<Cell> {
                             t,
                             kind,
                             segments,
-                            both_sides: false,
+                            one_side: false,
                         }),
                         CompletedOrStopped,
                         quick,

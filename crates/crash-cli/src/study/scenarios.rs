@@ -178,9 +178,10 @@ pub struct Thrown {
     /// Run under the segment contact pass (`contact.pass = "segments"`) instead of the
     /// node passes.
     pub segments: bool,
-    /// Under the segment pass, both sides (`contact.sides = "both"`) instead of the
-    /// finer surface's points only.
-    pub both_sides: bool,
+    /// Under the segment pass, one way whatever the meshes (`contact.sides =
+    /// "finer"`) instead of the default `"auto"` (both ways here: the tube's and the
+    /// plate's segments are of about one size).
+    pub one_side: bool,
 }
 
 const TUBE_R: f64 = 0.025;
@@ -196,8 +197,8 @@ impl Thrown {
         let gap = 1e-4;
         let end = (gap + 3.0 * TUBE_R) / self.speed;
         let end = end.min(3e-4);
-        let contact = match (self.segments, self.both_sides) {
-            (true, true) => "\n[contact]\npass = \"segments\"\nsides = \"both\"\n",
+        let contact = match (self.segments, self.one_side) {
+            (true, true) => "\n[contact]\npass = \"segments\"\nsides = \"finer\"\n",
             (true, false) => "\n[contact]\npass = \"segments\"\n",
             (false, _) => "",
         };

@@ -47,15 +47,27 @@ pub enum ContactPass {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SegmentSides {
+    /// Per pair: one way (as `Finer`) where one surface is clearly finer (its mean
+    /// initial segment area under `ONE_SIDE_RATIO` of the other's), else two way (as
+    /// `Both`): meshes of about one size have no finer side, and a crush between them
+    /// needs both sides' points to hold each one's folds.
+    #[default]
+    Auto,
     /// One way: the finer surface's points (smaller mean initial segment area, else the
     /// lower id), full weight. Exact in sliding, about half the cost of both; in a
     /// crush a sharp fold can cross the other surface between the slave's points (no
     /// point sits on a node; the crossing check stops the run).
-    #[default]
     Finer,
     /// Two way: each body's points against the other, half the weight each.
     Both,
 }
+
+/// Under `SegmentSides::Auto`, a pair runs one way when the finer surface's mean
+/// initial segment area is below this fraction of the other's (docs/theory-contact.md,
+/// "One side": the crushed tube on a plate of about its mesh size, 0.98, needs both
+/// sides; the floor's spheres against the plate, 0.63, and the showcase's ball, 0.14,
+/// run one way).
+pub const ONE_SIDE_RATIO: f64 = 0.7;
 
 /// Most a node may close on a segment in one step, as a fraction of the contact
 /// distance c = (t_node + t_segment)/2, under `SpeedRule::LimitDt`.
@@ -103,7 +115,7 @@ impl Default for ContactConfig {
             damping_ratio: 0.0,
             speed_rule: SpeedRule::LimitDt,
             pass: ContactPass::Nodes,
-            sides: SegmentSides::Finer,
+            sides: SegmentSides::Auto,
         }
     }
 }

@@ -26,7 +26,7 @@ pub mod verlet;
 pub use broad::{candidate_pairs, BodyBox};
 pub use config::{
     ContactConfig, ContactPass, PenaltyKind, SegmentSides, SpeedRule, CLOSING_FRACTION,
-    REFERENCE_SAFETY, SOFT_SCALE_LIMIT,
+    ONE_SIDE_RATIO, REFERENCE_SAFETY, SOFT_SCALE_LIMIT,
 };
 pub use overlap::{initial_penetrations, Inside, Penetration};
 pub use segment::{project, segments, Projection, Segment};

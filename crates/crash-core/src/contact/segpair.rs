@@ -3,7 +3,7 @@
 //! point order, then the loads on the normals pulled back once per normal.
 //! docs/theory-contact.md, "Segment pass".
 
-use super::config::{ContactConfig, SegmentSides};
+use super::config::{ContactConfig, SegmentSides, ONE_SIDE_RATIO};
 use super::curved::{normal_pullback, NormalOf};
 use super::quadrature::BULGE_REACH;
 use super::quadrature::{point_pushes, NormalLoad, PointPush, Points};
@@ -36,11 +36,51 @@ pub(crate) fn slave_is_a((ida, sa): (u32, &Surface), (idb, sb): (u32, &Surface))
     }
 }
 
+/// Which points a pair's segment pass searches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Sides {
+    /// a's points against b, full weight.
+    A,
+    /// b's points against a, full weight.
+    B,
+    /// Each body's points against the other, half the weight each.
+    Both,
+}
+
+impl Sides {
+    /// The sides of the pair (a, b) under `sides`: under `SegmentSides::Auto` one way
+    /// only where one surface's mean initial segment area is below `ONE_SIDE_RATIO` of
+    /// the other's. Whole-body figures, as `slave_is_a`: every mode decides alike.
+    pub(crate) fn of(sides: SegmentSides, a: (u32, &Surface), b: (u32, &Surface)) -> Self {
+        let one_way = match sides {
+            SegmentSides::Both => false,
+            SegmentSides::Finer => true,
+            SegmentSides::Auto => {
+                let (ma, mb) = (a.1.figures.mean_area, b.1.figures.mean_area);
+                ma.min(mb) < ONE_SIDE_RATIO * ma.max(mb)
+            }
+        };
+        match (one_way, slave_is_a(a, b)) {
+            (false, _) => Sides::Both,
+            (true, true) => Sides::A,
+            (true, false) => Sides::B,
+        }
+    }
+
+    /// The share of the stiffness each side's points carry.
+    fn weight(self) -> f64 {
+        match self {
+            Sides::A | Sides::B => 1.0,
+            Sides::Both => 0.5,
+        }
+    }
+}
+
 /// The segment pass of a pair of different bodies (indices `ia`, `ib`, surfaces `sa`,
-/// `sb`): under `SegmentSides::Finer` the slave's points (`slave_is_a`) against the
-/// master's curved surface, stiffness per unit area kappa = s mu / dt_ref^2 (the soft
-/// rule per area, mu the lighter areal mass); under `Both` each body's points against
-/// the other with half of it. One side keeps issue 12's oblique bounds closer at
+/// `sb`): one way (`Sides::of`) the slave's points (`slave_is_a`) against the master's
+/// curved surface, stiffness per unit area kappa = s mu / dt_ref^2 (the soft rule per
+/// area, mu the lighter areal mass); two way each body's points against the other with
+/// half of it. One side keeps issue 12's oblique bounds closer at
 /// about half the cost; both hold sharp folds in a crush (docs/theory-contact.md,
 /// "One side").
 /// `counted`: which slave segments' points the statistics book, of a and of b (None:
@@ -65,8 +105,9 @@ pub(crate) fn segment_pair(
 ) -> PairStats {
     let (a, b) = (&bodies[ia], &bodies[ib]);
     let mu = sa.figures.areal_mass.min(sb.figures.areal_mass);
-    let kappa = weight(cfg.sides) * cfg.penalty_scale * mu / (dt_ref * dt_ref);
-    let (first, second) = pair_points(a, sa, b, sb, cfg, kappa, mu, slaves, lists);
+    let sides = Sides::of(cfg.sides, (a.def.id, sa), (b.def.id, sb));
+    let kappa = sides.weight() * cfg.penalty_scale * mu / (dt_ref * dt_ref);
+    let (first, second) = pair_points(a, sa, b, sb, cfg, sides, kappa, mu, slaves, lists);
     let mut st = PairStats::empty(a.def.id, b.def.id, 0);
     let thin = a.def.section.thickness.min(b.def.section.thickness);
     apply_points(bodies, (ia, ib), &first, &mut st, true, counted.0);
@@ -182,17 +223,9 @@ fn apply_points(
     }
 }
 
-/// The share of the stiffness each side's points carry.
-fn weight(sides: SegmentSides) -> f64 {
-    match sides {
-        SegmentSides::Finer => 1.0,
-        SegmentSides::Both => 0.5,
-    }
-}
-
-/// The points of a pair at the current positions (a's against b, b's against a; under
-/// `SegmentSides::Finer` the master's direction has none), stiffness per unit area
-/// `kappa`, damping areal mass `mu`.
+/// The points of a pair at the current positions (a's against b, b's against a; one
+/// way the master's direction has none), stiffness per unit area `kappa`, damping
+/// areal mass `mu`.
 #[allow(clippy::too_many_arguments)]
 fn pair_points(
     a: &Body,
@@ -200,6 +233,7 @@ fn pair_points(
     b: &Body,
     sb: &Surface,
     cfg: &ContactConfig,
+    sides: Sides,
     kappa: f64,
     mu: f64,
     slaves: (Option<&[bool]>, Option<&[bool]>),
@@ -250,12 +284,12 @@ fn pair_points(
             lb,
         )
     };
-    match cfg.sides {
+    match sides {
         // the two directions at once (each reads only positions): the pool gets both
         // directions' tasks, and a direction with few points does not leave a thread idle
-        SegmentSides::Both => rayon::join(ab, ba),
-        SegmentSides::Finer if slave_is_a((a.def.id, sa), (b.def.id, sb)) => (ab(), Vec::new()),
-        SegmentSides::Finer => (Vec::new(), ba()),
+        Sides::Both => rayon::join(ab, ba),
+        Sides::A => (ab(), Vec::new()),
+        Sides::B => (Vec::new(), ba()),
     }
 }
 
@@ -274,7 +308,8 @@ pub(crate) fn active_points(
     // any stiffness: which points are active depends on the gap alone
     let mu = sa.figures.areal_mass.min(sb.figures.areal_mass);
     let lists = &mut PairLists::default();
-    let (first, second) = pair_points(a, sa, b, sb, cfg, 1.0, mu, (None, None), lists);
+    let sides = Sides::of(cfg.sides, (a.def.id, sa), (b.def.id, sb));
+    let (first, second) = pair_points(a, sa, b, sb, cfg, sides, 1.0, mu, (None, None), lists);
     [first, second].map(|chunks| {
         let pushes = chunks.into_iter().flat_map(|c| c.pushes);
         pushes.fold((0, None), |(n, deepest): (usize, Option<PointPush>), p| {
@@ -320,5 +355,40 @@ mod tests {
         for (a, b) in [(f, c), (c, f), (f, k), (k, f), (c, k), (k, c)] {
             assert_ne!(slave_is_a(a, b), slave_is_a(b, a), "one side per pair");
         }
+    }
+
+    /// Under `Auto` a pair runs one way only where one surface is clearly finer (mean
+    /// segment area under 0.7 of the other's), the finer body's points; meshes of about
+    /// one size run both ways; `Finer` and `Both` whatever the meshes. Either order of
+    /// the pair gives the same sides.
+    #[test]
+    fn auto_sides_run_one_way_only_where_one_surface_is_clearly_finer() {
+        let quads = |id, n| surface(id, plate(0.4, 0.4, n, n, ElementKind::Quad), Vec3::zeros());
+        let sphere = surface(7, icosphere(0.05, 4), Vec3::zeros());
+        let (p20, p22, p24) = (quads(1, 20), quads(2, 22), quads(3, 24));
+        fn r(x: &(u32, Surface)) -> (u32, &Surface) {
+            (x.0, &x.1)
+        }
+        let both = |a, b| {
+            let s = [
+                Sides::of(SegmentSides::Auto, a, b),
+                Sides::of(SegmentSides::Auto, b, a),
+            ];
+            (s[0], s[1])
+        };
+        // (20/24)^2 = 0.69: one way, the 24 x 24 plate's points (b in the first order)
+        assert_eq!(both(r(&p20), r(&p24)), (Sides::B, Sides::A));
+        // (20/22)^2 = 0.83: both ways
+        assert_eq!(both(r(&p20), r(&p22)), (Sides::Both, Sides::Both));
+        assert_eq!(both(r(&sphere), r(&p20)), (Sides::A, Sides::B));
+        assert_eq!(
+            Sides::of(SegmentSides::Finer, r(&p20), r(&p22)),
+            Sides::B,
+            "finer: one way whatever the ratio"
+        );
+        assert_eq!(
+            Sides::of(SegmentSides::Both, r(&sphere), r(&p20)),
+            Sides::Both
+        );
     }
 }
