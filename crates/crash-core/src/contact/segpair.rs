@@ -369,7 +369,7 @@ mod tests {
         fn r(x: &(u32, Surface)) -> (u32, &Surface) {
             (x.0, &x.1)
         }
-        let both = |a, b| {
+        let either_order = |a, b| {
             let s = [
                 Sides::of(SegmentSides::Auto, a, b),
                 Sides::of(SegmentSides::Auto, b, a),
@@ -377,10 +377,10 @@ mod tests {
             (s[0], s[1])
         };
         // (20/24)^2 = 0.69: one way, the 24 x 24 plate's points (b in the first order)
-        assert_eq!(both(r(&p20), r(&p24)), (Sides::B, Sides::A));
+        assert_eq!(either_order(r(&p20), r(&p24)), (Sides::B, Sides::A));
         // (20/22)^2 = 0.83: both ways
-        assert_eq!(both(r(&p20), r(&p22)), (Sides::Both, Sides::Both));
-        assert_eq!(both(r(&sphere), r(&p20)), (Sides::A, Sides::B));
+        assert_eq!(either_order(r(&p20), r(&p22)), (Sides::Both, Sides::Both));
+        assert_eq!(either_order(r(&sphere), r(&p20)), (Sides::A, Sides::B));
         assert_eq!(
             Sides::of(SegmentSides::Finer, r(&p20), r(&p22)),
             Sides::B,
